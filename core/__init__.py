@@ -1,0 +1,18 @@
+"""Darboux core: differential geometry of unorganized point clouds.
+
+The augmented Darboux frame (p, n, e1, e2, k1, k2) of every point by the normal-fitting
+method of Cheng & Zhang (2009) and the baselines it is compared with. numpy/scipy only.
+"""
+
+from . import metrics, noise, shapes
+from ._progress import Cancelled
+from .estimate import estimate
+from .methods import METHODS, Method, get_method
+from .neighbours import Neighbours, build_neighbours
+from .result import FIELDS, CurvatureResult
+
+__all__ = [
+    "estimate", "build_neighbours", "Neighbours", "CurvatureResult", "METHODS", "Method",
+    "get_method", "Cancelled", "FIELDS", "shapes", "noise", "metrics", "io",
+]
+__version__ = "0.1.0"

@@ -1,0 +1,66 @@
+"""Input validation shared by the public functions: check first, then compute."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def as_points(points, *, name: str = "points", drop_nonfinite: bool = False):
+    """Return ``points`` as a new C-contiguous (N, 3) float64 array.
+
+    Returns ``(array, kept)`` where ``kept`` is the boolean mask of rows kept
+    (all True unless ``drop_nonfinite`` dropped rows with NaN/inf).
+    """
+    arr = np.asarray(points)
+    if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool):
+        raise ValueError(f"{name} must be a numeric array of shape (N, 3), got dtype {arr.dtype}")
+    if arr.ndim != 2 or arr.shape[1] != 3:
+        raise ValueError(f"{name} must have shape (N, 3), got shape {arr.shape}")
+    arr = np.array(arr, dtype=np.float64, order="C", copy=True)
+    finite = np.isfinite(arr).all(axis=1)
+    if not finite.all():
+        bad = int((~finite).sum())
+        if not drop_nonfinite:
+            raise ValueError(
+                f"{name} contains {bad} row(s) with NaN or inf (first at row "
+                f"{int(np.flatnonzero(~finite)[0])}); clean them or pass drop_nonfinite=True"
+            )
+        arr = arr[finite]
+    return arr, finite
+
+
+def as_normals(normals, n_points: int, *, name: str = "normals"):
+    """Validate optional input normals: (N, 3), finite, non-zero; returned unit length."""
+    arr = np.asarray(normals)
+    if arr.dtype == object or not np.issubdtype(arr.dtype, np.number):
+        raise ValueError(f"{name} must be a numeric array of shape ({n_points}, 3), got dtype {arr.dtype}")
+    if arr.shape != (n_points, 3):
+        raise ValueError(f"{name} must have shape ({n_points}, 3) to match points, got shape {arr.shape}")
+    arr = np.array(arr, dtype=np.float64, order="C", copy=True)
+    if not np.isfinite(arr).all():
+        raise ValueError(f"{name} contains NaN or inf values")
+    length = np.linalg.norm(arr, axis=1)
+    tiny = length < 1e-12
+    if tiny.any():
+        raise ValueError(
+            f"{name} has {int(tiny.sum())} zero-length vector(s) (first at row {int(np.flatnonzero(tiny)[0])}); "
+            "pass normals=None to estimate them"
+        )
+    return arr / length[:, None]
+
+
+def check_int(value, *, name: str, low: int, high: int | None = None) -> int:
+    """``value`` as an int in ``[low, high]``; bool and non-integral values are refused."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise ValueError(f"{name} must be an integer, got {value!r}")
+    value = int(value)
+    if value < low or (high is not None and value > high):
+        allowed = f">= {low}" if high is None else f"in [{low}, {high}]"
+        raise ValueError(f"{name}={value} is out of range; allowed: {allowed}")
+    return value
+
+
+def check_choice(value, *, name: str, choices) -> str:
+    if not isinstance(value, str) or value not in choices:
+        raise ValueError(f"{name} {value!r} is invalid; must be one of {sorted(choices)}")
+    return value

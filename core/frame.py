@@ -1,0 +1,111 @@
+"""The one shared path from fitted normal derivatives to the augmented Darboux frame.
+
+Every method ends here: it reports, in a local orthonormal frame (t1, t2, z) at p,
+the normal at p as its first two components mu = (X, Y) and the derivatives of the
+normal components along the frame's tangent coordinates,
+
+    W = [[X_u, X_v],
+         [Y_u, Y_v]]          (paper eq. 21: the matrix of dn in the basis r_u, r_v).
+
+Point-fitting methods (z = f(u, v) with the frame's z as normal) report mu = 0 and
+W = -Hess f(0, 0).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .linalg import symmetric_eig2
+
+#: |mu|^2 at or above this leaves no upward normal: the fit is rejected.
+MAX_TILT2 = 1.0 - 1e-6
+
+
+def darboux_frame(t1, t2, z, mu, W):
+    """Normal, principal curvatures and directions from (mu, W) in local frames.
+
+    Parameters
+    ----------
+    t1, t2, z : (M, 3) orthonormal local frames (z is the current normal).
+    mu : (M, 2) fitted normal components (X, Y) at p (paper eqs. 25–26).
+    W : (M, 2, 2) fitted normal derivatives (eq. 21), in the height-field basis.
+
+    Returns
+    -------
+    normal, e1, e2 : (M, 3); k1, k2 : (M,) with k1 >= k2; ok : (M,) bool.
+
+    Notes
+    -----
+    With Z0 = sqrt(1 - X^2 - Y^2), f_u = -X/Z0 and f_v = -Y/Z0 (eq. A1), the tangent
+    vectors are r_u = (1, 0, f_u), r_v = (0, 1, f_v). dn maps r_u -> n_u, r_v -> n_v,
+    so its matrix in (r_u, r_v) is W. In an orthonormal basis B = (b1, b2) of the tangent
+    plane, with P = B^T [r_u r_v], the matrix is S = P W P^-1, symmetric for exact data
+    (the symmetry constraint, eq. 22). It is symmetrised and diagonalised; the
+    eigenvalues are k1 >= k2 (eq. 5), with the sign convention k = +1/R on a sphere
+    with outward normals.
+    """
+    mu = np.asarray(mu, dtype=np.float64)
+    X, Y = mu[:, 0], mu[:, 1]
+    tilt2 = X * X + Y * Y
+    ok = np.isfinite(tilt2) & (tilt2 < MAX_TILT2) & np.isfinite(W).all(axis=(1, 2))
+    X = np.where(ok, X, 0.0)
+    Y = np.where(ok, Y, 0.0)
+    Z0 = np.sqrt(1.0 - X * X - Y * Y)
+    Wc = np.where(ok[:, None, None], W, 0.0)
+
+    # Local coordinates: n = (X, Y, Z0), r_u = (1, 0, fu), r_v = (0, 1, fv).
+    fu, fv = -X / Z0, -Y / Z0
+    ru_len = np.sqrt(1.0 + fu * fu)
+    b1 = np.stack([1.0 / ru_len, np.zeros_like(X), fu / ru_len], axis=1)
+    n_loc = np.stack([X, Y, Z0], axis=1)
+    b2 = np.cross(n_loc, b1)
+    # P = B^T [r_u r_v]: r_u . b2 = 0 by construction.
+    p11 = ru_len
+    p12 = b1[:, 2] * fv  # r_v . b1 = (0, 1, fv) . b1
+    p22 = b2[:, 1] + b2[:, 2] * fv
+    # S = P W P^-1 with P upper triangular.
+    w11, w12, w21, w22 = Wc[:, 0, 0], Wc[:, 0, 1], Wc[:, 1, 0], Wc[:, 1, 1]
+    pw11 = p11 * w11 + p12 * w21
+    pw12 = p11 * w12 + p12 * w22
+    pw21 = p22 * w21
+    pw22 = p22 * w22
+    # P^-1 = [[1/p11, -p12/(p11 p22)], [0, 1/p22]]
+    s11 = pw11 / p11
+    s12 = (-pw11 * p12 / p11 + pw12) / p22
+    s21 = pw21 / p11
+    s22 = (-pw21 * p12 / p11 + pw22) / p22
+    k1, k2, c, s = symmetric_eig2(s11, 0.5 * (s12 + s21), s22)
+
+    e1_loc = c[:, None] * b1 + s[:, None] * b2
+    e2_loc = -s[:, None] * b1 + c[:, None] * b2
+    to_world = np.stack([t1, t2, z], axis=1)  # (M, 3 local, 3 world)
+    normal = np.einsum("mi,mij->mj", n_loc, to_world)
+    e1 = np.einsum("mi,mij->mj", e1_loc, to_world)
+    e2 = np.einsum("mi,mij->mj", e2_loc, to_world)
+    ok &= np.isfinite(k1) & np.isfinite(k2)
+    return normal, k1, k2, e1, e2, ok
+
+
+def height_field_derivatives(fu, fv, fuu, fuv, fvv):
+    """(mu, W) of the graph z = f(u, v) at the origin, with the upward normal.
+
+    n = (-f_u, -f_v, 1) / g, g = sqrt(1 + f_u^2 + f_v^2); differentiating gives W = dn
+    in the basis (r_u, r_v). With f_u = f_v = 0 this is simply W = -Hess f.
+    """
+    g = np.sqrt(1.0 + fu * fu + fv * fv)
+    g3 = g**3
+    du = (fu * fuu + fv * fuv) / g3  # d(1/g)/du = -du, so X_u = -fuu/g + fu*du
+    dv = (fu * fuv + fv * fvv) / g3
+    mu = np.stack([-fu / g, -fv / g], axis=1)
+    W = np.empty(fu.shape + (2, 2))
+    W[:, 0, 0] = -fuu / g + fu * du
+    W[:, 0, 1] = -fuv / g + fu * dv
+    W[:, 1, 0] = -fuv / g + fv * du
+    W[:, 1, 1] = -fvv / g + fv * dv
+    return mu, W
+
+
+def quadratic_form(a, b, c):
+    """(mu, W) for a fit whose frame z is the normal and whose Hessian is [[a, b], [b, c]]."""
+    zero = np.zeros_like(a)
+    return height_field_derivatives(zero, zero, a, b, c)

@@ -1,0 +1,81 @@
+"""The registry of curvature estimators (scipy ``integrate.solve_ivp``-style METHODS).
+
+Each method fits, per point, the normal at p and its derivatives in the local frame of
+a :class:`core.patch.Patch`, returning ``(mu, W, ok)`` for the shared
+:func:`core.frame.darboux_frame`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+from . import cubic, jet, normal_fit, quadric, tensor
+
+
+@dataclass(frozen=True)
+class Method:
+    """A registered estimator.
+
+    Attributes
+    ----------
+    name : registry key, e.g. ``"nr"``.
+    title : short label for menus.
+    description : one paragraph, with the paper's equations.
+    fit : ``fit(patch, **options) -> (mu, W, ok)``.
+    default_passes : normal refinement passes run by default (NR: 1).
+    options : default values of the method's options.
+    min_k : smallest neighbourhood that determines the fit.
+    """
+
+    name: str
+    title: str
+    description: str
+    fit: Callable
+    default_passes: int = 0
+    options: dict = field(default_factory=dict)
+    min_k: int = 3
+
+    @property
+    def uses_passes(self) -> bool:
+        """Whether refinement passes make sense (methods that refine the normal)."""
+        return self.name in ("nf", "nr", "jet")
+
+
+def _registry():
+    nf_opts = dict(normal_fit.DEFAULTS)
+    entries = [
+        Method("nr", "NR – normal fitting + refinement", normal_fit.NR_DOC, normal_fit.fit, 1, nf_opts, 4),
+        Method("nf", "NF – normal fitting", normal_fit.NF_DOC, normal_fit.fit, 0, nf_opts, 4),
+        Method("ct", "CT – curvature tensor", tensor.DOC, tensor.fit, 0, {}, 3),
+        Method("qp", "QP – quadric fit to points", quadric.QP_DOC, quadric.fit_points, 0, {}, 4),
+        Method("qn", "QN – quadric fit to normals", quadric.QN_DOC, quadric.fit_normals, 0, {}, 3),
+        Method("cf", "CF – cubic fit to points + normals", cubic.CF_DOC, cubic.fit_points_normals, 0, {}, 4),
+        Method("cn", "CN – cubic fit to normals", cubic.CN_DOC, cubic.fit_normals, 0, {}, 5),
+        Method("jet", "Jet – osculating jet (Cazals–Pouget)", jet.DOC, jet.fit, 0, dict(jet.DEFAULTS), 10),
+    ]
+    return {m.name: m for m in entries}
+
+
+METHODS: dict[str, Method] = _registry()
+
+
+def get_method(method) -> Method:
+    """Look a method up by name (case-insensitive); unknown names list the valid ones."""
+    if isinstance(method, Method):
+        return method
+    if isinstance(method, str) and method.lower() in METHODS:
+        return METHODS[method.lower()]
+    raise ValueError(f"method {method!r} is unknown; valid methods are: {', '.join(METHODS)}")
+
+
+def check_options(method: Method, options) -> dict:
+    """Merge user options over the method's defaults; unknown keys are an error."""
+    options = dict(options or {})
+    unknown = sorted(set(options) - set(method.options))
+    if unknown:
+        allowed = ", ".join(sorted(method.options)) or "none"
+        raise ValueError(
+            f"option(s) {unknown} do not apply to method {method.name!r}; its options are: {allowed}"
+        )
+    return {**method.options, **options}

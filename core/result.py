@@ -1,0 +1,85 @@
+"""The frozen result of an estimate: the augmented Darboux frame of every point."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass(frozen=True, eq=False)
+class CurvatureResult:
+    """Per-point differential geometry, one row per input point.
+
+    Attributes
+    ----------
+    points, normals : (N, 3) arrays; normals are the (refined) unit normals.
+    k1, k2 : (N,) principal curvatures, k1 >= k2, eigenvalues of dn (k = +1/R on a
+        sphere with outward normals).
+    e1, e2 : (N, 3) unit principal directions (sign is arbitrary), orthogonal to the normal.
+    valid : (N,) bool. Where False the neighbourhood was degenerate (duplicates,
+        collinear, rank-deficient fit): k1, k2, e1, e2 are NaN there, never a made-up value.
+    method, k, passes, params : what was run.
+    neighbours : the :class:`core.Neighbours` used, to pass back for a fast re-estimate.
+    """
+
+    points: np.ndarray
+    normals: np.ndarray
+    k1: np.ndarray
+    k2: np.ndarray
+    e1: np.ndarray
+    e2: np.ndarray
+    valid: np.ndarray
+    method: str
+    k: int
+    passes: int
+    params: dict = field(default_factory=dict)
+    neighbours: object = field(default=None, repr=False)
+
+    def __len__(self) -> int:
+        return len(self.points)
+
+    @property
+    def n_invalid(self) -> int:
+        return int(np.count_nonzero(~self.valid))
+
+    @property
+    def gaussian(self) -> np.ndarray:
+        """K = k1 k2."""
+        return self.k1 * self.k2
+
+    @property
+    def mean(self) -> np.ndarray:
+        """H = (k1 + k2) / 2 (the paper's eq. 6 prints k1 + k2: its fraction bar was lost)."""
+        return 0.5 * (self.k1 + self.k2)
+
+    @property
+    def shape_index(self) -> np.ndarray:
+        """Koenderink's shape index (2/pi) arctan((k1 + k2) / (k1 - k2)) in [-1, 1].
+
+        +1 is a cap curving away from the normal like a sphere seen from outside, -1 a cup,
+        0 a symmetric saddle; planar points (k1 = k2 = 0) give 0.
+        """
+        return (2.0 / np.pi) * np.arctan2(self.k1 + self.k2, self.k1 - self.k2)
+
+    @property
+    def curvedness(self) -> np.ndarray:
+        """Koenderink's curvedness sqrt((k1^2 + k2^2) / 2)."""
+        return np.sqrt(0.5 * (self.k1**2 + self.k2**2))
+
+    def field(self, name: str) -> np.ndarray:
+        """A scalar field by name: one of :data:`FIELDS`."""
+        if name not in FIELDS:
+            raise ValueError(f"field {name!r} is unknown; valid fields are: {', '.join(FIELDS)}")
+        return getattr(self, FIELDS[name])
+
+
+#: scalar fields by short name -> attribute
+FIELDS = {
+    "mean": "mean",
+    "gaussian": "gaussian",
+    "k1": "k1",
+    "k2": "k2",
+    "shape_index": "shape_index",
+    "curvedness": "curvedness",
+}
