@@ -10,7 +10,7 @@ from .frame import darboux_frame
 from .methods import check_options, get_method
 from .neighbours import Neighbours, build_neighbours
 from .normals import orient_normals, pca_normals
-from .patch import make_patch
+from .patch import Chunk
 from .result import CurvatureResult
 
 _CHUNK = 32_768
@@ -148,9 +148,9 @@ def _fit_all(pts, nrm, idx, h, has_normal, method, opts, report):
         centres = centres[usable[centres]]
         if len(centres):
             hc = h[centres]
-            patch = make_patch(pts, nrm, idx[centres], centres, hc)
-            mu, W, ok = method.fit(patch, **opts)
-            c_n, c_k1, c_k2, c_e1, c_e2, ok2 = darboux_frame(patch.t1, patch.t2, patch.z, mu, W / hc[:, None, None])
+            chunk = Chunk.build(pts, nrm, idx[centres], hc, centres)
+            mu, W, ok = method.fit(chunk, **opts)
+            c_n, c_k1, c_k2, c_e1, c_e2, ok2 = darboux_frame(chunk.t1, chunk.t2, chunk.z, mu, W / hc[:, None, None])
             good = ok & ok2
             sel = centres[good]
             normal[sel], e1[sel], e2[sel] = c_n[good], c_e1[good], c_e2[good]

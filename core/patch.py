@@ -1,12 +1,44 @@
-"""Local patches: each point's neighbours expressed in a frame whose z axis is its normal."""
+"""What a method sees: a chunk of points with their neighbours and local frames."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
 from .linalg import tangent_basis
+
+
+@dataclass(frozen=True, eq=False)
+class Chunk:
+    """M centre points, their k neighbours and local frames (z = current normal).
+
+    ``points`` and ``normals`` are the whole cloud's arrays (normals NaN where a point
+    has none); ``idx`` (M, k) are the centres' neighbours, ``h`` (M,) the distance to the
+    k-th neighbour. Fitting methods take a chunk and return ``(mu, W, ok)`` with W in
+    units of 1/h (lengths divided by h).
+    """
+
+    points: np.ndarray
+    normals: np.ndarray
+    idx: np.ndarray
+    h: np.ndarray
+    centres: np.ndarray
+    t1: np.ndarray
+    t2: np.ndarray
+    z: np.ndarray
+
+    @classmethod
+    def build(cls, points, normals, idx, h, centres):
+        z = normals[centres]
+        t1, t2 = tangent_basis(z)
+        return cls(points, normals, np.ascontiguousarray(idx), h, centres, t1, t2, z)
+
+    @cached_property
+    def patch(self) -> "Patch":
+        """The neighbourhoods as arrays in the local frames (for the numpy methods)."""
+        return make_patch(self)
 
 
 @dataclass(frozen=True, eq=False)
@@ -45,10 +77,10 @@ class Patch:
         return np.sqrt(self.u**2 + self.v**2 + self.w**2)
 
 
-def make_patch(points, normals, idx, centres, h) -> Patch:
-    """Build the patch of ``centres`` (indices) whose neighbours are ``idx`` (M, k)."""
-    z = normals[centres]
-    t1, t2 = tangent_basis(z)
+def make_patch(chunk: Chunk) -> Patch:
+    """Express each centre's neighbours in its local frame, lengths in units of h."""
+    points, normals, idx, centres, h = chunk.points, chunk.normals, chunk.idx, chunk.centres, chunk.h
+    t1, t2, z = chunk.t1, chunk.t2, chunk.z
     d = points[idx] - points[centres][:, None, :]
     inv_h = 1.0 / h
     u = np.einsum("mkj,mj->mk", d, t1) * inv_h[:, None]

@@ -28,7 +28,8 @@ def _solve(A, y, wt):
     return mu, W, ok
 
 
-def fit_points_normals(patch):
+def fit_points_normals(chunk):
+    patch = chunk.patch
     u, v = patch.u, patch.v
     ap = np.stack([0.5 * u * u, u * v, 0.5 * v * v, u**3, u * u * v, u * v * v, v**3], axis=2)
     ax, ay = _normal_design(u, v)
@@ -39,7 +40,8 @@ def fit_points_normals(patch):
     return _solve(A, y, wt)
 
 
-def fit_normals(patch):
+def fit_normals(chunk):
+    patch = chunk.patch
     ax, ay = _normal_design(patch.u, patch.v)
     sx, sy = normal_rows(patch)
     A = np.concatenate([ax, ay], axis=1)

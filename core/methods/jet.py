@@ -15,7 +15,8 @@ DOC = (
 DEFAULTS = {"degree": 2}
 
 
-def fit(patch, *, degree=2):
+def fit(chunk, *, degree=2):
+    patch = chunk.patch
     if degree not in (2, 3):
         raise ValueError(f"degree {degree!r} is invalid; must be 2 or 3")
     u, v = patch.u, patch.v

@@ -13,7 +13,8 @@ QN_DOC = (
 )
 
 
-def fit_points(patch):
+def fit_points(chunk):
+    patch = chunk.patch
     u, v = patch.u, patch.v
     A = np.stack([0.5 * u * u, u * v, 0.5 * v * v], axis=2)
     x, ok = weighted_lstsq(A, patch.w)
@@ -26,7 +27,8 @@ def normal_rows(patch):
     return -patch.X / patch.Z, -patch.Y / patch.Z
 
 
-def fit_normals(patch):
+def fit_normals(chunk):
+    patch = chunk.patch
     u, v = patch.u, patch.v
     zero = np.zeros_like(u)
     sx, sy = normal_rows(patch)

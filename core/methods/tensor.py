@@ -13,7 +13,8 @@ DOC = (
 )
 
 
-def fit(patch):
+def fit(chunk):
+    patch = chunk.patch
     """Fit (mu = 0, W symmetric) per point."""
     u, v = patch.u, patch.v
     zero = np.zeros_like(u)
