@@ -4,7 +4,7 @@ The augmented Darboux frame (p, n, e1, e2, k1, k2) of every point by the normal-
 method of Cheng & Zhang (2009) and the baselines it is compared with. numpy/scipy only.
 """
 
-from . import metrics, noise, shapes
+from . import io, metrics, noise, shapes
 from ._progress import Cancelled
 from .estimate import estimate
 from .methods import METHODS, Method, get_method

@@ -1,0 +1,131 @@
+"""``python -m core bench perf``: wall time and peak memory of each stage of an NR estimate.
+
+The reference is the neighbour search alone (``cKDTree(points)`` + ``query(k)`` on all
+cores) measured in the same run, so the printed ratio does not depend on the machine.
+Targets (issue "core"): whole NR estimate (1 refinement pass) <= 2x that search; peak
+memory <= 2 GB at 1M points; re-estimate with cached neighbours on 100k points < 0.5 s.
+"""
+
+from __future__ import annotations
+
+import argparse
+import threading
+import time
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ._table import fmt, text_table
+
+
+class _PeakRSS:
+    """Sample the resident set size (Linux /proc) in a thread; peak above the start."""
+
+    def __init__(self, interval=0.002):
+        self.interval = interval
+
+    @staticmethod
+    def rss() -> int:
+        try:
+            with open("/proc/self/statm") as fh:
+                return int(fh.read().split()[1]) * 4096
+        except OSError:  # not Linux: memory is not reported
+            return 0
+
+    def __enter__(self):
+        self.start = self.peak = self.rss()
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+        return self
+
+    def _run(self):
+        while not self._stop.is_set():
+            self.peak = max(self.peak, self.rss())
+            time.sleep(self.interval)
+
+    def __exit__(self, *exc):
+        self._stop.set()
+        self._thread.join()
+        self.peak = max(self.peak, self.rss())
+
+    @property
+    def delta_mb(self) -> float:
+        return (self.peak - self.start) / 2**20
+
+    @property
+    def peak_mb(self) -> float:
+        return self.peak / 2**20
+
+
+def _timed(fn):
+    with _PeakRSS() as mem:
+        t0 = time.perf_counter()
+        out = fn()
+        dt = time.perf_counter() - t0
+    return out, dt, mem
+
+
+def _stage_rows(points, k):
+    """Each stage of the NR pipeline run by hand, in the order estimate() runs them."""
+    import core
+    from core.estimate import _fit_all
+    from core.methods import get_method
+    from core.normals import orient_normals, pca_normals
+
+    rows = []
+    nb, dt, mem = _timed(lambda: core.build_neighbours(points, k))
+    rows.append(("neighbours (kd-tree)", dt, mem))
+    idx, dist = nb.take(k)
+    (nrm, ok), dt, mem = _timed(lambda: pca_normals(nb.points, idx, dist))
+    rows.append(("PCA normals (eqs. 13-14)", dt, mem))
+    nrm, dt, mem = _timed(lambda: orient_normals(nb.points, nrm, idx, "outward", ok=ok))
+    rows.append(("orientation (Hoppe MST)", dt, mem))
+    m = get_method("nr")
+    out, dt, mem = _timed(lambda: _fit_all(nb.points, nrm, idx, dist[:, -1], ok, m, m.options, core._progress.Progress()))
+    rows.append(("NF fit + frame, pass 1", dt, mem))
+    nrm2 = np.where(out[-1][:, None], out[0], nrm)
+    _, dt, mem = _timed(lambda: _fit_all(nb.points, nrm2, idx, dist[:, -1], ok, m, m.options, core._progress.Progress()))
+    rows.append(("NF fit + frame, pass 2 (NR)", dt, mem))
+    return rows, nb
+
+
+def run(sizes=(100_000, 1_000_000), k=15, seed=0, out=print):
+    import core
+
+    core.estimate(core.shapes.torus(2000, seed=seed).points, k=k)  # compile the kernels once
+    summary = []
+    for n in sizes:
+        pts = core.shapes.torus(n, seed=seed).points
+        _, t_ref, mem_ref = _timed(lambda: cKDTree(pts).query(pts, k=k, workers=-1))
+        res, t_all, mem_all = _timed(lambda: core.estimate(pts, k=k, method="nr"))
+        stages, nb = _stage_rows(pts, k)
+        _, t_re, _ = _timed(lambda: core.estimate(pts, k=k, method="nr", neighbours=nb))
+        _, t_nf, _ = _timed(lambda: core.estimate(pts, k=k, method="nf", neighbours=nb))
+        rows = [("cKDTree build + query (reference)", t_ref, mem_ref)] + stages + [
+            ("core.estimate NR, end to end", t_all, mem_all),
+        ]
+        table = [[name, fmt(dt, 3), fmt(dt / t_ref, 3), fmt(mem.delta_mb, 4), fmt(mem.peak_mb, 4)]
+                 for name, dt, mem in rows]
+        table.append(["re-estimate NR, cached neighbours", fmt(t_re, 3), fmt(t_re / t_ref, 3), "", ""])
+        table.append(["re-estimate NF, cached neighbours", fmt(t_nf, 3), fmt(t_nf / t_ref, 3), "", ""])
+        out(text_table(["stage", "seconds", "x search", "stage MB", "process peak MB"], table,
+                       title=f"\n{n:,} points (torus), k = {k}"))
+        summary.append(dict(n=n, ratio=t_all / t_ref, peak_mb=mem_all.peak_mb, reestimate=t_re,
+                            invalid=res.n_invalid))
+    out("")
+    for s in summary:
+        out(f"{s['n']:>9,} points: NR / search = {s['ratio']:.2f} (target <= 2), "
+            f"peak {s['peak_mb']:.0f} MB (target <= 2048 at 1M), "
+            f"re-estimate {s['reestimate']:.3f} s (target < 0.5 s at 100k), invalid {s['invalid']}")
+    return summary
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(prog="python -m core bench perf", description=__doc__.splitlines()[0])
+    p.add_argument("--sizes", default="100000,1000000", help="comma-separated point counts")
+    p.add_argument("--k", type=int, default=15)
+    p.add_argument("--seed", type=int, default=0)
+    a = p.parse_args(argv)
+    run(tuple(int(s) for s in a.sizes.split(",")), k=a.k, seed=a.seed)
+    return 0
