@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import kernels, scale
 from ._progress import Progress
 from ._validate import as_normals, as_points, check_int
 from .frame import darboux_frame
@@ -16,15 +17,23 @@ from .result import CurvatureResult
 _CHUNK = 32_768
 _ORIENTATIONS = ("auto", "propagate", "outward", "keep")
 MAX_PASSES = 20
+#: k of the initial PCA normals when k is chosen automatically (the paper's k)
+PCA_K = 15
+#: a point whose distance to its neighbours' plane exceeds this many spreads is an outlier
+OUTLIER_SCORE = 6.0
+#: RMS residual of the normal fit (unit normals) above which a point sits on a crease
+CREASE_RMS = 0.25
+_OUTLIER_FLOOR = 0.05
 
 
 def estimate(
     points,
     normals=None,
     *,
-    k=15,
+    k="auto",
     method="nr",
     passes=None,
+    tol=None,
     orientation="auto",
     neighbours=None,
     options=None,
@@ -38,10 +47,14 @@ def estimate(
     points : (N, 3) array_like of finite coordinates.
     normals : (N, 3) array_like, optional. Used as the initial normals (their signs are
         kept); otherwise weighted PCA (eqs. 13–14) estimates them.
-    k : int, neighbourhood size including the point itself (the paper uses 15).
+    k : "auto" (default) or int. Neighbourhood size including the point itself (the paper
+        uses 15). "auto" (NF/NR only) chooses k per point by a bias–variance rule, see
+        :mod:`core.scale`; the result's ``k_point`` holds the choice.
     method : str, one of :data:`core.METHODS` ("nr", "nf", "ct", "qp", "qn", "cf", "cn", "jet").
     passes : int, optional. Normal refinement passes after the first fit (NR, §4.4);
         default: the method's (1 for "nr", 0 otherwise). 0 gives plain NF.
+    tol : float, optional. Stop refining early once the mean change of the normals in a
+        pass is below ``tol`` degrees (``passes`` is then the maximum).
     orientation : "auto" (keep given normals; orient estimated ones outward), "propagate"
         (Hoppe et al. 1992), "outward", "keep", or a (3,) viewpoint.
     neighbours : :class:`core.Neighbours`, optional, from :func:`build_neighbours` on the
@@ -60,7 +73,7 @@ def estimate(
     --------
     >>> from core import estimate, shapes
     >>> s = shapes.sphere(2000, radius=2.0, seed=1)
-    >>> r = estimate(s.points, k=15)
+    >>> r = estimate(s.points)
     >>> bool(abs(np.median(r.mean) - 0.5) < 0.01)
     True
     """
@@ -70,42 +83,88 @@ def estimate(
         raise ValueError(f"points must hold at least 3 points, got {n}")
     m = get_method(method)
     opts = check_options(m, options)
-    k = check_int(k, name="k", low=m.min_k, high=n)
+    auto = isinstance(k, str) and k == "auto"
+    if auto:
+        if m.name not in ("nf", "nr"):
+            raise ValueError(f'k="auto" is available for methods nf and nr, not {m.name!r}; pass an integer k')
+        ks = scale.candidates(n)
+        k_search = ks[-1]
+    else:
+        if isinstance(k, str):
+            raise ValueError(f'k must be an integer or "auto", got {k!r}')
+        k = check_int(k, name="k", low=m.min_k, high=n)
+        k_search = k
     passes = m.default_passes if passes is None else check_int(passes, name="passes", low=0, high=MAX_PASSES)
+    if tol is not None and not (isinstance(tol, (int, float)) and np.isfinite(tol) and tol > 0):
+        raise ValueError(f"tol must be a positive number of degrees or None, got {tol!r}")
     if normals is not None:
         normals = as_normals(np.asarray(normals)[kept] if drop_nonfinite else normals, n)
     view = _check_orientation(orientation)
     report = Progress(progress)
 
-    nb = _neighbours(pts, k, neighbours, report.sub(0.0, 0.3))
-    idx, dist = nb.take(k)
+    nb = _neighbours(pts, k_search, neighbours, report.sub(0.0, 0.3))
+    idx_p, dist_p = nb.take(min(PCA_K, k_search) if auto else k_search)
     if normals is None:
-        nrm, has_normal = pca_normals(pts, idx, dist, progress=report.sub(0.3, 0.4))
+        nrm, has_normal = pca_normals(pts, idx_p, dist_p, progress=report.sub(0.3, 0.4))
         mode = "outward" if view == "auto" else view
     else:
         nrm, has_normal = normals, np.ones(n, dtype=bool)
         mode = "keep" if view == "auto" else view
-    nrm = orient_normals(pts, nrm, idx, mode, ok=has_normal)
+    nrm = orient_normals(pts, nrm, idx_p, mode, ok=has_normal)
     report(0.45, "orientation")
 
-    h = dist[:, -1]
+    fit_start = 0.45
+    if auto:
+        kc = scale.choose_k(pts, nrm, nb, has_normal, m, opts, ks, report.sub(0.45, 0.7))
+        fit_start = 0.7
+    else:
+        kc = np.full(n, k, dtype=np.int64)
+    idx, dist = nb.take(int(kc.max()))
+    h = dist[np.arange(n), kc - 1]
+
+    scores = np.full(n, np.nan)
+    kernels.outlier_scores(pts, np.ascontiguousarray(idx_p), _OUTLIER_FLOOR, scores)
+    outlier = scores > OUTLIER_SCORE
+    robust = opts.get("robust") is not None
     n_fits = passes + 1
+    passes_run = 0
     for p in range(n_fits):
-        sub = report.sub(0.45 + 0.55 * p / n_fits, 0.45 + 0.55 * (p + 1) / n_fits)
-        out = _fit_all(pts, nrm, idx, h, has_normal, m, opts, sub)
-        refined, k1, k2, e1, e2, valid = out
-        if p < passes:  # refinement: the refined normals become the input normals
-            nrm = np.where(valid[:, None], refined, nrm)
+        span = (1.0 - fit_start) / n_fits
+        sub = report.sub(fit_start + span * p, fit_start + span * (p + 1))
+        refined, k1, k2, e1, e2, valid, rms = _fit_all(pts, nrm, idx, kc, h, has_normal, m, opts, sub)
+        if p == passes:
+            break
+        if robust and p == 0:  # outliers leave their neighbours' fits (and are not estimated)
+            has_normal = has_normal & ~outlier
+            refined[outlier] = np.nan
+        new = np.where(valid[:, None], refined, nrm)
+        change = _mean_angle_deg(new, nrm, valid)
+        nrm = new
+        passes_run += 1
+        if tol is not None and change < tol:
+            refined, k1, k2, e1, e2, valid, rms = _fit_all(pts, nrm, idx, kc, h, has_normal, m, opts, sub)
+            break
+    report(1.0, "done")
     params = dict(
-        method=m.name, k=k, passes=passes, orientation=orientation if isinstance(orientation, str) else "viewpoint",
+        method=m.name, k="auto" if auto else k, passes=passes, passes_run=passes_run, tol=tol,
+        orientation=orientation if isinstance(orientation, str) else "viewpoint",
         options=opts, n_points=n, dropped=int(np.count_nonzero(~kept)),
         normals_given=normals is not None,
     )
     normals_out = np.where(valid[:, None], refined, nrm)
+    crease = valid & (rms > CREASE_RMS)
     return CurvatureResult(
         points=pts, normals=normals_out, k1=k1, k2=k2, e1=e1, e2=e2, valid=valid,
-        method=m.name, k=k, passes=passes, params=params, neighbours=nb,
+        k_point=kc, outlier_score=scores, crease=crease,
+        method=m.name, k="auto" if auto else k, passes=passes, params=params, neighbours=nb,
     )
+
+
+def _mean_angle_deg(a, b, mask):
+    if not mask.any():
+        return 0.0
+    cos = np.abs(np.einsum("ij,ij->i", a[mask], b[mask]))
+    return float(np.degrees(np.arccos(np.clip(cos, 0.0, 1.0))).mean())
 
 
 def _check_orientation(orientation):
@@ -133,14 +192,15 @@ def _neighbours(pts, k, neighbours, report) -> Neighbours:
     return neighbours
 
 
-def _fit_all(pts, nrm, idx, h, has_normal, method, opts, report):
-    """Run one fit of ``method`` over all points in chunks; returns the frame arrays."""
+def _fit_all(pts, nrm, idx, kc, h, has_normal, method, opts, report):
+    """One fit of ``method`` over all points in chunks, through the shared frame path."""
     n = len(pts)
     normal = np.full((n, 3), np.nan)
     e1 = np.full((n, 3), np.nan)
     e2 = np.full((n, 3), np.nan)
     k1 = np.full(n, np.nan)
     k2 = np.full(n, np.nan)
+    rms = np.full(n, np.nan)
     valid = np.zeros(n, dtype=bool)
     usable = has_normal & (h > 0)
     for start in range(0, n, _CHUNK):
@@ -148,13 +208,15 @@ def _fit_all(pts, nrm, idx, h, has_normal, method, opts, report):
         centres = centres[usable[centres]]
         if len(centres):
             hc = h[centres]
-            chunk = Chunk.build(pts, nrm, idx[centres], hc, centres)
-            mu, W, ok = method.fit(chunk, **opts)
+            chunk = Chunk.build(pts, nrm, idx[centres], hc, centres, kc[centres])
+            mu, W, ok, *diag = method.fit(chunk, **opts)
             c_n, c_k1, c_k2, c_e1, c_e2, ok2 = darboux_frame(chunk.t1, chunk.t2, chunk.z, mu, W / hc[:, None, None])
             good = ok & ok2
             sel = centres[good]
             normal[sel], e1[sel], e2[sel] = c_n[good], c_e1[good], c_e2[good]
             k1[sel], k2[sel] = c_k1[good], c_k2[good]
+            if diag and "rms" in diag[0]:
+                rms[sel] = diag[0]["rms"][good]
             valid[sel] = True
         report(min(n, start + _CHUNK) / n, method.name)
-    return normal, k1, k2, e1, e2, valid
+    return normal, k1, k2, e1, e2, valid, rms

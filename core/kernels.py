@@ -12,6 +12,8 @@ import numpy as np
 from numba import njit, prange
 
 _OPTS = dict(cache=True, nogil=True)
+#: points per parallel work item (scratch arrays are allocated once per block)
+_BLOCK = 256
 
 
 @njit(**_OPTS, inline="always")
@@ -24,21 +26,18 @@ def _theta(x):
 
 
 @njit(**_OPTS)
-def _smallest_eigvec_sym3(a00, a01, a02, a11, a12, a22, out):
+def _smallest_eigvec_sym3(a00, a01, a02, a11, a12, a22):
     """Eigenvalues (ascending) of a symmetric 3x3 and the unit eigenvector of the smallest.
 
     Closed-form eigenvalues (Smith 1961); the eigenvector is the largest cross product of
-    two rows of A - l_min I. Returns (l0, l1, l2); ``out`` receives the vector.
+    two rows of A - l_min I. Returns (l0, l1, l2, x, y, z); NaN vector if A = c I.
     """
     p1 = a01 * a01 + a02 * a02 + a12 * a12
     q = (a00 + a11 + a22) / 3.0
     b00, b11, b22 = a00 - q, a11 - q, a22 - q
     p2 = b00 * b00 + b11 * b11 + b22 * b22 + 2.0 * p1
     if p2 <= 0.0:
-        out[0] = math.nan
-        out[1] = math.nan
-        out[2] = math.nan
-        return q, q, q
+        return q, q, q, math.nan, math.nan, math.nan
     p = math.sqrt(p2 / 6.0)
     det = (
         b00 * (b11 * b22 - a12 * a12)
@@ -55,6 +54,7 @@ def _smallest_eigvec_sym3(a00, a01, a02, a11, a12, a22, out):
     r1x, r1y, r1z = a01, a11 - l0, a12
     r2x, r2y, r2z = a02, a12, a22 - l0
     best = -1.0
+    ox = oy = oz = 0.0
     for c in range(3):
         if c == 0:
             x, y, z = r0y * r1z - r0z * r1y, r0z * r1x - r0x * r1z, r0x * r1y - r0y * r1x
@@ -65,13 +65,11 @@ def _smallest_eigvec_sym3(a00, a01, a02, a11, a12, a22, out):
         nn = x * x + y * y + z * z
         if nn > best:
             best = nn
-            out[0], out[1], out[2] = x, y, z
+            ox, oy, oz = x, y, z
     s = math.sqrt(best)
-    if s > 0.0:
-        out[0] /= s
-        out[1] /= s
-        out[2] /= s
-    return l0, l1, l2
+    if not s > 0.0:
+        return l0, l1, l2, math.nan, math.nan, math.nan
+    return l0, l1, l2, ox / s, oy / s, oz / s
 
 
 @njit(**_OPTS, parallel=True)
@@ -104,125 +102,212 @@ def pca_normals(points, idx, dist, start, reach, collinear, normals, ok):
             c11 += w * dy * dy
             c12 += w * dy * dz
             c22 += w * dz * dz
-        vec = np.empty(3)
-        l0, l1, l2 = _smallest_eigvec_sym3(c00, c01, c02, c11, c12, c22, vec)
-        if l1 > collinear * max(l2, 1e-300) and l1 > l0 and math.isfinite(vec[0]):
-            normals[i, 0], normals[i, 1], normals[i, 2] = vec[0], vec[1], vec[2]
+        l0, l1, l2, x, y, z = _smallest_eigvec_sym3(c00, c01, c02, c11, c12, c22)
+        if l1 > collinear * max(l2, 1e-300) and l1 > l0 and math.isfinite(x):
+            normals[i, 0], normals[i, 1], normals[i, 2] = x, y, z
             ok[i] = True
 
 
+@njit(**_OPTS)
+def _solve_nf(u, v, X, Y, wt, n, rcond, coef):
+    """Weighted least squares of X and Y on [1, u, v] (eqs. 25–26).
+
+    Writes coef = (cX0, cX1, cX2, cY0, cY1, cY2, inv11, inv22, rssX, rssY, sumw) and
+    returns False when the equilibrated normal matrix is near singular (determinant test).
+    """
+    s1 = su = sv = suu = suv = svv = 0.0
+    x0 = x1 = x2 = y0 = y1 = y2 = xx = yy = 0.0
+    for j in range(n):
+        w = wt[j]
+        if w == 0.0:
+            continue
+        uj, vj, Xj, Yj = u[j], v[j], X[j], Y[j]
+        s1 += w
+        su += w * uj
+        sv += w * vj
+        suu += w * uj * uj
+        suv += w * uj * vj
+        svv += w * vj * vj
+        x0 += w * Xj
+        x1 += w * uj * Xj
+        x2 += w * vj * Xj
+        y0 += w * Yj
+        y1 += w * uj * Yj
+        y2 += w * vj * Yj
+        xx += w * Xj * Xj
+        yy += w * Yj * Yj
+    if not (s1 > 0.0 and suu > 0.0 and svv > 0.0):
+        return False
+    d0, d1, d2 = math.sqrt(s1), math.sqrt(suu), math.sqrt(svv)
+    g01, g02, g12 = su / (d0 * d1), sv / (d0 * d2), suv / (d1 * d2)
+    i00 = 1.0 - g12 * g12
+    i01 = g02 * g12 - g01
+    i02 = g01 * g12 - g02
+    i11 = 1.0 - g02 * g02
+    i12 = g01 * g02 - g12
+    i22 = 1.0 - g01 * g01
+    det = i00 + g01 * i01 + g02 * i02
+    if not det > rcond:
+        return False
+    # G = D Gs D, so G^-1 = D^-1 adj(Gs) D^-1 / det
+    e00 = i00 / (det * d0 * d0)
+    e01 = i01 / (det * d0 * d1)
+    e02 = i02 / (det * d0 * d2)
+    e11 = i11 / (det * d1 * d1)
+    e12 = i12 / (det * d1 * d2)
+    e22 = i22 / (det * d2 * d2)
+    coef[0] = e00 * x0 + e01 * x1 + e02 * x2
+    coef[1] = e01 * x0 + e11 * x1 + e12 * x2
+    coef[2] = e02 * x0 + e12 * x1 + e22 * x2
+    coef[3] = e00 * y0 + e01 * y1 + e02 * y2
+    coef[4] = e01 * y0 + e11 * y1 + e12 * y2
+    coef[5] = e02 * y0 + e12 * y1 + e22 * y2
+    coef[6] = e11
+    coef[7] = e22
+    coef[8] = max(xx - (coef[0] * x0 + coef[1] * x1 + coef[2] * x2), 0.0)
+    coef[9] = max(yy - (coef[3] * y0 + coef[4] * y1 + coef[5] * y2), 0.0)
+    coef[10] = s1
+    coef[11] = e12
+    coef[12] = e01
+    coef[13] = e02
+    return True
+
+
+@njit(**_OPTS)
+def _robust_weights(u, v, X, Y, base, n, coef, kind, wt, res):
+    """IRLS weights from the residuals of the current fit (Huber 1.345 or Tukey 4.685 x MAD)."""
+    m = 0
+    for j in range(n):
+        rx = X[j] - (coef[0] + coef[1] * u[j] + coef[2] * v[j])
+        ry = Y[j] - (coef[3] + coef[4] * u[j] + coef[5] * v[j])
+        res[j] = math.sqrt(rx * rx + ry * ry)
+        if base[j] > 0.0:
+            m += 1
+    if m == 0:
+        return
+    tmp = np.empty(m)
+    c = 0
+    for j in range(n):
+        if base[j] > 0.0:
+            tmp[c] = res[j]
+            c += 1
+    scale = max(1.4826 * np.median(tmp), 1e-4)
+    for j in range(n):
+        r = res[j] / scale
+        if kind == 1:  # Huber
+            f = 1.0 if r <= 1.345 else 1.345 / r
+        else:  # Tukey biweight
+            f = (1.0 - (r / 4.685) ** 2) ** 2 if r < 4.685 else 0.0
+        wt[j] = base[j] * f
+
+
 @njit(**_OPTS, parallel=True)
-def normal_fit(points, normals, idx, h, centres, t1, t2, z, theta_reach, weighting, constraint, rcond,
-               mu, W, ok):
+def normal_fit(points, normals, idx, kc, h, centres, t1, t2, z, theta_reach, weighting, constraint,
+               robust, rcond, mu, W, var, rms, ok):
     """NF per point (§4.3–4.4): fit X, Y of the neighbours' normals with [1, u, v].
 
-    weighting: 0 uniform (eqs. 25–26), 1 theta of eq. 14. constraint: 0 none,
-    1 Euclidean projection onto the symmetry plane (§4.4), 2 exact (Lagrange multiplier
-    in the metric of the normal equations, two fixed-point iterations on mu).
-    Coordinates are divided by h; W is returned in those units.
+    kc (M,): neighbours used per point (the first kc of each row of idx). weighting: 0
+    uniform (eqs. 25–26), 1 theta of eq. 14. constraint: 0 none, 1 Euclidean projection
+    onto the symmetry plane (§4.4), 2 exact (Lagrange multiplier in the metric of the
+    normal equations, two fixed-point iterations on mu). robust: 0 none, 1 Huber, 2 Tukey
+    (3 IRLS iterations). Coordinates are divided by h; W is returned in those units, with
+    var (M, 3) the least-squares variances of W11, (W12 + W21)/2, W22 and rms (M,) the
+    weighted RMS residual of the normal components.
     """
     m = len(centres)
-    k = idx.shape[1]
-    for r in prange(m):
-        i = centres[r]
-        hi = h[r]
-        a0, a1, a2 = t1[r, 0], t1[r, 1], t1[r, 2]
-        b0, b1, b2 = t2[r, 0], t2[r, 1], t2[r, 2]
-        c0, c1, c2 = z[r, 0], z[r, 1], z[r, 2]
-        s1 = su = sv = suu = suv = svv = 0.0
-        x0 = x1 = x2 = y0 = y1 = y2 = 0.0
-        for j in range(k):
-            q = idx[r, j]
-            nx, ny, nz = normals[q, 0], normals[q, 1], normals[q, 2]
-            if not math.isfinite(nx):
-                continue
-            dx = (points[q, 0] - points[i, 0]) / hi
-            dy = (points[q, 1] - points[i, 1]) / hi
-            dz = (points[q, 2] - points[i, 2]) / hi
-            u = dx * a0 + dy * a1 + dz * a2
-            v = dx * b0 + dy * b1 + dz * b2
-            X = nx * a0 + ny * a1 + nz * a2
-            Y = nx * b0 + ny * b1 + nz * b2
-            if nx * c0 + ny * c1 + nz * c2 < 0.0:
-                X, Y = -X, -Y
-            wt = 1.0
-            if weighting == 1:
-                wt = _theta(math.sqrt(dx * dx + dy * dy + dz * dz) / theta_reach)
-            s1 += wt
-            su += wt * u
-            sv += wt * v
-            suu += wt * u * u
-            suv += wt * u * v
-            svv += wt * v * v
-            x0 += wt * X
-            x1 += wt * u * X
-            x2 += wt * v * X
-            y0 += wt * Y
-            y1 += wt * u * Y
-            y2 += wt * v * Y
-        # equilibrate, test conditioning by the determinant, invert by the adjugate
-        ok[r] = False
-        if not (s1 > 0.0 and suu > 0.0 and svv > 0.0):
+    kmax = idx.shape[1]
+    n_blocks = (m + _BLOCK - 1) // _BLOCK
+    for blk in prange(n_blocks):
+        # scratch arrays once per block: a per-point allocation would cost more than the fit
+        u = np.empty(kmax)
+        v = np.empty(kmax)
+        X = np.empty(kmax)
+        Y = np.empty(kmax)
+        base = np.empty(kmax)
+        wt = np.empty(kmax)
+        res = np.empty(kmax)
+        coef = np.empty(14)
+        for r in range(blk * _BLOCK, min(m, (blk + 1) * _BLOCK)):
+            _nf_point(points, normals, idx, kc, h, centres, t1, t2, z, theta_reach, weighting,
+                      constraint, robust, rcond, mu, W, var, rms, ok, r, u, v, X, Y, base, wt, res, coef)
+
+
+@njit(**_OPTS)
+def _nf_point(points, normals, idx, kc, h, centres, t1, t2, z, theta_reach, weighting, constraint,
+              robust, rcond, mu, W, var, rms, ok, r, u, v, X, Y, base, wt, res, coef):
+    """The NF fit of centre ``r`` (see :func:`normal_fit`), using the scratch arrays given."""
+    i = centres[r]
+    n = kc[r]
+    hi = h[r]
+    a0, a1, a2 = t1[r, 0], t1[r, 1], t1[r, 2]
+    b0, b1, b2 = t2[r, 0], t2[r, 1], t2[r, 2]
+    c0, c1, c2 = z[r, 0], z[r, 1], z[r, 2]
+    for j in range(n):
+        q = idx[r, j]
+        nx, ny, nz = normals[q, 0], normals[q, 1], normals[q, 2]
+        dx = (points[q, 0] - points[i, 0]) / hi
+        dy = (points[q, 1] - points[i, 1]) / hi
+        dz = (points[q, 2] - points[i, 2]) / hi
+        u[j] = dx * a0 + dy * a1 + dz * a2
+        v[j] = dx * b0 + dy * b1 + dz * b2
+        if not math.isfinite(nx):
+            X[j] = Y[j] = base[j] = 0.0
             continue
-        d0, d1, d2 = math.sqrt(s1), math.sqrt(suu), math.sqrt(svv)
-        g01, g02, g12 = su / (d0 * d1), sv / (d0 * d2), suv / (d1 * d2)
-        i00 = 1.0 - g12 * g12
-        i01 = g02 * g12 - g01
-        i02 = g01 * g12 - g02
-        i11 = 1.0 - g02 * g02
-        i12 = g01 * g02 - g12
-        i22 = 1.0 - g01 * g01
-        det = i00 + g01 * i01 + g02 * i02
-        if not det > rcond:
-            continue
-        # inverse of G = D Gs D is D^-1 Gs^-1 D^-1
-        inv = np.empty((3, 3))
-        inv[0, 0] = i00 / det / (d0 * d0)
-        inv[0, 1] = inv[1, 0] = i01 / det / (d0 * d1)
-        inv[0, 2] = inv[2, 0] = i02 / det / (d0 * d2)
-        inv[1, 1] = i11 / det / (d1 * d1)
-        inv[1, 2] = inv[2, 1] = i12 / det / (d1 * d2)
-        inv[2, 2] = i22 / det / (d2 * d2)
-        cx = np.empty(3)
-        cy = np.empty(3)
-        for p in range(3):
-            cx[p] = inv[p, 0] * x0 + inv[p, 1] * x1 + inv[p, 2] * x2
-            cy[p] = inv[p, 0] * y0 + inv[p, 1] * y1 + inv[p, 2] * y2
-        if constraint == 2:
-            ex0, ex1, ex2, ey0, ey1, ey2 = cx[0], cx[1], cx[2], cy[0], cy[1], cy[2]
-            for _ in range(2):
-                m1, m2 = cx[0], cy[0]
-                g1, g2, g3, g4 = m1 * m2, -(1.0 - m2 * m2), 1.0 - m1 * m1, -m1 * m2
-                # G^-1 a for a = (0, g1, g2 | 0, g3, g4)
-                ax0 = inv[0, 1] * g1 + inv[0, 2] * g2
-                ax1 = inv[1, 1] * g1 + inv[1, 2] * g2
-                ax2 = inv[2, 1] * g1 + inv[2, 2] * g2
-                ay0 = inv[0, 1] * g3 + inv[0, 2] * g4
-                ay1 = inv[1, 1] * g3 + inv[1, 2] * g4
-                ay2 = inv[2, 1] * g3 + inv[2, 2] * g4
-                num = g1 * ex1 + g2 * ex2 + g3 * ey1 + g4 * ey2
-                den = g1 * ax1 + g2 * ax2 + g3 * ay1 + g4 * ay2
-                if den == 0.0:
-                    break
-                lam = num / den
-                cx[0], cx[1], cx[2] = ex0 - lam * ax0, ex1 - lam * ax1, ex2 - lam * ax2
-                cy[0], cy[1], cy[2] = ey0 - lam * ay0, ey1 - lam * ay1, ey2 - lam * ay2
-        w11, w12, w21, w22 = cx[1], cx[2], cy[1], cy[2]
-        if constraint == 1:
-            m1, m2 = cx[0], cy[0]
+        sgn = 1.0 if nx * c0 + ny * c1 + nz * c2 >= 0.0 else -1.0
+        X[j] = sgn * (nx * a0 + ny * a1 + nz * a2)
+        Y[j] = sgn * (nx * b0 + ny * b1 + nz * b2)
+        base[j] = 1.0
+        if weighting == 1:
+            base[j] = _theta(math.sqrt(dx * dx + dy * dy + dz * dz) / theta_reach)
+        wt[j] = base[j]
+    ok[r] = _solve_nf(u, v, X, Y, wt, n, rcond, coef)
+    if robust > 0:
+        for _ in range(3):
+            if not ok[r]:
+                break
+            _robust_weights(u, v, X, Y, base, n, coef, robust, wt, res)
+            ok[r] = _solve_nf(u, v, X, Y, wt, n, rcond, coef)
+    if not ok[r]:
+        return
+    cx0, cx1, cx2, cy0, cy1, cy2 = coef[0], coef[1], coef[2], coef[3], coef[4], coef[5]
+    if constraint == 2:
+        # G^-1 a for a = (0, g1, g2 | 0, g3, g4): rows 1, 2 of G^-1 are needed
+        e11, e22, e12, e01, e02 = coef[6], coef[7], coef[11], coef[12], coef[13]
+        ex0, ex1, ex2, ey0, ey1, ey2 = cx0, cx1, cx2, cy0, cy1, cy2
+        for _ in range(2):
+            m1, m2 = cx0, cy0
             g1, g2, g3, g4 = m1 * m2, -(1.0 - m2 * m2), 1.0 - m1 * m1, -m1 * m2
-            t = (g1 * w11 + g2 * w12 + g3 * w21 + g4 * w22) / (g1 * g1 + g2 * g2 + g3 * g3 + g4 * g4)
-            w11 -= t * g1
-            w12 -= t * g2
-            w21 -= t * g3
-            w22 -= t * g4
-        mu[r, 0] = cx[0]
-        mu[r, 1] = cy[0]
-        W[r, 0, 0] = w11
-        W[r, 0, 1] = w12
-        W[r, 1, 0] = w21
-        W[r, 1, 1] = w22
-        ok[r] = True
+            ax0, ax1, ax2 = e01 * g1 + e02 * g2, e11 * g1 + e12 * g2, e12 * g1 + e22 * g2
+            ay0, ay1, ay2 = e01 * g3 + e02 * g4, e11 * g3 + e12 * g4, e12 * g3 + e22 * g4
+            num = g1 * ex1 + g2 * ex2 + g3 * ey1 + g4 * ey2
+            den = g1 * ax1 + g2 * ax2 + g3 * ay1 + g4 * ay2
+            if den == 0.0:
+                break
+            lam = num / den
+            cx0, cx1, cx2 = ex0 - lam * ax0, ex1 - lam * ax1, ex2 - lam * ax2
+            cy0, cy1, cy2 = ey0 - lam * ay0, ey1 - lam * ay1, ey2 - lam * ay2
+    w11, w12, w21, w22 = cx1, cx2, cy1, cy2
+    if constraint == 1:
+        g1, g2, g3, g4 = cx0 * cy0, -(1.0 - cy0 * cy0), 1.0 - cx0 * cx0, -cx0 * cy0
+        t = (g1 * w11 + g2 * w12 + g3 * w21 + g4 * w22) / (g1 * g1 + g2 * g2 + g3 * g3 + g4 * g4)
+        w11 -= t * g1
+        w12 -= t * g2
+        w21 -= t * g3
+        w22 -= t * g4
+    mu[r, 0] = cx0
+    mu[r, 1] = cy0
+    W[r, 0, 0] = w11
+    W[r, 0, 1] = w12
+    W[r, 1, 0] = w21
+    W[r, 1, 1] = w22
+    # residual variances -> variances of the slopes (ordinary least-squares formulas)
+    dof = max(coef[10] * (1.0 - 3.0 / max(n, 4)), 1e-12)
+    sx2 = coef[8] / dof
+    sy2 = coef[9] / dof
+    var[r, 0] = sx2 * coef[6]
+    var[r, 1] = 0.25 * (sx2 * coef[7] + sy2 * coef[6])
+    var[r, 2] = sy2 * coef[7]
+    rms[r] = math.sqrt((coef[8] + coef[9]) / max(coef[10], 1e-300))
 
 
 @njit(**_OPTS)
@@ -336,3 +421,49 @@ def propagate_orientation(z_order, normals, idx, ok, labels):
                     size = _heap_push(hw, hn, hp, size, c, q, node)
         comp += 1
     return comp
+
+
+@njit(**_OPTS, parallel=True)
+def outlier_scores(points, idx, floor, score):
+    """Distance of each point from the plane of its neighbours, in units of their spread.
+
+    The plane is the least-squares plane of the neighbours without the point itself
+    (centroid and smallest principal axis); the unit is the neighbours' RMS distance to
+    that plane plus ``floor`` x their mean distance to the centroid, so that a clean flat
+    patch does not make every tiny offset look infinite.
+    """
+    n, k = idx.shape
+    for i in prange(n):
+        cx = cy = cz = 0.0
+        m = 0
+        for j in range(1, k):
+            q = idx[i, j]
+            cx += points[q, 0]
+            cy += points[q, 1]
+            cz += points[q, 2]
+            m += 1
+        if m < 3:
+            score[i] = math.nan
+            continue
+        cx /= m
+        cy /= m
+        cz /= m
+        c00 = c01 = c02 = c11 = c12 = c22 = 0.0
+        spread = 0.0
+        for j in range(1, k):
+            q = idx[i, j]
+            dx, dy, dz = points[q, 0] - cx, points[q, 1] - cy, points[q, 2] - cz
+            c00 += dx * dx
+            c01 += dx * dy
+            c02 += dx * dz
+            c11 += dy * dy
+            c12 += dy * dz
+            c22 += dz * dz
+            spread += math.sqrt(dx * dx + dy * dy + dz * dz)
+        l0, l1, l2, x, y, z = _smallest_eigvec_sym3(c00, c01, c02, c11, c12, c22)
+        if not math.isfinite(x):
+            score[i] = math.nan
+            continue
+        d = abs((points[i, 0] - cx) * x + (points[i, 1] - cy) * y + (points[i, 2] - cz) * z)
+        unit = math.sqrt(max(l0, 0.0) / m) + floor * spread / m
+        score[i] = d / unit if unit > 0.0 else (0.0 if d == 0.0 else math.inf)

@@ -28,12 +28,16 @@ class Chunk:
     t1: np.ndarray
     t2: np.ndarray
     z: np.ndarray
+    kc: np.ndarray
 
     @classmethod
-    def build(cls, points, normals, idx, h, centres):
+    def build(cls, points, normals, idx, h, centres, kc=None):
+        """``kc`` (M,): neighbours used per centre (default: all k columns of ``idx``)."""
         z = normals[centres]
         t1, t2 = tangent_basis(z)
-        return cls(points, normals, np.ascontiguousarray(idx), h, centres, t1, t2, z)
+        if kc is None:
+            kc = np.full(len(centres), idx.shape[1], dtype=np.int64)
+        return cls(points, normals, np.ascontiguousarray(idx), h, centres, t1, t2, z, kc)
 
     @cached_property
     def patch(self) -> "Patch":

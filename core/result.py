@@ -19,7 +19,12 @@ class CurvatureResult:
     e1, e2 : (N, 3) unit principal directions (sign is arbitrary), orthogonal to the normal.
     valid : (N,) bool. Where False the neighbourhood was degenerate (duplicates,
         collinear, rank-deficient fit): k1, k2, e1, e2 are NaN there, never a made-up value.
-    method, k, passes, params : what was run.
+    k_point : (N,) int, neighbourhood size used at each point (varies with ``k="auto"``).
+    outlier_score : (N,) distance of each point from its neighbours' plane in units of
+        their spread; :attr:`outlier` is ``outlier_score > 6``.
+    crease : (N,) bool, points where the linear normal model fails (RMS residual of the
+        normal fit > 0.25): sharp edges and corners, flagged rather than trusted.
+    method, k, passes, params : what was run (``k`` is an int or "auto").
     neighbours : the :class:`core.Neighbours` used, to pass back for a fast re-estimate.
     """
 
@@ -31,10 +36,22 @@ class CurvatureResult:
     e2: np.ndarray
     valid: np.ndarray
     method: str
-    k: int
+    k: object
     passes: int
     params: dict = field(default_factory=dict)
     neighbours: object = field(default=None, repr=False)
+    k_point: np.ndarray = None
+    outlier_score: np.ndarray = None
+    crease: np.ndarray = None
+
+    def __post_init__(self):
+        n = len(self.points)
+        if self.k_point is None:
+            object.__setattr__(self, "k_point", np.full(n, self.k if isinstance(self.k, int) else -1))
+        if self.outlier_score is None:
+            object.__setattr__(self, "outlier_score", np.full(n, np.nan))
+        if self.crease is None:
+            object.__setattr__(self, "crease", np.zeros(n, dtype=bool))
 
     def __len__(self) -> int:
         return len(self.points)
@@ -42,6 +59,13 @@ class CurvatureResult:
     @property
     def n_invalid(self) -> int:
         return int(np.count_nonzero(~self.valid))
+
+    @property
+    def outlier(self) -> np.ndarray:
+        """Points far off the surface of their neighbours (score > 6)."""
+        from .estimate import OUTLIER_SCORE
+
+        return np.nan_to_num(self.outlier_score, nan=0.0) > OUTLIER_SCORE
 
     @property
     def gaussian(self) -> np.ndarray:
@@ -82,4 +106,6 @@ FIELDS = {
     "k2": "k2",
     "shape_index": "shape_index",
     "curvedness": "curvedness",
+    "k_point": "k_point",
+    "outlier_score": "outlier_score",
 }

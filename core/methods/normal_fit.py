@@ -21,24 +21,36 @@ NR_DOC = NF_DOC + " NR repeats the fit with the refined normals of all points (�
 #: weights: "uniform" (paper eqs. 25–26) or "theta" (eq. 14's kernel on the distance);
 #: constraint: "project" (paper §4.4), "exact" (Lagrange multiplier in the metric of the
 #: normal equations) or "none".
-DEFAULTS = {"weights": "uniform", "constraint": "project"}
+#: robust: None (least squares), "huber" or "tukey" (IRLS on the normal residuals, scale
+#: from the median absolute deviation; outlying neighbours and the far side of a crease
+#: lose their weight).
+DEFAULTS = {"weights": "uniform", "constraint": "project", "robust": None}
 _WEIGHTS = ("uniform", "theta")
-_CONSTRAINTS = ("project", "exact", "none")
+_CONSTRAINTS = ("none", "project", "exact")  # kernel codes 0, 1, 2
+_ROBUST = (None, "huber", "tukey")
 
 
-def fit(chunk, *, weights="uniform", constraint="project"):
-    """Fit (mu, W) per point of a :class:`core.patch.Chunk`; see :data:`NF_DOC`."""
+def fit(chunk, *, weights="uniform", constraint="project", robust=None):
+    """Fit (mu, W) per point of a :class:`core.patch.Chunk`; see :data:`NF_DOC`.
+
+    Returns ``(mu, W, ok, diag)`` with ``diag`` holding the least-squares variances of
+    W11, (W12 + W21)/2, W22 ("var", units of 1/h^2) and the RMS residual ("rms").
+    """
     if weights not in _WEIGHTS:
         raise ValueError(f"weights {weights!r} is invalid; must be one of {list(_WEIGHTS)}")
     if constraint not in _CONSTRAINTS:
         raise ValueError(f"constraint {constraint!r} is invalid; must be one of {list(_CONSTRAINTS)}")
+    if robust not in _ROBUST:
+        raise ValueError(f"robust {robust!r} is invalid; must be one of {list(_ROBUST)}")
     m = len(chunk.centres)
-    mu = np.empty((m, 2))
-    W = np.empty((m, 2, 2))
+    mu = np.zeros((m, 2))
+    W = np.zeros((m, 2, 2))
+    var = np.full((m, 3), np.inf)
+    rms = np.full(m, np.nan)
     ok = np.empty(m, dtype=bool)
     kernels.normal_fit(
-        chunk.points, chunk.normals, chunk.idx, chunk.h, chunk.centres, chunk.t1, chunk.t2, chunk.z,
-        THETA_REACH, _WEIGHTS.index(weights), {"none": 0, "project": 1, "exact": 2}[constraint],
-        RCOND_DET, mu, W, ok,
+        chunk.points, chunk.normals, chunk.idx, chunk.kc, chunk.h, chunk.centres, chunk.t1, chunk.t2,
+        chunk.z, THETA_REACH, _WEIGHTS.index(weights), _CONSTRAINTS.index(constraint),
+        _ROBUST.index(robust), RCOND_DET, mu, W, var, rms, ok,
     )
-    return mu, W, ok
+    return mu, W, ok, {"var": var, "rms": rms}

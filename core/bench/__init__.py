@@ -1,0 +1,1 @@
+"""Benchmarks: reproductions of published experiments (``python -m core bench ...``)."""

@@ -1,0 +1,17 @@
+"""Point-cloud file input/output.
+
+Read PLY, XYZ/PTS/TXT/CSV, PCD, OBJ, STL, VTK/VTP and LAS/LAZ files into a :class:`Cloud`;
+write points, normals and per-point fields (or a curvature result) to PLY or text,
+atomically. Every problem with a file raises :class:`CloudFileError` (a ``ValueError``)
+whose message names the file.
+"""
+
+from .cloud import Cloud, CloudFileError
+from .formats import READ_FORMATS, WRITE_FORMATS
+from .read import describe, read_cloud
+from .write import RESULT_FIELDS, write_cloud, write_result
+
+__all__ = [
+    "Cloud", "CloudFileError", "READ_FORMATS", "WRITE_FORMATS", "RESULT_FIELDS",
+    "read_cloud", "write_cloud", "write_result", "describe",
+]

@@ -1,0 +1,43 @@
+"""The file formats by extension, and choosing one from a path or a ``format=`` argument."""
+
+from __future__ import annotations
+
+from .cloud import CloudFileError
+
+#: extension -> description, for the formats :func:`core.io.read_cloud` reads
+READ_FORMATS = {
+    ".ply": "Stanford PLY (ascii or binary)",
+    ".xyz": "XYZ text (x y z [nx ny nz])",
+    ".pts": "PTS text (optional point count line)",
+    ".txt": "Text columns (x y z [nx ny nz])",
+    ".csv": "CSV (header naming x, y, z [nx, ny, nz])",
+    ".pcd": "PCL point cloud data",
+    ".obj": "Wavefront OBJ (vertices)",
+    ".stl": "STL mesh (vertices)",
+    ".vtk": "VTK legacy",
+    ".vtp": "VTK XML PolyData",
+    ".las": "LAS lidar",
+    ".laz": "LAZ compressed lidar",
+}
+
+#: extension -> description, for the formats :func:`core.io.write_cloud` writes
+WRITE_FORMATS = {
+    ".ply": "Stanford PLY (binary little-endian)",
+    ".csv": "CSV with a header line",
+    ".xyz": "XYZ text columns",
+    ".txt": "Text columns",
+}
+
+
+def resolve_format(path, format, table: dict, action: str) -> str:
+    """The short format name (``"ply"``) from ``format`` if given, else from the extension."""
+    allowed = ", ".join(table)
+    if format is None:
+        ext = path.suffix.lower()
+        if ext not in table:
+            what = f"unknown file extension {ext!r}" if ext else "no file extension"
+            raise CloudFileError(path, f"{what} for {action}; supported: {allowed} (or pass format=)")
+        return ext[1:]
+    if not isinstance(format, str) or "." + format.lower().lstrip(".") not in table:
+        raise CloudFileError(path, f"format={format!r} is not supported for {action}; allowed: {allowed}")
+    return format.lower().lstrip(".")

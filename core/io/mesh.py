@@ -1,0 +1,145 @@
+"""Mesh files read as point clouds: Wavefront OBJ (vertices, vertex normals) and STL."""
+
+from __future__ import annotations
+
+import os
+import re
+import warnings
+
+import numpy as np
+
+from .cloud import CloudFileError, RawCloud
+
+_STL_RECORD = np.dtype([("normal", "<f4", (3,)), ("vertices", "<f4", (3, 3)), ("attribute", "<u2")])
+_STL_VERTEX = re.compile(rb"vertex\s+(\S+)\s+(\S+)\s+(\S+)", re.IGNORECASE)
+
+
+# ---------------------------------------------------------------------------------- OBJ
+
+
+def read_obj(path) -> RawCloud:
+    """``v`` lines are the points. Normals come from faces' ``v//vn`` (or ``v/vt/vn``)
+    indices; without those, ``vn`` lines are used in order when there is one per vertex."""
+    with open(path, encoding="latin-1") as f:
+        lines = f.read().splitlines()
+    v_lines, vn_lines, f_lines = [], [], []  # f_lines: (line index, #v so far, #vn so far)
+    for i, line in enumerate(lines):
+        parts = line.split(None, 1)
+        key = parts[0] if parts else ""
+        if key == "v":
+            v_lines.append(i)
+        elif key == "vn":
+            vn_lines.append(i)
+        elif key == "f":
+            f_lines.append((i, len(v_lines), len(vn_lines)))
+    points = _parse_vectors(path, lines, v_lines, "v")
+    if not vn_lines:
+        return RawCloud(points, None, {})
+    vn = _parse_vectors(path, lines, vn_lines, "vn")
+    normals, referenced = _face_normals(path, lines, f_lines, points, vn)
+    if not referenced and len(vn) == len(points):
+        normals = vn
+    elif not referenced:
+        warnings.warn(f"{path}: {len(vn)} 'vn' normals cannot be matched to {len(points)} vertices (no face "
+                      "references them and the counts differ); normals ignored", UserWarning, stacklevel=4)
+    return RawCloud(points, normals, {})
+
+
+def _parse_vectors(path, lines, indices, key) -> np.ndarray:
+    rows = [lines[i].split()[1:4] for i in indices]
+    try:
+        return np.array(rows, dtype=np.float64).reshape(len(rows), 3)
+    except ValueError:
+        for i, row in zip(indices, rows):
+            if len(row) < 3:
+                raise CloudFileError(path, f"line {i + 1}: a '{key}' line needs 3 numbers, found {len(row)}") from None
+            if not all(map(_is_float, row)):
+                raise CloudFileError(path, f"line {i + 1}: cannot parse {lines[i].strip()!r}") from None
+        raise CloudFileError(path, f"cannot parse the '{key}' lines") from None
+
+
+def _face_normals(path, lines, f_lines, points, vn):
+    """(normals or None, whether any face gives a vertex//normal pair)."""
+    vi, ni = [], []
+    for i, n_v, n_vn in f_lines:
+        for token in lines[i].split()[1:]:
+            parts = token.split("/")
+            if len(parts) < 3 or not parts[2]:
+                continue
+            try:
+                a, b = int(parts[0]), int(parts[2])
+            except ValueError:
+                raise CloudFileError(path, f"line {i + 1}: cannot parse face vertex {token!r}") from None
+            a = a - 1 if a > 0 else n_v + a  # OBJ indices are 1-based, negative ones relative
+            b = b - 1 if b > 0 else n_vn + b
+            if not (0 <= a < len(points) and 0 <= b < len(vn)):
+                raise CloudFileError(path, f"line {i + 1}: face vertex {token!r} refers to a missing v or vn")
+            vi.append(a)
+            ni.append(b)
+    if not vi:
+        return None, False
+    pairs = np.unique(np.column_stack([vi, ni]), axis=0)
+    normals = np.zeros_like(points)
+    np.add.at(normals, pairs[:, 0], vn[pairs[:, 1]])
+    per_vertex = np.bincount(pairs[:, 0], minlength=len(points))
+    shared = per_vertex > 1  # a vertex with several different vn: their normalised mean
+    if shared.any():
+        length = np.linalg.norm(normals[shared], axis=1, keepdims=True)
+        normals[shared] /= np.where(length > 0, length, 1.0)
+    missing = int(np.count_nonzero(per_vertex == 0))
+    if missing:
+        warnings.warn(f"{path}: {missing} of {len(points)} vertices get no normal from the faces; normals ignored",
+                      UserWarning, stacklevel=5)
+        return None, True
+    return normals, True
+
+
+# ---------------------------------------------------------------------------------- STL
+
+
+def read_stl(path) -> RawCloud:
+    """The triangle corners, exact duplicates removed (first occurrence order); no normals."""
+    size = os.path.getsize(path)
+    with open(path, "rb") as f:
+        head = f.read(1024)
+    n = int.from_bytes(head[80:84], "little") if len(head) >= 84 else -1
+    looks_ascii = head.lstrip()[:5].lower() == b"solid" and (b"facet" in head.lower() or size != 84 + 50 * n)
+    if looks_ascii:
+        corners = _read_stl_ascii(path)
+    elif n < 0:
+        raise CloudFileError(path, f"too short for a binary STL (needs at least 84 bytes, has {size})")
+    elif size < 84 + 50 * n:
+        raise CloudFileError(
+            path, f"truncated: the binary STL header declares {n} triangles ({84 + 50 * n} bytes) but the file "
+            f"has {size} bytes"
+        )
+    else:
+        corners = np.fromfile(path, dtype=_STL_RECORD, count=n, offset=84)["vertices"].reshape(-1, 3)
+    corners = corners.astype(np.float64) + 0.0  # + 0.0 turns -0.0 into 0.0 so they deduplicate
+    _, first = np.unique(corners, axis=0, return_index=True)
+    return RawCloud(corners[np.sort(first)], None, {})
+
+
+def _read_stl_ascii(path) -> np.ndarray:
+    with open(path, "rb") as f:
+        data = f.read()
+    matches = _STL_VERTEX.findall(data)
+    try:
+        corners = np.array(matches, dtype=np.bytes_).reshape(-1, 3).astype(np.float64)
+    except ValueError:
+        for lineno, line in enumerate(data.splitlines(), start=1):
+            m = _STL_VERTEX.search(line)
+            if line.strip().lower().startswith(b"vertex") and not (m and all(_is_float(t) for t in m.groups())):
+                raise CloudFileError(path, f"line {lineno}: cannot parse {line.strip().decode('latin-1')!r}") from None
+        raise CloudFileError(path, "cannot parse the ASCII STL vertices") from None
+    if len(corners) % 3:
+        raise CloudFileError(path, f"truncated: {len(corners)} vertices do not make whole triangles")
+    return corners
+
+
+def _is_float(token) -> bool:
+    try:
+        float(token)
+    except ValueError:
+        return False
+    return True

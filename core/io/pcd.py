@@ -1,0 +1,198 @@
+"""PCL's PCD format: DATA ascii, binary and binary_compressed (LZF, decoded in Python).
+
+Fields x y z are the points, normal_x normal_y normal_z (or nx ny nz) the normals;
+a packed ``rgb``/``rgba`` field becomes uint8 fields red, green, blue; ``_`` padding is
+skipped; a field with COUNT 3 becomes name_x/_y/_z, other counts name_0, name_1, ...
+Binary data is read as little-endian.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+from .cloud import CloudFileError, RawCloud, find_normals, remaining_bytes, split_components
+from .text import diagnose_lines
+
+_MAX_HEADER_LINES = 100
+_TYPES = {"F": "f", "I": "i", "U": "u"}
+
+
+def read_pcd(path) -> RawCloud:
+    """Points, normals and other fields of a PCD file."""
+    with open(path, "rb") as f:
+        header, n_header_lines = _read_header(f, path)
+        fields, n = _layout(header, path)
+        mode = header["DATA"][0].lower() if header["DATA"] else ""
+        if mode == "ascii":
+            props = _read_ascii(path, fields, n, n_header_lines)
+        elif mode == "binary":
+            props = _read_binary(f, path, fields, n)
+        elif mode == "binary_compressed":
+            props = _read_compressed(f, path, fields, n)
+        else:
+            raise CloudFileError(path, f"unknown DATA type {mode!r}; expected ascii, binary or binary_compressed")
+    return _raw_from_props(props, path)
+
+
+def _read_header(f, path):
+    header = {}
+    for lineno in range(1, _MAX_HEADER_LINES + 1):
+        line = f.readline()
+        if not line:
+            raise CloudFileError(path, "truncated: the PCD header ends before its DATA line")
+        text = line.decode("ascii", "replace").split("#", 1)[0].strip()
+        if not text:
+            continue
+        key, *values = text.split()
+        header[key.upper()] = values
+        if key.upper() == "DATA":
+            return header, lineno
+    raise CloudFileError(path, f"not a PCD file: no DATA line in the first {_MAX_HEADER_LINES} lines")
+
+
+def _layout(header, path):
+    """[(name, numpy dtype string, count)] and the number of points."""
+    for key in ("FIELDS", "SIZE", "TYPE"):
+        if key not in header:
+            raise CloudFileError(path, f"the PCD header has no {key} line")
+    names, sizes, types = header["FIELDS"], header["SIZE"], header["TYPE"]
+    counts = header.get("COUNT", ["1"] * len(names))
+    if not len(names) == len(sizes) == len(types) == len(counts):
+        raise CloudFileError(path, f"the PCD header lists {len(names)} FIELDS but {len(sizes)} SIZE, "
+                                   f"{len(types)} TYPE and {len(counts)} COUNT entries")
+    fields = []
+    try:
+        for i, (name, size, kind, count) in enumerate(zip(names, sizes, types, counts)):
+            dtype = np.dtype("<" + _TYPES[kind.upper()] + size)
+            fields.append((name if name != "_" else f"_{i}", dtype.str, int(count)))
+        if "POINTS" in header:
+            n = int(header["POINTS"][0])
+        else:
+            n = int(header["WIDTH"][0]) * int(header.get("HEIGHT", ["1"])[0])
+        if n < 0 or any(count < 1 for _, _, count in fields):
+            raise ValueError
+    except (KeyError, ValueError, TypeError, IndexError):
+        raise CloudFileError(path, "the PCD header has an invalid FIELDS/SIZE/TYPE/COUNT/POINTS entry") from None
+    return fields, n
+
+
+def _read_ascii(path, fields, n, n_header_lines):
+    ncols = sum(count for _, _, count in fields)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)
+            table = np.loadtxt(path, dtype=np.float64, comments="#", skiprows=n_header_lines,
+                               encoding="latin-1", ndmin=2)
+    except ValueError as exc:
+        head = dict(first=n_header_lines + 1, ncols=ncols, delimiter=None)
+        raise diagnose_lines(path, "latin-1", head, exc) from None
+    if len(table) and table.shape[1] != ncols:
+        raise CloudFileError(path, f"the data lines have {table.shape[1]} columns but the header declares {ncols}")
+    if len(table) != n:
+        problem = "truncated: " if len(table) < n else ""
+        raise CloudFileError(path, f"{problem}the header declares {n} points but {len(table)} data lines follow")
+    props, col = {}, 0
+    for name, dtype, count in fields:
+        block = table[:, col : col + count].astype(dtype)
+        props[name] = block[:, 0] if count == 1 else block
+        col += count
+    return props
+
+
+def _read_binary(f, path, fields, n):
+    dtype = np.dtype([(name, dt, (count,)) if count > 1 else (name, dt) for name, dt, count in fields])
+    need, have = n * dtype.itemsize, remaining_bytes(f)
+    if have < need:
+        raise CloudFileError(
+            path, f"truncated: the header declares {n} points ({need} bytes) but only {have} bytes follow"
+        )
+    data = np.frombuffer(f.read(need), dtype=dtype)
+    return {name: data[name] for name in dtype.names}
+
+
+def _read_compressed(f, path, fields, n):
+    sizes = f.read(8)
+    if len(sizes) < 8:
+        raise CloudFileError(path, "truncated: the compressed PCD data has no size header")
+    packed, unpacked = np.frombuffer(sizes, dtype="<u4").tolist()
+    if remaining_bytes(f) < packed:
+        raise CloudFileError(
+            path, f"truncated: the header declares {packed} compressed bytes but only {remaining_bytes(f)} follow"
+        )
+    need = n * sum(np.dtype(dt).itemsize * count for _, dt, count in fields)
+    if unpacked != need:
+        raise CloudFileError(path, f"the compressed data expands to {unpacked} bytes but {n} points need {need}")
+    data = f.read(packed)
+    try:
+        raw = lzf_decompress(data, unpacked)
+    except ValueError as exc:
+        raise CloudFileError(path, f"corrupt compressed PCD data: {exc}") from None
+    props, offset = {}, 0
+    for name, dt, count in fields:  # column-major: all values of a field, then the next field
+        values = np.frombuffer(raw, dtype=dt, count=n * count, offset=offset)
+        props[name] = values.reshape(n, count) if count > 1 else values
+        offset += values.nbytes
+    return props
+
+
+def lzf_decompress(data: bytes, size: int) -> bytes:
+    """Decompress an LZF (liblzf) block whose decompressed length is ``size``."""
+    out = bytearray()
+    i, end = 0, len(data)
+    while i < end:
+        ctrl = data[i]
+        i += 1
+        if ctrl < 32:  # a run of ctrl + 1 literal bytes
+            run = ctrl + 1
+            if i + run > end:
+                raise ValueError("literal run past the end of the input")
+            out += data[i : i + run]
+            i += run
+            continue
+        length = ctrl >> 5  # a back reference
+        if length == 7:
+            if i >= end:
+                raise ValueError("back reference past the end of the input")
+            length += data[i]
+            i += 1
+        if i >= end:
+            raise ValueError("back reference past the end of the input")
+        start = len(out) - ((ctrl & 0x1F) << 8) - data[i] - 1
+        i += 1
+        length += 2
+        if start < 0:
+            raise ValueError("back reference before the start of the output")
+        chunk = out[start : start + length]
+        if len(chunk) < length:  # the reference overlaps what it writes: repeat the period
+            chunk = (chunk * (length // len(chunk) + 1))[:length]
+        out += chunk
+        if len(out) > size:
+            raise ValueError(f"output exceeds the declared {size} bytes")
+    if len(out) != size:
+        raise ValueError(f"decompressed {len(out)} bytes, expected {size}")
+    return bytes(out)
+
+
+def _raw_from_props(props, path) -> RawCloud:
+    if not all(c in props for c in "xyz"):
+        raise CloudFileError(path, f"the PCD file has no x, y, z fields (found: {', '.join(props)})")
+    points = np.column_stack([props[c] for c in "xyz"])
+    nrm = find_normals(props)
+    normals = None if nrm is None else np.column_stack([props[name] for name in nrm])
+    fields = {}
+    for name, values in props.items():
+        if name in ("x", "y", "z") or name in (nrm or ()) or name.startswith("_"):
+            continue
+        if name in ("rgb", "rgba") and values.ndim == 1 and values.dtype.itemsize == 4:
+            fields.update(_unpack_rgb(values))
+        else:
+            fields.update(split_components(name, values))
+    return RawCloud(points, normals, fields)
+
+
+def _unpack_rgb(values):
+    packed = np.ascontiguousarray(values).view("<u4")
+    return {name: ((packed >> shift) & 0xFF).astype(np.uint8) for name, shift in
+            (("red", 16), ("green", 8), ("blue", 0))}

@@ -1,0 +1,106 @@
+"""Reading point clouds: :func:`read_cloud` and :func:`describe`."""
+
+from __future__ import annotations
+
+import os
+import pathlib
+
+import numpy as np
+
+from . import las, mesh, pcd, ply, text, vtk
+from .cloud import Cloud, CloudFileError, RawCloud, finalize
+from .formats import READ_FORMATS, resolve_format
+
+_READERS = {
+    "ply": ply.read_ply,
+    "xyz": lambda path: text.read_text(path, "xyz"),
+    "pts": lambda path: text.read_text(path, "pts"),
+    "txt": lambda path: text.read_text(path, "txt"),
+    "csv": lambda path: text.read_text(path, "csv"),
+    "pcd": pcd.read_pcd,
+    "obj": mesh.read_obj,
+    "stl": mesh.read_stl,
+    "vtk": vtk.read_vtk,
+    "vtp": vtk.read_vtp,
+    "las": las.read_las,
+    "laz": las.read_las,
+}
+assert set(_READERS) == {ext[1:] for ext in READ_FORMATS}
+
+
+def read_cloud(path, *, format=None, drop_nonfinite=False) -> Cloud:
+    """Read the points (and normals and other per-point properties) of a file.
+
+    Parameters
+    ----------
+    path : str or path-like
+    format : str, optional
+        One of the :data:`READ_FORMATS` names without the dot (``"ply"``, ``"xyz"``, ...);
+        by default chosen from the file extension (case-insensitive).
+    drop_nonfinite : bool, default False
+        Drop points with NaN/inf coordinates (with a warning saying how many) instead of
+        raising.
+
+    Returns
+    -------
+    Cloud
+
+    Raises
+    ------
+    CloudFileError
+        Missing, empty, truncated or malformed file, unknown format, no points, or
+        non-finite coordinates; the message names the file and the problem.
+    """
+    path, fmt = _path_and_format(path, format)
+    return finalize(_read_raw(path, fmt), path, fmt, drop_nonfinite=drop_nonfinite)
+
+
+def describe(path, *, format=None) -> dict:
+    """A summary of a point-cloud file, for an ``info`` command.
+
+    Returns
+    -------
+    dict with keys ``path``, ``format``, ``file_size`` (bytes), ``n_points``,
+    ``n_nonfinite`` (points with NaN/inf coordinates), ``has_normals``, ``bbox_min`` and
+    ``bbox_max`` (lists of 3 floats over the finite points, None if there are none),
+    ``bbox_diagonal`` (float or None) and ``fields`` (names of the other properties).
+    """
+    path, fmt = _path_and_format(path, format)
+    raw = _read_raw(path, fmt)
+    points = np.asarray(raw.points, dtype=np.float64).reshape(-1, 3)
+    if len(points) == 0:
+        raise CloudFileError(path, "contains no points")
+    finite = points[np.isfinite(points).all(axis=1)]
+    low = finite.min(axis=0) if len(finite) else None
+    high = finite.max(axis=0) if len(finite) else None
+    return {
+        "path": str(path),
+        "format": fmt,
+        "file_size": path.stat().st_size,
+        "n_points": len(points),
+        "n_nonfinite": len(points) - len(finite),
+        "has_normals": raw.normals is not None,
+        "bbox_min": None if low is None else low.tolist(),
+        "bbox_max": None if high is None else high.tolist(),
+        "bbox_diagonal": None if low is None else float(np.linalg.norm(high - low)),
+        "fields": list(raw.fields),
+    }
+
+
+def _path_and_format(path, format):
+    path = pathlib.Path(os.fspath(path))
+    if not path.exists():
+        raise CloudFileError(path, "no such file")
+    if path.is_dir():
+        raise CloudFileError(path, "is a directory, not a file")
+    fmt = resolve_format(path, format, READ_FORMATS, "reading")
+    if path.stat().st_size == 0:
+        raise CloudFileError(path, "is empty (0 bytes)")
+    return path, fmt
+
+
+def _read_raw(path, fmt) -> RawCloud:
+    try:
+        return _READERS[fmt](path)
+    except OSError as exc:
+        raise CloudFileError(path, f"cannot be read: {exc.strerror or exc}") from exc

@@ -1,0 +1,192 @@
+"""Delimited text: XYZ / PTS / TXT / CSV, one point per line.
+
+Reading: leading non-numeric lines are a header (the last one may name the columns:
+x, y, z, nx, ny, nz in any order, other names become fields); ``#`` starts a comment; a
+first line holding a single integer is a point count (as in .pts) and is checked. The
+separator is a comma, a semicolon or whitespace, guessed from the first data line.
+Without usable column names: 3 columns are x y z, 6 or more are x y z nx ny nz and the
+rest become fields ``col6``, ``col7``... (0-based column numbers); 4 or 5 columns give
+fields ``col3`` (``col4``); a .pts file of 4 or 7 columns is Leica's x y z intensity
+[red green blue]. The numbers are parsed by ``np.loadtxt`` straight from the file.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+from .cloud import CloudFileError, RawCloud, find_normals
+
+_MAX_HEADER_LINES = 1000
+_CHUNK_ROWS = 100_000
+
+
+def read_text(path, fmt: str) -> RawCloud:
+    """Points, normals and extra columns from a delimited text file."""
+    encoding = _encoding(path)
+    head = _scan_head(path, encoding)
+    table = _load_table(path, encoding, head)
+    if head["count"] is not None and head["count"] != len(table):
+        raise CloudFileError(
+            path, f"line {head['count_line']} declares {head['count']} points but {len(table)} data lines follow"
+        )
+    return _raw_from_table(table, head["names"], fmt)
+
+
+def _encoding(path) -> str:
+    with open(path, "rb") as f:
+        bom = f.read(3) == b"\xef\xbb\xbf"
+    return "utf-8-sig" if bom else "latin-1"  # numbers are ASCII; latin-1 never fails to decode
+
+
+def _guess_delimiter(text: str) -> str | None:
+    return "," if "," in text else ";" if ";" in text else None
+
+
+def _split(line: str, delimiter: str | None) -> list[str]:
+    """Tokens without quotes; a trailing delimiter ("1,2,3,") adds no empty token."""
+    tokens = [t.strip().strip('"').strip() for t in line.split(delimiter)]
+    while len(tokens) > 1 and tokens[-1] == "":
+        tokens.pop()
+    return tokens
+
+
+def _is_number(token: str) -> bool:
+    try:
+        float(token)
+    except ValueError:
+        return False
+    return True
+
+
+def _scan_head(path, encoding) -> dict:
+    """Find the first data line, the separator, the column count, names and a count line."""
+    count = count_line = None
+    header = []  # (is_comment, text) of the non-blank lines before the data
+    with open(path, encoding=encoding, errors="replace", newline=None) as f:
+        for lineno, line in enumerate(f, start=1):
+            if lineno > _MAX_HEADER_LINES:
+                raise CloudFileError(path, f"no numeric data in the first {_MAX_HEADER_LINES} lines")
+            text = line.strip()
+            if not text:
+                continue
+            if text.startswith(("#", "//")):
+                header.append((True, text.lstrip("#/ \t")))
+                continue
+            text = text.split("#", 1)[0].strip()
+            delimiter = _guess_delimiter(text)
+            tokens = _split(text, delimiter)
+            if not all(_is_number(t) for t in tokens):
+                header.append((False, text))
+                continue
+            if len(tokens) == 1 and count is None and tokens[0].isdigit() and all(c for c, _ in header):
+                count, count_line = int(tokens[0]), lineno
+                continue
+            if len(tokens) < 3:
+                raise CloudFileError(
+                    path, f"line {lineno}: found {len(tokens)} column(s); need at least 3 (x y z [nx ny nz ...])"
+                )
+            names = _header_names(header, len(tokens))
+            trailing = delimiter is not None and text.endswith(delimiter)
+            return dict(skip=lineno - 1, first=lineno, delimiter=delimiter, ncols=len(tokens), names=names,
+                        count=count, count_line=count_line, usecols=range(len(tokens)) if trailing else None)
+    raise CloudFileError(path, "contains no points (no numeric data lines)")
+
+
+def _header_names(header, ncols):
+    """Column names from the last header line if it has one name per column."""
+    if not header:
+        return None
+    is_comment, text = header[-1]
+    names = _split(text, _guess_delimiter(text))
+    lower = [n.lower() for n in names]
+    if len(names) != ncols or len(set(lower)) != ncols:
+        return None
+    if is_comment and not {"x", "y", "z"} <= set(lower):
+        return None  # a comment that merely happens to have ncols words
+    return names
+
+
+def _load_table(path, encoding, head) -> np.ndarray:
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)  # "input contained no data"
+            table = np.loadtxt(path, dtype=np.float64, delimiter=head["delimiter"], comments="#",
+                               skiprows=head["skip"], encoding=encoding, quotechar='"', ndmin=2,
+                               usecols=head["usecols"])
+    except UnicodeDecodeError:
+        raise CloudFileError(path, "is not valid UTF-8 text") from None
+    except ValueError as exc:
+        raise diagnose_lines(path, encoding, head, exc) from None
+    return table
+
+
+def diagnose_lines(path, encoding, head, exc) -> CloudFileError:
+    """Re-read the data lines in Python to name the first bad line (``head``: first, ncols, delimiter)."""
+    delimiter, ncols = head["delimiter"], head["ncols"]
+    with open(path, encoding=encoding, errors="replace", newline=None) as f:
+        for lineno, line in enumerate(f, start=1):
+            text = line.split("#", 1)[0].strip()
+            if lineno < head["first"] or not text:
+                continue
+            tokens = _split(text, delimiter)
+            if len(tokens) != ncols:
+                return CloudFileError(
+                    path, f"line {lineno}: found {len(tokens)} columns but line {head['first']} has {ncols}"
+                )
+            bad = next((t for t in tokens if not _is_number(t)), None)
+            if bad is not None:
+                return CloudFileError(path, f"line {lineno}: cannot parse {bad!r} as a number")
+    return CloudFileError(path, f"cannot parse the data lines: {exc}")
+
+
+def _raw_from_table(table, names, fmt) -> RawCloud:
+    ncols = table.shape[1]
+    lower = [n.lower() for n in names] if names else None
+    if lower and {"x", "y", "z"} <= set(lower):
+        xyz = [lower.index(c) for c in "xyz"]
+        nrm = find_normals(lower)
+        nrm_idx = [lower.index(n) for n in nrm] if nrm else []
+    else:
+        xyz = [0, 1, 2]
+        nrm_idx = [3, 4, 5] if ncols >= 6 and not (fmt == "pts" and ncols == 7) else []
+        if names is None:
+            names = [f"col{i}" for i in range(ncols)]
+            if fmt == "pts" and ncols in (4, 7):
+                names[3:] = ["intensity", "red", "green", "blue"][: ncols - 3]
+    points = table[:, xyz]
+    normals = table[:, nrm_idx] if nrm_idx else None
+    used = set(xyz) | set(nrm_idx)
+    fields = {names[i]: table[:, i] for i in range(ncols) if i not in used}
+    return RawCloud(points, normals, fields)
+
+
+def _row_format(values: np.ndarray) -> tuple[str, str]:
+    """(printf format, storage dtype): shortest round-trip floats, 9 digits for float32, integers."""
+    if values.dtype == bool or np.issubdtype(values.dtype, np.signedinteger):
+        return "%d", "i8"
+    if np.issubdtype(values.dtype, np.unsignedinteger):
+        return "%d", "u8"
+    return ("%.9g" if values.dtype == np.float32 else "%r"), "f8"
+
+
+def write_text(f, columns, *, delimiter: str, header: bool) -> None:
+    """Write ``columns`` (list of (name, (N,) array)) as delimited lines.
+
+    ``header=True`` writes a first line of names (CSV style); otherwise a ``# names``
+    comment line is written only when there are columns beyond x y z [nx ny nz].
+    """
+    names = [name for name, _ in columns]
+    if header:
+        f.write((delimiter.join(names) + "\n").encode())
+    elif names not in (["x", "y", "z"], ["x", "y", "z", "nx", "ny", "nz"]):
+        f.write(("# " + delimiter.join(names) + "\n").encode())
+    formats, dtypes = zip(*(_row_format(values) for _, values in columns))
+    line = delimiter.join(formats) + "\n"
+    table = np.empty(len(columns[0][1]), dtype=[(f"c{i}", dt) for i, dt in enumerate(dtypes)])
+    for i, (_, values) in enumerate(columns):
+        table[f"c{i}"] = values
+    for start in range(0, len(table), _CHUNK_ROWS):
+        rows = table[start : start + _CHUNK_ROWS].tolist()  # tuples of Python floats and ints
+        f.write("".join(map(line.__mod__, rows)).encode())

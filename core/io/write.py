@@ -1,0 +1,127 @@
+"""Writing point clouds and curvature results: PLY (binary) or text, always atomically."""
+
+from __future__ import annotations
+
+import os
+import pathlib
+import re
+from collections.abc import Mapping
+from functools import partial
+
+import numpy as np
+
+from . import ply, text
+from .atomic import atomic_write
+from .cloud import CloudFileError
+from .formats import WRITE_FORMATS, resolve_format
+
+_WRITERS = {
+    "ply": ply.write_ply,
+    "csv": partial(text.write_text, delimiter=",", header=True),
+    "xyz": partial(text.write_text, delimiter=" ", header=False),
+    "txt": partial(text.write_text, delimiter=" ", header=False),
+}
+assert set(_WRITERS) == {ext[1:] for ext in WRITE_FORMATS}
+
+_RESERVED = ("x", "y", "z", "nx", "ny", "nz")
+_NAME = re.compile(r'^[^\s,;"#]+$')
+#: the per-point attributes of a curvature result written by :func:`write_result`, in order
+RESULT_FIELDS = ("k1", "k2", "e1", "e2", "gaussian", "mean", "valid")
+
+
+def write_cloud(path, points, *, normals=None, fields=None, format=None) -> pathlib.Path:
+    """Write points (with optional normals and per-point fields) to a PLY or text file.
+
+    Parameters
+    ----------
+    path : str or path-like
+    points : (N, 3) array_like
+    normals : (N, 3) array_like, optional
+    fields : dict, optional
+        name -> (N,) or (N, 3) array (numeric or bool); an (N, 3) array is written as
+        name_x, name_y, name_z. Names must not contain whitespace, ``,;"#``.
+    format : {"ply", "csv", "xyz", "txt"}, optional
+        By default from the extension. PLY is binary little-endian (bool -> uint8); CSV has
+        a header line; XYZ/TXT are space-separated columns, preceded by a ``# names`` line
+        only when there is more than x y z [nx ny nz].
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``. The file is written to a temporary file first and renamed over ``path``:
+        on failure no partial file is left and an existing file is untouched.
+
+    Raises
+    ------
+    ValueError
+        Invalid ``points``, ``normals`` or ``fields``.
+    CloudFileError
+        Unsupported format, or the file cannot be written (missing directory, permissions).
+    """
+    path = pathlib.Path(os.fspath(path))
+    fmt = resolve_format(path, format, WRITE_FORMATS, "writing")
+    columns = _columns(points, normals, fields)
+    try:
+        with atomic_write(path) as f:
+            _WRITERS[fmt](f, columns)
+    except OSError as exc:
+        raise CloudFileError(path, f"cannot be written: {exc.strerror or exc}") from exc
+    return path
+
+
+def write_result(path, result, *, format=None) -> pathlib.Path:
+    """Write a curvature result: x y z nx ny nz k1 k2 e1_x e1_y e1_z e2_x e2_y e2_z gaussian mean valid.
+
+    ``result`` is anything with the attributes ``points``, ``normals`` and
+    :data:`RESULT_FIELDS` (e.g. :class:`core.CurvatureResult`); see :func:`write_cloud`
+    for ``path`` and ``format``.
+    """
+    missing = [name for name in ("points", "normals", *RESULT_FIELDS) if not hasattr(result, name)]
+    if missing:
+        raise TypeError(f"result must have attributes points, normals, {', '.join(RESULT_FIELDS)}; "
+                        f"{type(result).__name__} lacks {', '.join(missing)}")
+    fields = {name: getattr(result, name) for name in RESULT_FIELDS}
+    return write_cloud(path, result.points, normals=result.normals, fields=fields, format=format)
+
+
+def _numeric(values, name: str, shapes: str) -> np.ndarray:
+    arr = np.asarray(values)
+    if not (arr.dtype == bool or np.issubdtype(arr.dtype, np.integer) or np.issubdtype(arr.dtype, np.floating)):
+        raise ValueError(f"{name} must be a numeric or bool array of shape {shapes}, got dtype {arr.dtype}")
+    return arr
+
+
+def _columns(points, normals, fields) -> list:
+    """[(name, (N,) array)] in file order, validated; new arrays, inputs untouched."""
+    pts = _numeric(points, "points", "(N, 3)")
+    if pts.ndim != 2 or pts.shape[1] != 3 or len(pts) == 0:
+        raise ValueError(f"points must have shape (N, 3) with N >= 1, got shape {pts.shape}")
+    n = len(pts)
+    pts = pts.astype(np.float64)
+    columns = [(c, pts[:, i]) for i, c in enumerate("xyz")]
+    if normals is not None:
+        nrm = _numeric(normals, "normals", f"({n}, 3)")
+        if nrm.shape != (n, 3):
+            raise ValueError(f"normals must have shape ({n}, 3) to match points, got shape {nrm.shape}")
+        nrm = nrm.astype(np.float64)
+        columns += [(c, nrm[:, i]) for i, c in enumerate(("nx", "ny", "nz"))]
+    if fields is not None and not isinstance(fields, Mapping):
+        raise ValueError(f"fields must be a dict of name -> array, got {type(fields).__name__}")
+    extra = []
+    for name, values in (fields or {}).items():
+        if not isinstance(name, str) or not _NAME.match(name):
+            raise ValueError(f"field name {name!r} is invalid; use a non-empty name without whitespace or ,;\"#")
+        arr = _numeric(values, f"field {name!r}", f"({n},) or ({n}, 3)")
+        if arr.dtype == np.float16:
+            arr = arr.astype(np.float32)
+        if arr.shape == (n,):
+            extra.append((name, arr.copy()))
+        elif arr.shape == (n, 3):
+            extra += [(f"{name}_{c}", arr[:, i].copy()) for i, c in enumerate("xyz")]
+        else:
+            raise ValueError(f"field {name!r} must have shape ({n},) or ({n}, 3), got shape {arr.shape}")
+    names = [name for name, _ in extra]
+    bad = sorted({name for name in names if names.count(name) > 1 or name in _RESERVED})
+    if bad:
+        raise ValueError(f"field names {', '.join(bad)} clash with x y z nx ny nz or with each other")
+    return columns + extra

@@ -1,0 +1,63 @@
+"""Automatic neighbourhood size: ``k="auto"`` picks k per point by a bias–variance rule.
+
+Small neighbourhoods give unbiased but noisy normal derivatives; large ones average the
+noise away but bend the linear model of the normal field (eq. 23) over a curved patch.
+The rule is the *intersection of confidence intervals* (ICI; Goldenshluger & Nemirovski
+1997, Katkovnik 1999): fit NF at increasing k, each giving the Weingarten entries
+(W11, (W12 + W21)/2, W22) with their least-squares standard deviations s_k. While the
+intervals [W_k - G s_k, W_k + G s_k] of all scales so far still intersect, the larger
+k only removes noise; the first k whose interval leaves the common intersection shows
+bias, and the previous k is kept. Noise sets s_k, curvature sets the bias, and both
+are read from the data: nothing is tuned per shape.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .patch import Chunk
+
+#: candidate neighbourhood sizes (about x1.4 apart)
+AUTO_KS = (12, 17, 24, 34, 48)
+#: width of the confidence intervals in standard deviations. The least-squares variance
+#: treats the neighbours' normals as independent, but neighbouring estimated normals
+#: share most of their own neighbours, so their errors are correlated and the variance
+#: is underestimated; 4 (not the textbook 2) compensates. Measured on the torus, saddle,
+#: ellipsoid and a thin torus (r = 0.3) at noise 0–0.2 of the spacing.
+GAMMA = 4.0
+_CHUNK = 32_768
+
+
+def candidates(n_points: int) -> tuple[int, ...]:
+    """The candidate k that a cloud of ``n_points`` allows."""
+    ks = tuple(k for k in AUTO_KS if k <= n_points)
+    return ks or (n_points,)
+
+
+def choose_k(points, normals, nb, has_normal, method, opts, ks, report):
+    """Per-point k by ICI over ``ks`` (ascending) using NF fits; returns (N,) int."""
+    n = len(points)
+    idx_all, dist_all = nb.take(ks[-1])
+    chosen = np.full(n, ks[0], dtype=np.int64)
+    usable = np.flatnonzero(has_normal)
+    for start in range(0, len(usable), _CHUNK):
+        centres = usable[start:start + _CHUNK]
+        lo = np.full((len(centres), 3), -np.inf)
+        hi = np.full((len(centres), 3), np.inf)
+        alive = np.ones(len(centres), dtype=bool)
+        pick = np.full(len(centres), ks[0], dtype=np.int64)
+        for k in ks:
+            h = dist_all[centres, k - 1]
+            good_h = h > 0
+            chunk = Chunk.build(points, normals, idx_all[centres, :k], np.where(good_h, h, 1.0), centres)
+            _, W, ok, diag = method.fit(chunk, **opts)
+            est = np.stack([W[:, 0, 0], 0.5 * (W[:, 0, 1] + W[:, 1, 0]), W[:, 1, 1]], axis=1) / chunk.h[:, None]
+            sd = np.sqrt(diag["var"]) / chunk.h[:, None]
+            ok &= good_h & np.isfinite(est).all(axis=1) & np.isfinite(sd).all(axis=1)
+            lo = np.where(ok[:, None], np.maximum(lo, est - GAMMA * sd), lo)
+            hi = np.where(ok[:, None], np.minimum(hi, est + GAMMA * sd), hi)
+            alive &= ok & (lo <= hi).all(axis=1)
+            pick = np.where(alive, k, pick)
+        chosen[centres] = pick
+        report(min(len(usable), start + _CHUNK) / max(len(usable), 1), "choosing k")
+    return chosen
