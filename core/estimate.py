@@ -115,7 +115,7 @@ def estimate(
 
     fit_start = 0.45
     if auto:
-        kc = scale.choose_k(pts, nrm, nb, has_normal, m, opts, ks, report.sub(0.45, 0.7))
+        kc = scale.choose_k(pts, nrm, nb, has_normal, ks, report.sub(0.45, 0.7))
         fit_start = 0.7
     else:
         kc = np.full(n, k, dtype=np.int64)

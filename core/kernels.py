@@ -109,33 +109,39 @@ def pca_normals(points, idx, dist, start, reach, collinear, normals, ok):
 
 
 @njit(**_OPTS)
-def _solve_nf(u, v, X, Y, wt, n, rcond, coef):
-    """Weighted least squares of X and Y on [1, u, v] (eqs. 25–26).
-
-    Writes coef = (cX0, cX1, cX2, cY0, cY1, cY2, inv11, inv22, rssX, rssY, sumw) and
-    returns False when the equilibrated normal matrix is near singular (determinant test).
-    """
-    s1 = su = sv = suu = suv = svv = 0.0
-    x0 = x1 = x2 = y0 = y1 = y2 = xx = yy = 0.0
-    for j in range(n):
+def _accumulate(u, v, X, Y, wt, j0, j1, S):
+    """Add neighbours j0..j1-1 to the weighted sums S of the NF normal equations."""
+    for j in range(j0, j1):
         w = wt[j]
         if w == 0.0:
             continue
         uj, vj, Xj, Yj = u[j], v[j], X[j], Y[j]
-        s1 += w
-        su += w * uj
-        sv += w * vj
-        suu += w * uj * uj
-        suv += w * uj * vj
-        svv += w * vj * vj
-        x0 += w * Xj
-        x1 += w * uj * Xj
-        x2 += w * vj * Xj
-        y0 += w * Yj
-        y1 += w * uj * Yj
-        y2 += w * vj * Yj
-        xx += w * Xj * Xj
-        yy += w * Yj * Yj
+        S[0] += w
+        S[1] += w * uj
+        S[2] += w * vj
+        S[3] += w * uj * uj
+        S[4] += w * uj * vj
+        S[5] += w * vj * vj
+        S[6] += w * Xj
+        S[7] += w * uj * Xj
+        S[8] += w * vj * Xj
+        S[9] += w * Yj
+        S[10] += w * uj * Yj
+        S[11] += w * vj * Yj
+        S[12] += w * Xj * Xj
+        S[13] += w * Yj * Yj
+
+
+@njit(**_OPTS)
+def _solve_sums(S, rcond, coef):
+    """Least squares of X and Y on [1, u, v] from the sums S (eqs. 25–26).
+
+    Writes coef = (cX0, cX1, cX2, cY0, cY1, cY2, inv11, inv22, rssX, rssY, sumw, inv12,
+    inv01, inv02) and returns False when the equilibrated normal matrix is near singular
+    (determinant test).
+    """
+    s1, su, sv, suu, suv, svv = S[0], S[1], S[2], S[3], S[4], S[5]
+    x0, x1, x2, y0, y1, y2, xx, yy = S[6], S[7], S[8], S[9], S[10], S[11], S[12], S[13]
     if not (s1 > 0.0 and suu > 0.0 and svv > 0.0):
         return False
     d0, d1, d2 = math.sqrt(s1), math.sqrt(suu), math.sqrt(svv)
@@ -171,6 +177,43 @@ def _solve_nf(u, v, X, Y, wt, n, rcond, coef):
     coef[12] = e01
     coef[13] = e02
     return True
+
+
+@njit(**_OPTS)
+def _gather(points, normals, idx, centres, h, t1, t2, z, r, n, weighting, theta_reach, u, v, X, Y, base):
+    """Neighbours 0..n-1 of centre r in its frame: offsets (u, v) / h, normal components
+    (X, Y) flipped to agree with the frame's z (§4.3), and base weights (0 without a normal)."""
+    i = centres[r]
+    hi = h[r]
+    a0, a1, a2 = t1[r, 0], t1[r, 1], t1[r, 2]
+    b0, b1, b2 = t2[r, 0], t2[r, 1], t2[r, 2]
+    c0, c1, c2 = z[r, 0], z[r, 1], z[r, 2]
+    for j in range(n):
+        q = idx[r, j]
+        nx, ny, nz = normals[q, 0], normals[q, 1], normals[q, 2]
+        dx = (points[q, 0] - points[i, 0]) / hi
+        dy = (points[q, 1] - points[i, 1]) / hi
+        dz = (points[q, 2] - points[i, 2]) / hi
+        u[j] = dx * a0 + dy * a1 + dz * a2
+        v[j] = dx * b0 + dy * b1 + dz * b2
+        if not math.isfinite(nx):
+            X[j] = Y[j] = base[j] = 0.0
+            continue
+        sgn = 1.0 if nx * c0 + ny * c1 + nz * c2 >= 0.0 else -1.0
+        X[j] = sgn * (nx * a0 + ny * a1 + nz * a2)
+        Y[j] = sgn * (nx * b0 + ny * b1 + nz * b2)
+        base[j] = 1.0
+        if weighting == 1:
+            base[j] = _theta(math.sqrt(dx * dx + dy * dy + dz * dz) / theta_reach)
+
+
+@njit(**_OPTS)
+def _slope_variances(coef, n):
+    """Least-squares variances of W11, (W12 + W21)/2 and W22 from the residuals."""
+    dof = max(coef[10] * (1.0 - 3.0 / max(n, 4)), 1e-12)
+    sx2 = coef[8] / dof
+    sy2 = coef[9] / dof
+    return sx2 * coef[6], 0.25 * (sx2 * coef[7] + sy2 * coef[6]), sy2 * coef[7]
 
 
 @njit(**_OPTS)
@@ -227,46 +270,31 @@ def normal_fit(points, normals, idx, kc, h, centres, t1, t2, z, theta_reach, wei
         wt = np.empty(kmax)
         res = np.empty(kmax)
         coef = np.empty(14)
+        S = np.empty(14)
         for r in range(blk * _BLOCK, min(m, (blk + 1) * _BLOCK)):
             _nf_point(points, normals, idx, kc, h, centres, t1, t2, z, theta_reach, weighting,
-                      constraint, robust, rcond, mu, W, var, rms, ok, r, u, v, X, Y, base, wt, res, coef)
+                      constraint, robust, rcond, mu, W, var, rms, ok, r, u, v, X, Y, base, wt, res, coef, S)
 
 
 @njit(**_OPTS)
 def _nf_point(points, normals, idx, kc, h, centres, t1, t2, z, theta_reach, weighting, constraint,
-              robust, rcond, mu, W, var, rms, ok, r, u, v, X, Y, base, wt, res, coef):
+              robust, rcond, mu, W, var, rms, ok, r, u, v, X, Y, base, wt, res, coef, S):
     """The NF fit of centre ``r`` (see :func:`normal_fit`), using the scratch arrays given."""
-    i = centres[r]
     n = kc[r]
-    hi = h[r]
-    a0, a1, a2 = t1[r, 0], t1[r, 1], t1[r, 2]
-    b0, b1, b2 = t2[r, 0], t2[r, 1], t2[r, 2]
-    c0, c1, c2 = z[r, 0], z[r, 1], z[r, 2]
+    _gather(points, normals, idx, centres, h, t1, t2, z, r, n, weighting, theta_reach, u, v, X, Y, base)
     for j in range(n):
-        q = idx[r, j]
-        nx, ny, nz = normals[q, 0], normals[q, 1], normals[q, 2]
-        dx = (points[q, 0] - points[i, 0]) / hi
-        dy = (points[q, 1] - points[i, 1]) / hi
-        dz = (points[q, 2] - points[i, 2]) / hi
-        u[j] = dx * a0 + dy * a1 + dz * a2
-        v[j] = dx * b0 + dy * b1 + dz * b2
-        if not math.isfinite(nx):
-            X[j] = Y[j] = base[j] = 0.0
-            continue
-        sgn = 1.0 if nx * c0 + ny * c1 + nz * c2 >= 0.0 else -1.0
-        X[j] = sgn * (nx * a0 + ny * a1 + nz * a2)
-        Y[j] = sgn * (nx * b0 + ny * b1 + nz * b2)
-        base[j] = 1.0
-        if weighting == 1:
-            base[j] = _theta(math.sqrt(dx * dx + dy * dy + dz * dz) / theta_reach)
         wt[j] = base[j]
-    ok[r] = _solve_nf(u, v, X, Y, wt, n, rcond, coef)
+    S[:] = 0.0
+    _accumulate(u, v, X, Y, wt, 0, n, S)
+    ok[r] = _solve_sums(S, rcond, coef)
     if robust > 0:
         for _ in range(3):
             if not ok[r]:
                 break
             _robust_weights(u, v, X, Y, base, n, coef, robust, wt, res)
-            ok[r] = _solve_nf(u, v, X, Y, wt, n, rcond, coef)
+            S[:] = 0.0
+            _accumulate(u, v, X, Y, wt, 0, n, S)
+            ok[r] = _solve_sums(S, rcond, coef)
     if not ok[r]:
         return
     cx0, cx1, cx2, cy0, cy1, cy2 = coef[0], coef[1], coef[2], coef[3], coef[4], coef[5]
@@ -300,13 +328,7 @@ def _nf_point(points, normals, idx, kc, h, centres, t1, t2, z, theta_reach, weig
     W[r, 0, 1] = w12
     W[r, 1, 0] = w21
     W[r, 1, 1] = w22
-    # residual variances -> variances of the slopes (ordinary least-squares formulas)
-    dof = max(coef[10] * (1.0 - 3.0 / max(n, 4)), 1e-12)
-    sx2 = coef[8] / dof
-    sy2 = coef[9] / dof
-    var[r, 0] = sx2 * coef[6]
-    var[r, 1] = 0.25 * (sx2 * coef[7] + sy2 * coef[6])
-    var[r, 2] = sy2 * coef[7]
+    var[r, 0], var[r, 1], var[r, 2] = _slope_variances(coef, n)
     rms[r] = math.sqrt((coef[8] + coef[9]) / max(coef[10], 1e-300))
 
 
@@ -467,3 +489,53 @@ def outlier_scores(points, idx, floor, score):
         d = abs((points[i, 0] - cx) * x + (points[i, 1] - cy) * y + (points[i, 2] - cz) * z)
         unit = math.sqrt(max(l0, 0.0) / m) + floor * spread / m
         score[i] = d / unit if unit > 0.0 else (0.0 if d == 0.0 else math.inf)
+
+
+@njit(**_OPTS, parallel=True)
+def choose_scales(points, normals, idx, h, centres, t1, t2, z, ks, gamma, rcond, chosen):
+    """Intersection of confidence intervals over nested neighbourhoods (see core.scale).
+
+    One pass over each centre's ks[-1] neighbours: the NF sums grow neighbour by
+    neighbour and are solved at each candidate size ks[c] (uniform weights, no constraint,
+    lengths in units of h = the distance to the largest neighbourhood). ``chosen`` gets
+    the largest k whose interval [W - gamma s, W + gamma s] still meets all previous ones.
+    """
+    m = len(centres)
+    kmax = ks[-1]
+    n_blocks = (m + _BLOCK - 1) // _BLOCK
+    for blk in prange(n_blocks):
+        u = np.empty(kmax)
+        v = np.empty(kmax)
+        X = np.empty(kmax)
+        Y = np.empty(kmax)
+        base = np.empty(kmax)
+        coef = np.empty(14)
+        S = np.empty(14)
+        lo = np.empty(3)
+        hi = np.empty(3)
+        for r in range(blk * _BLOCK, min(m, (blk + 1) * _BLOCK)):
+            _gather(points, normals, idx, centres, h, t1, t2, z, r, kmax, 0, 1.0, u, v, X, Y, base)
+            S[:] = 0.0
+            lo[:] = -math.inf
+            hi[:] = math.inf
+            pick = ks[0]
+            prev = 0
+            for c in range(len(ks)):
+                _accumulate(u, v, X, Y, base, prev, ks[c], S)
+                prev = ks[c]
+                if not _solve_sums(S, rcond, coef):
+                    if c == 0:
+                        continue
+                    break
+                v0, v1, v2 = _slope_variances(coef, ks[c])
+                est0, est1, est2 = coef[1], 0.5 * (coef[2] + coef[4]), coef[5]
+                lo[0] = max(lo[0], est0 - gamma * math.sqrt(v0))
+                hi[0] = min(hi[0], est0 + gamma * math.sqrt(v0))
+                lo[1] = max(lo[1], est1 - gamma * math.sqrt(v1))
+                hi[1] = min(hi[1], est1 + gamma * math.sqrt(v1))
+                lo[2] = max(lo[2], est2 - gamma * math.sqrt(v2))
+                hi[2] = min(hi[2], est2 + gamma * math.sqrt(v2))
+                if lo[0] > hi[0] or lo[1] > hi[1] or lo[2] > hi[2]:
+                    break
+                pick = ks[c]
+            chosen[r] = pick

@@ -15,6 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import kernels
+from .methods.normal_fit import RCOND_DET
 from .patch import Chunk
 
 #: candidate neighbourhood sizes (about x1.4 apart)
@@ -34,30 +36,19 @@ def candidates(n_points: int) -> tuple[int, ...]:
     return ks or (n_points,)
 
 
-def choose_k(points, normals, nb, has_normal, method, opts, ks, report):
-    """Per-point k by ICI over ``ks`` (ascending) using NF fits; returns (N,) int."""
+def choose_k(points, normals, nb, has_normal, ks, report):
+    """Per-point k by ICI over ``ks`` (ascending); returns (N,) int (ks[0] where no normal)."""
     n = len(points)
     idx_all, dist_all = nb.take(ks[-1])
     chosen = np.full(n, ks[0], dtype=np.int64)
-    usable = np.flatnonzero(has_normal)
+    usable = np.flatnonzero(has_normal & (dist_all[:, -1] > 0))
+    ks_arr = np.asarray(ks, dtype=np.int64)
     for start in range(0, len(usable), _CHUNK):
         centres = usable[start:start + _CHUNK]
-        lo = np.full((len(centres), 3), -np.inf)
-        hi = np.full((len(centres), 3), np.inf)
-        alive = np.ones(len(centres), dtype=bool)
-        pick = np.full(len(centres), ks[0], dtype=np.int64)
-        for k in ks:
-            h = dist_all[centres, k - 1]
-            good_h = h > 0
-            chunk = Chunk.build(points, normals, idx_all[centres, :k], np.where(good_h, h, 1.0), centres)
-            _, W, ok, diag = method.fit(chunk, **opts)
-            est = np.stack([W[:, 0, 0], 0.5 * (W[:, 0, 1] + W[:, 1, 0]), W[:, 1, 1]], axis=1) / chunk.h[:, None]
-            sd = np.sqrt(diag["var"]) / chunk.h[:, None]
-            ok &= good_h & np.isfinite(est).all(axis=1) & np.isfinite(sd).all(axis=1)
-            lo = np.where(ok[:, None], np.maximum(lo, est - GAMMA * sd), lo)
-            hi = np.where(ok[:, None], np.minimum(hi, est + GAMMA * sd), hi)
-            alive &= ok & (lo <= hi).all(axis=1)
-            pick = np.where(alive, k, pick)
-        chosen[centres] = pick
+        chunk = Chunk.build(points, normals, idx_all[centres], dist_all[centres, -1], centres)
+        out = np.empty(len(centres), dtype=np.int64)
+        kernels.choose_scales(chunk.points, chunk.normals, chunk.idx, chunk.h, chunk.centres,
+                              chunk.t1, chunk.t2, chunk.z, ks_arr, GAMMA, RCOND_DET, out)
+        chosen[centres] = out
         report(min(len(usable), start + _CHUNK) / max(len(usable), 1), "choosing k")
     return chosen
