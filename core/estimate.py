@@ -21,8 +21,10 @@ MAX_PASSES = 20
 PCA_K = 15
 #: a point whose distance to its neighbours' plane exceeds this many spreads is an outlier
 OUTLIER_SCORE = 6.0
-#: RMS residual of the normal fit (unit normals) above which a point sits on a crease
-CREASE_RMS = 0.25
+#: crease: normals spread (RMS, unit normals) above this and a linear fit leaving more
+#: than CREASE_RATIO of that spread unexplained
+CREASE_SPREAD = 0.15
+CREASE_RATIO = 0.25
 _OUTLIER_FLOOR = 0.05
 
 
@@ -131,7 +133,8 @@ def estimate(
     for p in range(n_fits):
         span = (1.0 - fit_start) / n_fits
         sub = report.sub(fit_start + span * p, fit_start + span * (p + 1))
-        refined, k1, k2, e1, e2, valid, rms = _fit_all(pts, nrm, idx, kc, h, has_normal, m, opts, sub)
+        refined, k1, k2, e1, e2, valid, stats = _fit_all(pts, nrm, idx, kc, h, has_normal, m, opts, sub)
+        crease = _creases(valid, *stats)
         if p == passes:
             break
         if robust and p == 0:  # outliers leave their neighbours' fits (and are not estimated)
@@ -142,7 +145,7 @@ def estimate(
         nrm = new
         passes_run += 1
         if tol is not None and change < tol:
-            refined, k1, k2, e1, e2, valid, rms = _fit_all(pts, nrm, idx, kc, h, has_normal, m, opts, sub)
+            refined, k1, k2, e1, e2, valid, _ = _fit_all(pts, nrm, idx, kc, h, has_normal, m, opts, sub)
             break
     report(1.0, "done")
     params = dict(
@@ -152,12 +155,24 @@ def estimate(
         normals_given=normals is not None,
     )
     normals_out = np.where(valid[:, None], refined, nrm)
-    crease = valid & (rms > CREASE_RMS)
+    crease &= valid
     return CurvatureResult(
         points=pts, normals=normals_out, k1=k1, k2=k2, e1=e1, e2=e2, valid=valid,
         k_point=kc, outlier_score=scores, crease=crease,
         method=m.name, k="auto" if auto else k, passes=passes, params=params, neighbours=nb,
     )
+
+
+def _creases(valid, rms, spread):
+    """Points where the neighbours' normals turn a lot but not linearly (a step: a crease).
+
+    On a smooth patch the linear model of eq. 23 explains the turning of the normals and
+    the residual is a small part of it; across a sharp edge the normals jump and a line
+    explains only part of the jump. Measured on the initial (PCA) normals.
+    """
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratio = rms / spread
+    return valid & (spread > CREASE_SPREAD) & (ratio > CREASE_RATIO)
 
 
 def _mean_angle_deg(a, b, mask):
@@ -201,6 +216,7 @@ def _fit_all(pts, nrm, idx, kc, h, has_normal, method, opts, report):
     k1 = np.full(n, np.nan)
     k2 = np.full(n, np.nan)
     rms = np.full(n, np.nan)
+    spread = np.full(n, np.nan)
     valid = np.zeros(n, dtype=bool)
     usable = has_normal & (h > 0)
     for start in range(0, n, _CHUNK):
@@ -217,6 +233,7 @@ def _fit_all(pts, nrm, idx, kc, h, has_normal, method, opts, report):
             k1[sel], k2[sel] = c_k1[good], c_k2[good]
             if diag and "rms" in diag[0]:
                 rms[sel] = diag[0]["rms"][good]
+                spread[sel] = diag[0]["spread"][good]
             valid[sel] = True
         report(min(n, start + _CHUNK) / n, method.name)
-    return normal, k1, k2, e1, e2, valid, rms
+    return normal, k1, k2, e1, e2, valid, (rms, spread)

@@ -246,7 +246,7 @@ def _robust_weights(u, v, X, Y, base, n, coef, kind, wt, res):
 
 @njit(**_OPTS, parallel=True)
 def normal_fit(points, normals, idx, kc, h, centres, t1, t2, z, theta_reach, weighting, constraint,
-               robust, rcond, mu, W, var, rms, ok):
+               robust, rcond, mu, W, var, rms, spread, ok):
     """NF per point (§4.3–4.4): fit X, Y of the neighbours' normals with [1, u, v].
 
     kc (M,): neighbours used per point (the first kc of each row of idx). weighting: 0
@@ -255,7 +255,8 @@ def normal_fit(points, normals, idx, kc, h, centres, t1, t2, z, theta_reach, wei
     normal equations, two fixed-point iterations on mu). robust: 0 none, 1 Huber, 2 Tukey
     (3 IRLS iterations). Coordinates are divided by h; W is returned in those units, with
     var (M, 3) the least-squares variances of W11, (W12 + W21)/2, W22 and rms (M,) the
-    weighted RMS residual of the normal components.
+    weighted RMS residual of the normal components, spread (M,) their weighted RMS
+    deviation from their mean (how much the normals turn over the neighbourhood).
     """
     m = len(centres)
     kmax = idx.shape[1]
@@ -273,12 +274,12 @@ def normal_fit(points, normals, idx, kc, h, centres, t1, t2, z, theta_reach, wei
         S = np.empty(14)
         for r in range(blk * _BLOCK, min(m, (blk + 1) * _BLOCK)):
             _nf_point(points, normals, idx, kc, h, centres, t1, t2, z, theta_reach, weighting,
-                      constraint, robust, rcond, mu, W, var, rms, ok, r, u, v, X, Y, base, wt, res, coef, S)
+                      constraint, robust, rcond, mu, W, var, rms, spread, ok, r, u, v, X, Y, base, wt, res, coef, S)
 
 
 @njit(**_OPTS)
 def _nf_point(points, normals, idx, kc, h, centres, t1, t2, z, theta_reach, weighting, constraint,
-              robust, rcond, mu, W, var, rms, ok, r, u, v, X, Y, base, wt, res, coef, S):
+              robust, rcond, mu, W, var, rms, spread, ok, r, u, v, X, Y, base, wt, res, coef, S):
     """The NF fit of centre ``r`` (see :func:`normal_fit`), using the scratch arrays given."""
     n = kc[r]
     _gather(points, normals, idx, centres, h, t1, t2, z, r, n, weighting, theta_reach, u, v, X, Y, base)
@@ -330,6 +331,8 @@ def _nf_point(points, normals, idx, kc, h, centres, t1, t2, z, theta_reach, weig
     W[r, 1, 1] = w22
     var[r, 0], var[r, 1], var[r, 2] = _slope_variances(coef, n)
     rms[r] = math.sqrt((coef[8] + coef[9]) / max(coef[10], 1e-300))
+    total = S[12] - S[6] * S[6] / S[0] + S[13] - S[9] * S[9] / S[0]
+    spread[r] = math.sqrt(max(total, 0.0) / S[0])
 
 
 @njit(**_OPTS)

@@ -122,6 +122,28 @@ def torus(n=5000, *, R=2.0, r=1.0, seed=0):
     return _ordered(nrm, np.full(n, 1.0 / r), ct / rho, tube, ring, pts, "torus", R=R, r=r)
 
 
+def cube(n=6000, *, size=2.0, seed=0):
+    """The surface of an axis-aligned cube: flat faces (k1 = k2 = 0) meeting at sharp edges.
+
+    ``interior`` marks points at least 10 % of the edge length away from every edge; the
+    edges themselves have no curvature to compare with (a crease), only a flag to expect.
+    """
+    n, rng = _rng_n(n, seed)
+    face = rng.integers(0, 6, n)
+    axis, sign = face // 2, np.where(face % 2 == 0, 1.0, -1.0)
+    pts = (rng.random((n, 3)) - 0.5) * size
+    pts[np.arange(n), axis] = sign * size / 2
+    nrm = np.zeros((n, 3))
+    nrm[np.arange(n), axis] = sign
+    ea = np.zeros((n, 3))
+    ea[np.arange(n), (axis + 1) % 3] = 1.0
+    eb = np.cross(nrm, ea)
+    in_face = np.abs(pts) < size / 2 * (1 - 1e-12)
+    edge_dist = np.where(in_face, size / 2 - np.abs(pts), np.inf).min(axis=1)
+    zeros = np.zeros(n)
+    return _ordered(nrm, zeros, zeros, ea, eb, pts, "cube", edge_dist > 0.1 * size, size=size)
+
+
 # ----------------------------------------------------------------------------- implicit
 def _implicit_sample(name, F, grad, hess, n, rng, r_max, **params):
     """Area-uniform samples of a star-shaped implicit surface F = 0 (F < 0 inside).
@@ -207,4 +229,5 @@ SHAPES = {
     "plane": plane,
     "saddle": saddle,
     "ellipsoid": ellipsoid,
+    "cube": cube,
 }

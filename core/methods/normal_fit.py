@@ -34,7 +34,8 @@ def fit(chunk, *, weights="uniform", constraint="project", robust=None):
     """Fit (mu, W) per point of a :class:`core.patch.Chunk`; see :data:`NF_DOC`.
 
     Returns ``(mu, W, ok, diag)`` with ``diag`` holding the least-squares variances of
-    W11, (W12 + W21)/2, W22 ("var", units of 1/h^2) and the RMS residual ("rms").
+    W11, (W12 + W21)/2, W22 ("var", units of 1/h^2), the RMS residual of the normal components ("rms") and
+    their RMS deviation from their mean ("spread").
     """
     if weights not in _WEIGHTS:
         raise ValueError(f"weights {weights!r} is invalid; must be one of {list(_WEIGHTS)}")
@@ -47,10 +48,11 @@ def fit(chunk, *, weights="uniform", constraint="project", robust=None):
     W = np.zeros((m, 2, 2))
     var = np.full((m, 3), np.inf)
     rms = np.full(m, np.nan)
+    spread = np.full(m, np.nan)
     ok = np.empty(m, dtype=bool)
     kernels.normal_fit(
         chunk.points, chunk.normals, chunk.idx, chunk.kc, chunk.h, chunk.centres, chunk.t1, chunk.t2,
         chunk.z, THETA_REACH, _WEIGHTS.index(weights), _CONSTRAINTS.index(constraint),
-        _ROBUST.index(robust), RCOND_DET, mu, W, var, rms, ok,
+        _ROBUST.index(robust), RCOND_DET, mu, W, var, rms, spread, ok,
     )
-    return mu, W, ok, {"var": var, "rms": rms}
+    return mu, W, ok, {"var": var, "rms": rms, "spread": spread}
