@@ -542,3 +542,81 @@ def choose_scales(points, normals, idx, h, centres, t1, t2, z, ks, gamma, rcond,
                     break
                 pick = ks[c]
             chosen[r] = pick
+
+
+@njit(**_OPTS, parallel=True)
+def jet_normals(points, idx, h, centres, t1, t2, z, rcond, normals, ok):
+    """Normals of the osculating 2-jet (Cazals & Pouget 2005) in the frames given.
+
+    Fits w = c0 + c1 u + c2 v + c3 u^2 + c4 uv + c5 v^2 to the neighbours (lengths / h) by
+    least squares (6x6 normal equations, equilibrated, Cholesky); the normal of the graph
+    at the origin is (-c1, -c2, 1) / |.|. Near-singular systems leave ok False.
+    """
+    m = len(centres)
+    k = idx.shape[1]
+    n_blocks = (m + _BLOCK - 1) // _BLOCK
+    for blk in prange(n_blocks):
+        G = np.empty((6, 6))
+        b = np.empty(6)
+        row = np.empty(6)
+        L = np.empty((6, 6))
+        d = np.empty(6)
+        for r in range(blk * _BLOCK, min(m, (blk + 1) * _BLOCK)):
+            ok[r] = False
+            i = centres[r]
+            hi = h[r]
+            G[:, :] = 0.0
+            b[:] = 0.0
+            for j in range(k):
+                q = idx[r, j]
+                dx = (points[q, 0] - points[i, 0]) / hi
+                dy = (points[q, 1] - points[i, 1]) / hi
+                dz = (points[q, 2] - points[i, 2]) / hi
+                u = dx * t1[r, 0] + dy * t1[r, 1] + dz * t1[r, 2]
+                v = dx * t2[r, 0] + dy * t2[r, 1] + dz * t2[r, 2]
+                w = dx * z[r, 0] + dy * z[r, 1] + dz * z[r, 2]
+                row[0], row[1], row[2], row[3], row[4], row[5] = 1.0, u, v, u * u, u * v, v * v
+                for a in range(6):
+                    b[a] += row[a] * w
+                    for c in range(a + 1):
+                        G[a, c] += row[a] * row[c]
+            good = True
+            for a in range(6):
+                d[a] = math.sqrt(G[a, a]) if G[a, a] > 0.0 else 0.0
+                if d[a] == 0.0:
+                    good = False
+            if not good:
+                continue
+            # Cholesky of the equilibrated matrix; a pivot below rcond means rank deficient
+            for a in range(6):
+                for c in range(a + 1):
+                    s = G[a, c] / (d[a] * d[c])
+                    for e in range(c):
+                        s -= L[a, e] * L[c, e]
+                    if a == c:
+                        if not s > rcond:
+                            good = False
+                            break
+                        L[a, a] = math.sqrt(s)
+                    else:
+                        L[a, c] = s / L[c, c]
+                if not good:
+                    break
+            if not good:
+                continue
+            # solve (L L^T) y = b / d, then x = y / d
+            for a in range(6):
+                s = b[a] / d[a]
+                for e in range(a):
+                    s -= L[a, e] * row[e]
+                row[a] = s / L[a, a]
+            for a in range(5, -1, -1):
+                s = row[a]
+                for e in range(a + 1, 6):
+                    s -= L[e, a] * row[e]
+                row[a] = s / L[a, a]
+            c1, c2 = row[1] / d[1], row[2] / d[2]
+            nrm = math.sqrt(1.0 + c1 * c1 + c2 * c2)
+            for a in range(3):
+                normals[r, a] = (-c1 * t1[r, a] - c2 * t2[r, a] + z[r, a]) / nrm
+            ok[r] = True

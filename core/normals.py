@@ -39,6 +39,33 @@ def pca_normals(points, idx, dist, *, progress=None):
     return normals, ok
 
 
+def jet_normals(points, normals, ok, idx, dist, *, progress=None):
+    """Normals of the osculating 2-jet (Cazals & Pouget 2005) fitted in the PCA frames.
+
+    A full quadric with constant and linear terms follows a curved patch where a plane
+    (PCA) cannot: noise-free, the normal error on the torus drops from ~0.7 to ~0.15
+    degrees at k = 15, and it stays lower under noise. Points where the jet is singular
+    keep their PCA normal.
+    """
+    from .linalg import tangent_basis
+    from .methods.normal_fit import RCOND_DET
+
+    out = normals.copy()
+    rows = np.flatnonzero(ok & (dist[:, -1] > 0))
+    for start in range(0, len(rows), _CHUNK):
+        centres = rows[start:start + _CHUNK]
+        z = normals[centres]
+        t1, t2 = tangent_basis(z)
+        res = np.empty((len(centres), 3))
+        good = np.empty(len(centres), dtype=bool)
+        kernels.jet_normals(points, np.ascontiguousarray(idx[centres]), dist[centres, -1], centres,
+                            t1, t2, z, RCOND_DET, res, good)
+        out[centres[good]] = res[good]
+        if progress is not None:
+            progress(min(len(rows), start + _CHUNK) / max(len(rows), 1), "normals")
+    return out
+
+
 def orient_normals(points, normals, idx, mode, *, ok=None):
     """Make normal signs globally consistent; returns a new array.
 

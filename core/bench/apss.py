@@ -177,8 +177,9 @@ def apss_curvature(points, normals, *, scale=2.0, evaluate=None, spherical=1.0, 
         l2 = np.linalg.norm(e2, axis=1)
         e1 = e1 / l1[:, None]
         e2 = e2 / l2[:, None]
-    valid = (np.isfinite(k1) & np.isfinite(k2) & (np.abs(l1 - 1) < 1e-3) & (np.abs(l2 - 1) < 1e-3)
-             & ~((mean2 == 0) & (gauss == 0)))  # a failed projection leaves quality 0
+    # a vertex the filter did not finish (failed projection, not selected) keeps
+    # undefined directions: accept only unit ones
+    valid = np.isfinite(k1) & np.isfinite(k2) & (np.abs(l1 - 1) < 1e-3) & (np.abs(l2 - 1) < 1e-3)
     if select is not None:
         valid &= select
     nan = np.nan
