@@ -20,7 +20,7 @@ MAX_PASSES = 20
 #: k of the initial PCA normals when k is chosen automatically (the paper's k)
 PCA_K = 15
 #: a point whose distance to its neighbours' plane exceeds this many spreads is an outlier
-OUTLIER_SCORE = 6.0
+OUTLIER_SCORE = 4.0
 #: crease: normals spread (RMS, unit normals) above this and a linear fit leaving more
 #: than CREASE_RATIO of that spread unexplained
 CREASE_SPREAD = 0.15

@@ -21,7 +21,7 @@ class CurvatureResult:
         collinear, rank-deficient fit): k1, k2, e1, e2 are NaN there, never a made-up value.
     k_point : (N,) int, neighbourhood size used at each point (varies with ``k="auto"``).
     outlier_score : (N,) distance of each point from its neighbours' plane in units of
-        their spread; :attr:`outlier` is ``outlier_score > 6``.
+        their spread; :attr:`outlier` is ``outlier_score > 4``.
     crease : (N,) bool, points where the linear normal model fails (RMS residual of the
         normal fit > 0.25): sharp edges and corners, flagged rather than trusted.
     method, k, passes, params : what was run (``k`` is an int or "auto").
@@ -62,7 +62,7 @@ class CurvatureResult:
 
     @property
     def outlier(self) -> np.ndarray:
-        """Points far off the surface of their neighbours (score > 6)."""
+        """Points far off the surface of their neighbours (score > 4)."""
         from .estimate import OUTLIER_SCORE
 
         return np.nan_to_num(self.outlier_score, nan=0.0) > OUTLIER_SCORE

@@ -24,6 +24,16 @@ Conventions of the filter (checked by ``tests/core/test_bench_accuracy.py`` and 
 * The principal directions PD1/PD2 (``vertex_curvature_principal_dir{1,2}_matrix``) are
   paired the other way round: **PD1 is the direction of the curvature of smaller |k|**
   (i.e. of K2), PD2 that of the larger |k| (K1).
+* Why, from MeshLab's source (``filter_mls/implicits.h``, ``WeingartenMap``): W =
+  (I − n nᵀ) Hess(f) / |∇f|; Mean is tr W, Gauss det(W + n nᵀ), K1/K2 come from
+  (Mean ± sqrt(Mean² − 4 Gauss))/2 swapped so that |K1| >= |K2| (NaN when the root's
+  argument rounds below 0: on an exact sphere, where the colour histogram then aborts the
+  process), and the directions from Eigen's ``SelfAdjointEigenSolver`` applied to W — which
+  is not symmetric, so only its lower triangle is read — dropping the eigenvector of
+  smallest |eigenvalue| as the normal and calling the smaller of the other two PD1. Mean
+  and Gauss are therefore exact functions of the fit, but near |k1| = |k2| (H ≈ 0) the
+  directions can come out swapped relative to K1/K2 (a 90° error in e1) — a MeshLab quirk
+  that APSS's direction errors below include.
 * ``"K1"``/``"K2"`` abort the whole process ("double free or corruption") on an exact
   sphere (every point umbilic), so they are never used here: k1, k2 are recovered from
   one "Mean" and one "Gauss" run as H ± sqrt(H² − K), and the direction of the larger
