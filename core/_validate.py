@@ -11,9 +11,12 @@ def as_points(points, *, name: str = "points", drop_nonfinite: bool = False):
     Returns ``(array, kept)`` where ``kept`` is the boolean mask of rows kept
     (all True unless ``drop_nonfinite`` dropped rows with NaN/inf).
     """
-    arr = np.asarray(points)
-    if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool):
-        raise ValueError(f"{name} must be a numeric array of shape (N, 3), got dtype {arr.dtype}")
+    try:
+        arr = np.asarray(points)
+    except ValueError as exc:  # ragged nested sequences
+        raise ValueError(f"{name} must be an array of shape (N, 3): {exc}") from None
+    if not (np.issubdtype(arr.dtype, np.integer) or np.issubdtype(arr.dtype, np.floating)):
+        raise ValueError(f"{name} must be a numeric array (real) of shape (N, 3), got dtype {arr.dtype}")
     if arr.ndim != 2 or arr.shape[1] != 3:
         raise ValueError(f"{name} must have shape (N, 3), got shape {arr.shape}")
     arr = np.array(arr, dtype=np.float64, order="C", copy=True)
@@ -32,8 +35,8 @@ def as_points(points, *, name: str = "points", drop_nonfinite: bool = False):
 def as_normals(normals, n_points: int, *, name: str = "normals"):
     """Validate optional input normals: (N, 3), finite, non-zero; returned unit length."""
     arr = np.asarray(normals)
-    if arr.dtype == object or not np.issubdtype(arr.dtype, np.number):
-        raise ValueError(f"{name} must be a numeric array of shape ({n_points}, 3), got dtype {arr.dtype}")
+    if not (np.issubdtype(arr.dtype, np.integer) or np.issubdtype(arr.dtype, np.floating)):
+        raise ValueError(f"{name} must be a numeric array (real) of shape ({n_points}, 3), got dtype {arr.dtype}")
     if arr.shape != (n_points, 3):
         raise ValueError(f"{name} must have shape ({n_points}, 3) to match points, got shape {arr.shape}")
     arr = np.array(arr, dtype=np.float64, order="C", copy=True)

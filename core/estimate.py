@@ -105,7 +105,10 @@ def estimate(
     if tol is not None and not (isinstance(tol, (int, float)) and np.isfinite(tol) and tol > 0):
         raise ValueError(f"tol must be a positive number of degrees or None, got {tol!r}")
     if normals is not None:
-        normals = as_normals(np.asarray(normals)[kept] if drop_nonfinite else normals, n)
+        shape = np.shape(normals)
+        if shape != (len(kept), 3):
+            raise ValueError(f"normals must have shape ({len(kept)}, 3) to match points, got shape {shape}")
+        normals = as_normals(np.asarray(normals)[kept], n)
     if initial not in ("auto", "pca", "jet"):
         raise ValueError(f"initial {initial!r} is invalid; must be one of ['auto', 'pca', 'jet']")
     initial = ("jet" if auto else "pca") if initial == "auto" else initial
@@ -118,10 +121,10 @@ def estimate(
         nrm, has_normal = pca_normals(pts, idx_p, dist_p, progress=report.sub(0.3, 0.4))
         if initial == "jet":
             nrm = jet_normals(pts, nrm, has_normal, idx_p, dist_p, progress=report.sub(0.4, 0.43))
-        mode = "outward" if view == "auto" else view
+        mode = "outward" if isinstance(view, str) and view == "auto" else view
     else:
         nrm, has_normal = normals, np.ones(n, dtype=bool)
-        mode = "keep" if view == "auto" else view
+        mode = "keep" if isinstance(view, str) and view == "auto" else view
     nrm = orient_normals(pts, nrm, idx_p, mode, ok=has_normal)
     report(0.45, "orientation")
 

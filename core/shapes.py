@@ -197,28 +197,33 @@ def ellipsoid(n=5000, *, axes=(1.5, 1.0, 0.75), seed=0):
     return _implicit_sample("ellipsoid", F, grad, hess, n, rng, 1.01 * max(axes), axes=tuple(axes))
 
 
-def saddle(n=5000, *, c=0.22, seed=0):
-    """A closed surface with saddles: |x|^2 - 1 - c (x^4 + y^4 + z^4) = 0.
+def saddle(n=5000, *, a=1.0, b=1.2, seed=0):
+    """A closed surface with saddles: the Cassini "peanut" |p - a x̂|^2 |p + a x̂|^2 = b^4.
 
-    Six lobes along the axes; between them the surface is saddle-shaped (K < 0). It
-    stands in for Goldfeather & Interrante's test surface, which the paper does not define.
-    Star-shaped for 0 < c < 1/4.
+    For a < b < sqrt(2) a it is one closed surface of revolution about the x axis: two
+    convex lobes (K > 0) joined by a waist where it is saddle-shaped (K < 0). It stands
+    in for Goldfeather & Interrante's test surface, which the paper does not define.
     """
     n, rng = _rng_n(n, seed)
-    if not 0 < c < 0.25:
-        raise ValueError(f"saddle needs 0 < c < 0.25, got c={c}")
+    if not a < b < np.sqrt(2) * a:
+        raise ValueError(f"saddle needs a < b < sqrt(2) a, got a={a}, b={b}")
+    ex = np.array([a, 0.0, 0.0])
 
     def F(p):
-        return (p * p).sum(1) - 1.0 - c * (p**4).sum(1)
+        return ((p - ex) ** 2).sum(1) * ((p + ex) ** 2).sum(1) - b**4
 
     def grad(p):
-        return 2 * p - 4 * c * p**3
+        A, B = ((p - ex) ** 2).sum(1), ((p + ex) ** 2).sum(1)
+        return 2 * (p - ex) * B[:, None] + 2 * (p + ex) * A[:, None]
 
     def hess(p):
-        return np.einsum("mi,ij->mij", 2 - 12 * c * p**2, np.eye(3))
+        A, B = ((p - ex) ** 2).sum(1), ((p + ex) ** 2).sum(1)
+        ga, gb = 2 * (p - ex), 2 * (p + ex)
+        outer = np.einsum("mi,mj->mij", ga, gb)
+        return outer + outer.transpose(0, 2, 1) + 2 * (A + B)[:, None, None] * np.eye(3)
 
-    r_axis = np.sqrt((1 - np.sqrt(1 - 4 * c)) / (2 * c))
-    return _implicit_sample("saddle", F, grad, hess, n, rng, 1.05 * r_axis, c=c)
+    r_max = 1.05 * np.sqrt(a * a + b * b)
+    return _implicit_sample("saddle", F, grad, hess, n, rng, r_max, a=a, b=b)
 
 
 #: shape name -> sampler(n, *, seed)

@@ -71,6 +71,8 @@ def get_method(method) -> Method:
 
 def check_options(method: Method, options) -> dict:
     """Merge user options over the method's defaults; unknown keys are an error."""
+    if options is not None and not isinstance(options, dict):
+        raise ValueError(f"options must be a dict of method options or None, got {options!r}")
     options = dict(options or {})
     unknown = sorted(set(options) - set(method.options))
     if unknown:

@@ -1,0 +1,206 @@
+"""Draw a worker result with the current display settings (GUI thread).
+
+:class:`ResultPresenter` turns one :class:`app.worker.EstimateOutput` plus the
+display part of the state (field, colour limits, glyphs, picked point) into calls
+on the scene(s) and the panels. It keeps the output on screen so that display
+changes re-draw without a new estimate.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .fields import FIELDS, colormap_for, curvature_floor, is_signed, robust_limits
+
+__all__ = ["ResultPresenter", "method_title", "uses_passes", "summary_line", "status_line", "point_info"]
+
+
+def method_title(name: str | None) -> str:
+    import core
+
+    method = core.METHODS.get(name) if name else None
+    return getattr(method, "title", name or "")
+
+
+def uses_passes(name: str | None) -> bool:
+    import core
+
+    return bool(getattr(core.METHODS.get(name), "uses_passes", False)) if name else False
+
+
+class ResultPresenter:
+    """Owns what is on screen; the window forwards display-state changes to it.
+
+    Attributes
+    ----------
+    output : EstimateOutput or None
+        The result on screen.
+    shown : dict
+        Field, colour limits, colormap and generation on screen (tests, status).
+    compare_scene : CloudScene or None
+        Set by the window while the compare view is visible.
+    """
+
+    def __init__(self, state, scene, *, field_panel, histogram, inspector):
+        self.state = state
+        self.scene = scene
+        self.compare_scene = None
+        self.field_panel = field_panel
+        self.histogram = histogram
+        self.inspector = inspector
+        self.output = None
+        self.shown: dict = {}
+
+    def _pairs(self):
+        """(scene, result, fields) for every view showing the current output."""
+        out = self.output
+        pairs = [(self.scene, out.result, out.fields)]
+        if self.compare_scene is not None and out.compare is not None:
+            pairs.append((self.compare_scene, out.compare, out.compare_fields))
+        return pairs
+
+    def clear(self) -> None:
+        """A new cloud is loading: forget the old result."""
+        self.output = None
+        self.shown = {}
+        self.scene.set_highlight(None)
+        for kind in ("e1", "e2", "normals"):
+            self.scene.set_glyphs(kind, None, density=0, length=0)
+        self.inspector.clear()
+
+    def show(self, out) -> None:
+        """Draw a new result in the main view (and the compare view if set)."""
+        self.output = out
+        req = out.request
+        for scene, res, _fields in self._pairs():
+            scene.spacing = out.spacing
+            scene.set_cloud(out.points)
+            method = req.method if res is out.result else req.compare_method
+            summary = out.summary if res is out.result else out.compare_summary
+            scene.set_title(_title(out, method, res, summary))
+        self.recolour()
+        self.glyphs()
+        self.pick()
+
+    def recolour(self) -> None:
+        out = self.output
+        if out is None:
+            return
+        s = self.state
+        self.field_panel.set_available(out.fields)
+        name = s.field if s.field in out.fields else "mean"
+        spec = FIELDS[name]
+        pairs = self._pairs()
+        both = np.concatenate([fields[name] for _, _, fields in pairs if fields and name in fields])
+        signed = is_signed(spec, both)
+        if s.clim_auto or s.clim is None:
+            floor = curvature_floor(name, self.scene.radius())
+            clim = robust_limits(both, signed=signed, clip=s.clip_percent, floor=floor)
+            if not signed and (spec.unit == "deg" or spec.needs == "truth"):
+                clim = (0.0, max(clim[1], 1e-12))  # errors and angles start at 0
+        else:
+            clim = s.clim
+        cmap = colormap_for(spec, signed)
+        for scene, _res, fields in pairs:
+            scene.set_values(fields[name], title=spec.title, cmap=cmap, clim=clim)
+        self.field_panel.show_limits(*clim)
+        self.histogram.set_data(out.fields[name], clim=clim, cmap=cmap, label=spec.label)
+        self.shown = {"field": name, "clim": clim, "cmap": cmap, "gen": out.gen}
+
+    def glyphs(self) -> None:
+        if self.output is None:
+            return
+        s = self.state
+        for scene, res, _fields in self._pairs():
+            for kind, key, arr in (("e1", "show_e1", res.e1), ("e2", "show_e2", res.e2),
+                                   ("normals", "show_normals", res.normals)):
+                scene.set_glyphs(kind, arr if s.get(key) else None, density=s.glyph_density,
+                                 length=s.glyph_length, normals=None if kind == "normals" else res.normals)
+
+    def pick(self) -> None:
+        out, index = self.output, self.state.picked
+        if out is None or index is None or not 0 <= index < len(out.points):
+            self.inspector.clear()
+            for scene in (self.scene, self.compare_scene):
+                if scene is not None:
+                    scene.set_highlight(None)
+            return
+        for scene, res, _fields in self._pairs():
+            neighbours = np.asarray(res.neighbours.indices)[index, : res.k]
+            scene.set_highlight(index, neighbours, {"e1": res.e1[index], "e2": res.e2[index], "n": res.normals[index]})
+        self.inspector.show_point(point_info(out, index))
+
+    def set_point_size(self, size: float) -> None:
+        for scene in (self.scene, self.compare_scene):
+            if scene is not None:
+                scene.set_point_size(size)
+        self.pick()
+
+
+def _title(out, method: str, result, summary: dict | None) -> str:
+    """Top-left caption of a view: method and parameters, cloud, errors."""
+    req = out.request
+    text = f"{method_title(method)}\nk = {result.k}"
+    passes = getattr(result, "passes", None)
+    if passes is not None and uses_passes(method):
+        text += f",  passes = {passes}"
+    if req.noise > 0:
+        text += f",  noise {req.noise:g}%"
+    text += f"\n{req.source.name}"
+    if summary:
+        text += "\n" + summary_line(summary, None, short=True)
+    return text
+
+
+def status_line(out) -> str:
+    """The status bar's description of a result."""
+    res, req = out.result, out.request
+    invalid = int(getattr(res, "n_invalid", int(np.count_nonzero(~np.asarray(res.valid)))))
+    text = f"{req.source.name}: {len(out.points):,} points  ·  {req.method.upper()} k={res.k}"
+    if getattr(res, "passes", None) is not None and uses_passes(req.method):
+        text += f" passes={res.passes}"
+    if req.noise > 0:
+        text += f"  ·  noise {req.noise:g}%"
+    text += f"  ·  {invalid:,} invalid (grey)" if invalid else "  ·  all valid"
+    text += f"  ·  {out.elapsed:.2f} s" + (" (neighbours reused)" if out.reused_neighbours else "")
+    return text
+
+
+def point_info(out, index: int) -> dict:
+    """Everything the inspector shows about one point."""
+    res = out.result
+    info = {
+        "index": int(index),
+        "position": out.points[index],
+        "normal": res.normals[index],
+        "k1": res.k1[index],
+        "k2": res.k2[index],
+        "e1": res.e1[index],
+        "e2": res.e2[index],
+        "gaussian": out.fields["gaussian"][index],
+        "mean": out.fields["mean"][index],
+        "shape_index": out.fields["shape_index"][index],
+        "curvedness": out.fields["curvedness"][index],
+        "valid": bool(np.asarray(res.valid)[index]),
+    }
+    sample = out.request.source.sample
+    if sample is not None:
+        k1, k2 = float(sample.k1[index]), float(sample.k2[index])
+        info.update(true_k1=k1, true_k2=k2, true_mean=0.5 * (k1 + k2), true_gaussian=k1 * k2)
+    return info
+
+
+def summary_line(summary: dict | None, method: str | None, *, short: bool = False) -> str:
+    """One line of mean absolute errors against the truth."""
+    if not summary:
+        return ""
+    parts = []
+    for key, label, unit in (("mean", "H", ""), ("gaussian", "K", ""), ("k1", "k1", ""), ("k2", "k2", ""),
+                             ("normal_deg", "n", "°"), ("direction_deg", "dir", "°")):
+        value = summary.get(key)
+        if value is not None and np.isfinite(value):
+            parts.append(f"{label} {value:.3g}{unit}")
+    if short:
+        keep = [p for p in parts if p.split()[0] in ("H", "K", "dir")]
+        return "mean abs. error:  " + "   ".join(keep)
+    return f"{(method or '').upper()} mean abs. error: " + ", ".join(parts)

@@ -1,0 +1,316 @@
+"""Every pyvista/VTK call of the viewer, for one 3D view.
+
+All methods run on the GUI thread (VTK must never be touched from the worker:
+rendering from another thread aborts the process). Arrays are updated in place
+when the cloud keeps its size; actors are rebuilt only when it changes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pyvista as pv
+
+from . import glyphs
+
+__all__ = ["CloudScene", "GLYPH_COLOURS", "FRAME_COLOURS"]
+
+#: Colours of the ± glyphs: dark enough to read over a diverging colormap.
+GLYPH_COLOURS = {"e1": "#111111", "e2": "#1a9850", "normals": "#7b3294"}
+#: Colours of the picked point's frame (the usual x/y/z = red/green/blue).
+FRAME_COLOURS = {"e1": "#e41a1c", "e2": "#4daf4a", "n": "#377eb8"}
+NAN_COLOUR = "#b0b0b0"
+HIGHLIGHT_COLOUR = "#ffd92f"
+TEXT_COLOUR = "#222222"
+
+
+def _projection(renderer, points: np.ndarray):
+    """Display coordinates (x, y in pixels, origin bottom-left) and depth of points."""
+    cam = renderer.GetActiveCamera()
+    aspect = renderer.GetTiledAspectRatio()
+    vtk_m = cam.GetCompositeProjectionTransformMatrix(aspect, -1.0, 1.0)
+    m = np.array([[vtk_m.GetElement(i, j) for j in range(4)] for i in range(4)])
+    hom = np.c_[points, np.ones(len(points))] @ m.T
+    w = hom[:, 3:4]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ndc = hom[:, :3] / w
+    vx0, vy0, vx1, vy1 = renderer.GetViewport()
+    width, height = renderer.GetRenderWindow().GetSize()
+    x = (vx0 + (ndc[:, 0] + 1.0) * 0.5 * (vx1 - vx0)) * width
+    y = (vy0 + (ndc[:, 1] + 1.0) * 0.5 * (vy1 - vy0)) * height
+    return x, y, ndc[:, 2]
+
+
+class CloudScene:
+    """One cloud, its colours, glyphs, picked-point highlight and title in a plotter.
+
+    Parameters
+    ----------
+    plotter : pyvistaqt.QtInteractor (or any pyvista plotter)
+        The scene does not own it; whoever created the plotter closes it.
+    """
+
+    def __init__(self, plotter):
+        self.plotter = plotter
+        self.points: np.ndarray | None = None
+        self.spacing = 1.0
+        self.point_size = 5.0
+        self.view = "front"
+        self._cloud: pv.PolyData | None = None
+        self._actor = None
+        self._lut = pv.LookupTable(cmap="RdBu_r")
+        self._lut.nan_color = NAN_COLOUR
+        self._lut.scalar_range = (-1.0, 1.0)
+        self._bar = None
+        self._bar_title = ""
+        self._glyph_names: set[str] = set()
+        self._pick_callback = None
+        self._press = None
+        self._observers = []
+        plotter.set_background("white")
+        # pyvista's key bindings that would fight the viewer's own state (point size,
+        # picking mode, a screenshot on "q"); r (reset camera) and v (isometric) stay
+        for key in ("q", "b", "C", "plus", "minus"):
+            try:
+                plotter.clear_events_for_key(key)
+            except (AttributeError, KeyError, ValueError):
+                pass
+
+    # -- cloud and colours ----------------------------------------------------
+    def set_cloud(self, points: np.ndarray, values: np.ndarray | None = None, *, reset_camera: str | None = None):
+        """Show ``points`` (in place if the count did not change)."""
+        points = np.asarray(points, dtype=float)
+        vals = np.full(len(points), np.nan) if values is None else np.asarray(values, dtype=float)
+        if self._cloud is not None and self._cloud.n_points == len(points):
+            self._cloud.points = points.copy()
+            self._cloud.point_data["values"] = vals
+        else:
+            if self._actor is not None:
+                self.plotter.remove_actor(self._actor, render=False)
+            self._cloud = pv.PolyData(points.copy())
+            self._cloud.point_data["values"] = vals
+            self._actor = self.plotter.add_mesh(
+                self._cloud,
+                scalars="values",
+                cmap=self._lut,
+                clim=self._lut.scalar_range,
+                render_points_as_spheres=True,
+                point_size=self.point_size,
+                show_scalar_bar=False,
+                nan_color=NAN_COLOUR,
+                pickable=False,
+                name="cloud",
+                reset_camera=False,
+                render=False,
+            )
+            self._actor.mapper.SetUseLookupTableScalarRange(True)
+            if self._bar is None:
+                self._bar = self.plotter.add_scalar_bar(
+                    title=self._bar_title or " ",
+                    lookup_table=self._lut,
+                    vertical=False,
+                    position_x=0.25,
+                    position_y=0.03,
+                    width=0.5,
+                    height=0.075,
+                    title_font_size=14,
+                    label_font_size=12,
+                    n_labels=3,
+                    fmt="%.3g",
+                    color=TEXT_COLOUR,
+                    render=False,
+                )
+                self._bar.SetMaximumHeightInPixels(90)
+        self.points = points
+        if reset_camera:
+            self.reset_camera(reset_camera)
+
+    def set_values(self, values: np.ndarray, *, title: str, cmap: str, clim: tuple[float, float]):
+        """Colour the cloud by ``values`` (NaN drawn in a neutral grey)."""
+        if self._cloud is None:
+            return
+        self._cloud.point_data["values"] = np.asarray(values, dtype=float)
+        self._cloud.set_active_scalars("values")
+        if self._lut.cmap is None or getattr(self._lut.cmap, "name", None) != cmap:
+            self._lut.cmap = cmap
+            self._lut.nan_color = NAN_COLOUR
+        self._lut.scalar_range = (float(clim[0]), float(clim[1]))
+        self._bar_title = title
+        if self._bar is not None:
+            self._bar.SetTitle(title)
+
+    def set_point_size(self, size: float):
+        self.point_size = float(size)
+        if self._actor is not None:
+            self._actor.prop.point_size = self.point_size
+
+    # -- glyphs -------------------------------------------------------------------
+    def set_glyphs(self, kind: str, directions: np.ndarray | None, *, density: float, length: float,
+                   normals: np.ndarray | None = None):
+        """± segments along ``directions`` for a subsample of points, or remove them.
+
+        ``length`` is in mean point spacings. With ``normals``, tangent glyphs are
+        lifted off the surface by half a spacing so the point sprites do not hide them.
+        """
+        name = f"glyph-{kind}"
+        if directions is None or self.points is None or density <= 0:
+            if name in self._glyph_names:
+                self.plotter.remove_actor(name, render=False)
+                self._glyph_names.discard(name)
+            return
+        index = glyphs.subsample(len(self.points), density)
+        base = self.points
+        if normals is not None:
+            lift = np.nan_to_num(np.asarray(normals, dtype=float)) * (0.6 * self.spacing)
+            base = self.points + lift
+        vertices, lines = glyphs.segments(base, directions, index, length * self.spacing)
+        if len(vertices) == 0:
+            self.set_glyphs(kind, None, density=0, length=0)
+            return
+        mesh = pv.PolyData(vertices, lines=lines)
+        self.plotter.add_mesh(
+            mesh, color=GLYPH_COLOURS.get(kind, "black"), line_width=2, name=name,
+            pickable=False, reset_camera=False, render=False, lighting=False,
+        )
+        self._glyph_names.add(name)
+
+    # -- picked point ---------------------------------------------------------------
+    def set_highlight(self, index: int | None, neighbours: np.ndarray | None = None, frame: dict | None = None):
+        """Highlight a point's neighbourhood and draw its frame (``frame``: name -> unit vector)."""
+        for name in ("pick-neighbours", "pick-point", *(f"pick-frame-{k}" for k in FRAME_COLOURS)):
+            self.plotter.remove_actor(name, render=False)
+        if index is None or self.points is None or index >= len(self.points):
+            return
+        if neighbours is not None and len(neighbours):
+            nb = pv.PolyData(self.points[np.asarray(neighbours)])
+            self.plotter.add_mesh(
+                nb, color=HIGHLIGHT_COLOUR, point_size=self.point_size * 1.6, render_points_as_spheres=True,
+                name="pick-neighbours", pickable=False, reset_camera=False, render=False,
+            )
+        centre = self.points[index]
+        self.plotter.add_mesh(
+            pv.PolyData(centre[None, :]), color="#e7298a", point_size=self.point_size * 2.6,
+            render_points_as_spheres=True, name="pick-point", pickable=False, reset_camera=False, render=False,
+        )
+        length = max(8.0 * self.spacing, 0.1 * self.radius())
+        for key, vec in (frame or {}).items():
+            vec = np.asarray(vec, dtype=float)
+            if not np.isfinite(vec).all():
+                continue
+            seg = pv.Line(centre - 0.5 * length * vec, centre + 0.5 * length * vec)
+            self.plotter.add_mesh(
+                seg, color=FRAME_COLOURS.get(key, "black"), line_width=5, name=f"pick-frame-{key}",
+                pickable=False, reset_camera=False, render=False, lighting=False,
+            )
+
+    def radius(self) -> float:
+        """Half the diagonal of the cloud's bounding box."""
+        pts = self.points[np.isfinite(self.points).all(axis=1)]
+        return 0.5 * float(np.linalg.norm(np.ptp(pts, axis=0))) if len(pts) else 1.0
+
+    # -- camera, text, render ------------------------------------------------------
+    def set_title(self, text: str):
+        """Caption in the top-left corner, at a fixed font size (a corner annotation
+        would shrink it, or drop it, in a narrow view)."""
+        actor = self.plotter.add_text(text, position=(0.012, 0.985), viewport=True, font_size=7,
+                                      color=TEXT_COLOUR, name="title", render=False)
+        actor.prop.font_size = 13
+        actor.prop.SetVerticalJustificationToTop()
+        actor.prop.SetLineSpacing(1.15)
+
+    def reset_camera(self, view: str = "front"):
+        """Frame the cloud.
+
+        ``"front"``: look down -z with y up (the convention of most scans, the
+        Stanford models among them), turned a little for depth. ``"oblique"``:
+        z up, seen from above at an angle (the synthetic shapes). ``"xy"``,
+        ``"xz"``, ``"yz"``: axis-aligned.
+        """
+        if self.points is None or not len(self.points):
+            return
+        pts = self.points[np.isfinite(self.points).all(axis=1)]
+        centre = 0.5 * (pts.min(axis=0) + pts.max(axis=0))
+        radius = 0.5 * float(np.linalg.norm(np.ptp(pts, axis=0))) or 1.0
+        presets = {
+            "front": ([0.35, 0.25, 1.0], [0, 1, 0]),
+            "oblique": ([0.55, -1.0, 0.75], [0, 0, 1]),
+            "xy": ([0, 0, 1], [0, 1, 0]),
+            "xz": ([0, -1, 0], [0, 0, 1]),
+            "yz": ([1, 0, 0], [0, 0, 1]),
+        }
+        direction, up = (np.asarray(v, dtype=float) for v in presets[view])
+        direction /= np.linalg.norm(direction)
+        cam = self.plotter.camera
+        cam.focal_point = tuple(centre)
+        cam.position = tuple(centre + direction * radius * 3.2)
+        cam.up = tuple(up)
+        self.plotter.reset_camera(render=False)
+        cam.zoom(1.1)
+        self.view = view
+
+    def render(self):
+        self.plotter.render()
+
+    # -- picking ---------------------------------------------------------------------
+    def display_coords(self, index) -> tuple[np.ndarray, np.ndarray]:
+        """Display (x, y) pixel coordinates of cloud points (origin bottom-left)."""
+        x, y, _ = _projection(self.plotter.renderer, self.points[np.atleast_1d(index)])
+        return x, y
+
+    def pick(self, x: float, y: float, radius: float | None = None) -> int | None:
+        """Index of the front-most cloud point within ``radius`` px of display (x, y)."""
+        if self.points is None or not len(self.points):
+            return None
+        px, py, depth = _projection(self.plotter.renderer, self.points)
+        r = radius if radius is not None else max(4.0, self.point_size)
+        d2 = (px - x) ** 2 + (py - y) ** 2
+        near = np.flatnonzero((d2 <= r * r) & np.isfinite(depth) & (np.abs(depth) <= 1.0))
+        if not len(near):
+            return None
+        # front-most first; among points at about the same depth, the closest to the click
+        front = depth[near]
+        keep = near[front <= front.min() + 1e-3 * (1.0 + abs(front.min()))]
+        return int(keep[np.argmin(d2[keep])]) if len(keep) else int(near[np.argmin(front)])
+
+    def enable_picking(self, callback) -> None:
+        """Call ``callback(index)`` when the user clicks (press and release, no drag) a point."""
+        iren = getattr(self.plotter, "iren", None)
+        if iren is None:
+            return
+        self._pick_callback = callback
+        vtk_iren = iren.interactor
+
+        def on_press(*_args):
+            self._press = vtk_iren.GetEventPosition()
+
+        def on_release(*_args):
+            start, self._press = self._press, None
+            if start is None or self._pick_callback is None:
+                return
+            x, y = vtk_iren.GetEventPosition()
+            if abs(x - start[0]) + abs(y - start[1]) > 3:
+                return  # that was a drag (rotate), not a click
+            index = self.pick(x, y)
+            if index is not None:
+                self._pick_callback(index)
+
+        # pyvista registers release observers on the interactor style: the
+        # interactor swallows release events (pyvista issue #4976)
+        self._observers = [
+            iren.add_observer("LeftButtonPressEvent", on_press),
+            iren.add_observer("LeftButtonReleaseEvent", on_release),
+        ]
+
+    def close(self):
+        """Drop observers and references (the plotter itself is closed by its owner)."""
+        iren = getattr(self.plotter, "iren", None)
+        for tag in self._observers:
+            if iren is not None:
+                iren.remove_observer(tag)
+                style = getattr(iren, "style", None)
+                if style is not None:
+                    style.RemoveObserver(tag)
+        self._observers = []
+        self._pick_callback = None
+        self._cloud = None
+        self._actor = None
+        self._bar = None

@@ -1,0 +1,87 @@
+"""The cloud being looked at: a file or a synthetic shape with its ground truth.
+
+Pure data, no Qt. Loading runs wherever it is called (the window calls it on the
+GUI thread; files are read with :func:`core.io.read_cloud`).
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+_uids = itertools.count(1)
+
+
+@dataclass(frozen=True, eq=False)
+class CloudSource:
+    """An input cloud as loaded, never modified (noise is applied to copies).
+
+    Attributes
+    ----------
+    name : str
+        Short label for titles ("bunny.ply", "torus (5000)").
+    points : (N, 3) float array, read-only.
+    normals : (N, 3) float array or None
+        Normals that came with the file, or the exact normals of a shape.
+    path : Path or None
+        The file it was read from.
+    sample : core.shapes.Sample or None
+        Ground truth for synthetic shapes (enables the error fields).
+    uid : int
+        Identity used by the worker's caches (noisy copies, neighbours).
+    """
+
+    name: str
+    points: np.ndarray
+    normals: np.ndarray | None = None
+    path: Path | None = None
+    sample: object | None = None
+    uid: int = field(default_factory=lambda: next(_uids))
+
+    def __post_init__(self):
+        for arr in (self.points, self.normals):
+            if arr is not None:
+                arr.flags.writeable = False
+
+    @property
+    def n_points(self) -> int:
+        return int(self.points.shape[0])
+
+    @property
+    def has_truth(self) -> bool:
+        return self.sample is not None
+
+
+def load_file(path) -> CloudSource:
+    """Read a cloud with :func:`core.io.read_cloud`.
+
+    Raises
+    ------
+    core.io.CloudFileError
+        With a message that names the file, when it cannot be read.
+    """
+    import core.io
+
+    path = Path(path)
+    cloud = core.io.read_cloud(path)
+    points = np.array(cloud.points, dtype=float, copy=True)
+    normals = None if cloud.normals is None else np.array(cloud.normals, dtype=float, copy=True)
+    return CloudSource(name=path.name, points=points, normals=normals, path=path)
+
+
+def make_shape(name: str, n: int = 5000, *, seed: int = 0) -> CloudSource:
+    """Sample a synthetic shape from :data:`core.shapes.SHAPES` (with exact truth)."""
+    import core.shapes
+
+    try:
+        factory = core.shapes.SHAPES[name]
+    except KeyError:
+        valid = ", ".join(sorted(core.shapes.SHAPES))
+        raise ValueError(f"shape {name!r} is unknown; valid shapes: {valid}") from None
+    sample = factory(int(n), seed=seed)
+    points = np.array(sample.points, dtype=float, copy=True)
+    normals = np.array(sample.normals, dtype=float, copy=True)
+    return CloudSource(name=f"{name} ({len(points):,} pts)", points=points, normals=normals, sample=sample)

@@ -1,0 +1,36 @@
+"""One small widget per file, each bound both ways to :class:`app.state.ViewerState`.
+
+Pattern (napari's layer controls): the widget writes to the state when the user
+acts, and listens to ``state.changed`` to update itself with its own signals
+blocked, so a state change never echoes back as a user action.
+"""
+
+from .check_box import StateCheckBox
+from .compare_view import CompareView
+from .field_panel import FieldPanel
+from .glyph_controls import GlyphControls
+from .histogram import Histogram
+from .inspector import PointInspector
+from .k_slider import KSlider
+from .method_combo import MethodCombo
+from .noise_slider import NoiseSlider
+from .passes_slider import PassesSlider
+from .progress import EstimateProgress
+from .recent_menu import RecentFilesMenu
+from .shape_dialog import ShapeDialog
+
+__all__ = [
+    "CompareView",
+    "EstimateProgress",
+    "FieldPanel",
+    "GlyphControls",
+    "Histogram",
+    "KSlider",
+    "MethodCombo",
+    "NoiseSlider",
+    "PassesSlider",
+    "PointInspector",
+    "RecentFilesMenu",
+    "ShapeDialog",
+    "StateCheckBox",
+]

@@ -1,0 +1,129 @@
+"""Pieces of the viewer that need no window: fields, glyphs, state, arguments."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from app import glyphs
+from app.fields import FIELDS, colormap_for, compute_fields, is_signed, resolve_field, robust_limits
+
+
+@pytest.mark.parametrize("clip", [0.0, 2.0, 10.0])
+def test_signed_limits_are_symmetric_and_robust(clip):
+    values = np.r_[np.linspace(-1, 3, 1000), 1e6, np.nan]
+    lo, hi = robust_limits(values, signed=True, clip=clip)
+    assert lo == -hi and 0 < hi
+    if clip:
+        assert hi < 10  # the outlier is clipped away
+
+
+def test_unsigned_limits_and_degenerate_cases():
+    lo, hi = robust_limits(np.linspace(0, 1, 101), signed=False, clip=10)
+    assert lo == pytest.approx(0.1) and hi == pytest.approx(0.9)
+    assert robust_limits(np.full(10, 2.0), signed=False)[0] < 2.0 < robust_limits(np.full(10, 2.0), signed=False)[1]
+    assert robust_limits(np.full(5, np.nan), signed=True) == (-1.0, 1.0)
+    assert robust_limits(np.zeros(5), signed=True)[1] > 0
+
+
+def test_field_names_and_colormaps():
+    assert resolve_field("H") == "mean" and resolve_field("K") == "gaussian" and resolve_field("k1") == "k1"
+    with pytest.raises(ValueError, match="valid fields"):
+        resolve_field("banana")
+    spec = FIELDS["err_mean"]
+    assert not is_signed(spec, np.array([0.1, 0.2])) and colormap_for(spec, False) == "magma"
+    assert colormap_for(FIELDS["mean"], True) == "RdBu_r"
+
+
+def test_compute_fields_on_a_torus(torus):
+    import core
+
+    res = core.estimate(torus.points, torus.normals, k=15)
+    fields = compute_fields(res, reference_normals=torus.normals, sample=torus.sample)
+    assert set(FIELDS) <= set(fields)
+    assert np.allclose(fields["mean"], 0.5 * (res.k1 + res.k2), equal_nan=True)
+    assert np.nanmedian(fields["normal_dev"]) < 5.0
+    assert fields["mean"] is not res.mean  # copies, never the result's own arrays
+
+
+def test_glyph_segments_are_centred_and_skip_invalid():
+    pts = np.zeros((4, 3))
+    dirs = np.array([[1.0, 0, 0], [0, 2.0, 0], [np.nan, 0, 0], [0, 0, 1.0]])
+    v, lines = glyphs.segments(pts, dirs, np.arange(4), 2.0)
+    assert v.shape == (6, 3) and lines.tolist() == [2, 0, 1, 2, 2, 3, 2, 4, 5]
+    assert np.allclose(v[0], [-1, 0, 0]) and np.allclose(v[3], [0, 1, 0])  # unit length either way
+
+
+def test_glyph_subsample_is_stable():
+    a, b = glyphs.subsample(1000, 0.1), glyphs.subsample(1000, 0.2)
+    assert len(a) == 100 and len(b) == 200 and set(a) <= set(b)
+    assert len(glyphs.subsample(1000, 0.0)) == 0
+
+
+def test_state_emits_names_once_and_batches(qtbot):
+    from app.state import ViewerState
+
+    state = ViewerState()
+    seen = []
+    state.changed.connect(seen.append)
+    state.k = 20
+    state.set(k=20)  # unchanged: no signal
+    with state.batch():
+        state.set(noise=10, method="ct")
+        state.set(noise=20)
+    assert seen == ["k", "noise", "method"] and state.noise == 20.0
+    state.set(compare_method="")
+    assert state.compare_method is None
+    with pytest.raises(AttributeError, match="valid"):
+        state.set(banana=1)
+    with pytest.raises(ValueError, match="finite"):
+        state.set(clim=(0, np.inf))
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--method", "nope"], "valid methods"),
+        (["--compare", "nope"], "valid methods"),
+        (["--field", "nope"], "valid fields"),
+        (["--shape", "nope"], "valid shapes"),
+        (["--k", "1"], "at least 3"),
+        (["--glyphs", "e3"], "valid: e1, e2, normals"),
+    ],
+)
+def test_bad_arguments_exit_with_a_message(argv, message, capsys):
+    from app.__main__ import main
+
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    assert exc.value.code == 2
+    assert message in capsys.readouterr().err
+
+
+def test_reference_guard_protects_the_singletons(qapp):
+    import sys
+
+    from app import _refguard
+
+    info = _refguard.guard()
+    assert set(info) >= {"none", "true", "applied"}
+    if (info["none"] > 0.5 or info["true"] > 0.5) and sys.version_info < (3, 12):
+        assert info["applied"]
+        assert sys.getrefcount(None) > 1 << 39 and sys.getrefcount(True) > 1 << 39
+    assert _refguard.guard() == info  # once per process
+
+
+def test_dialog_pieces(qtbot):
+    import core.io
+    import core.shapes
+
+    from app.widgets import ShapeDialog
+    from app.window import _read_filter, _write_filter
+
+    dialog = ShapeDialog(list(core.shapes.SHAPES), shape="saddle", count=1234)
+    qtbot.addWidget(dialog)
+    assert dialog.shape == "saddle" and dialog.count == 1234
+    filt = _read_filter()
+    for ext in core.io.READ_FORMATS:
+        assert f"*{ext}" in filt
+    assert "*.ply" in _write_filter() and "*.csv" in _write_filter()
