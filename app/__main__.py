@@ -22,7 +22,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("file", nargs="?", metavar="FILE", help="point cloud to open (PLY, XYZ/CSV, LAS, ... as core reads)")
     p.add_argument("--shape", metavar="NAME", help="open a synthetic shape instead (torus, sphere, cylinder, saddle, ...)")
     p.add_argument("--points", type=int, default=5000, metavar="N", help="points of the synthetic shape (default 5000)")
-    p.add_argument("--k", type=int, metavar="N", help="neighbours per point (default 15)")
+    p.add_argument("--k", metavar="N|auto", help="neighbours per point, or auto (default: auto for NF/NR)")
     p.add_argument("--method", metavar="NAME", help="estimator from core.METHODS (default nr)")
     p.add_argument("--passes", type=int, metavar="N", help="NR refinement passes (0 = NF; default 1)")
     p.add_argument("--noise", type=float, metavar="PCT", help="Gaussian noise, sigma in %% of the mean spacing")
@@ -56,9 +56,16 @@ def _state_from_args(args, parser):
     if args.compare:
         values["compare_method"] = args.compare.lower()
     if args.k is not None:
-        if args.k < 3:
-            parser.error(f"--k must be at least 3, got {args.k}")
-        values["k"] = args.k
+        if args.k.lower() == "auto":
+            values["k_auto"] = True
+        else:
+            try:
+                k = int(args.k)
+            except ValueError:
+                parser.error(f"--k must be an integer or auto, got {args.k!r}")
+            if k < 3:
+                parser.error(f"--k must be at least 3, got {k}")
+            values["k"], values["k_auto"] = k, False
     if args.passes is not None:
         if args.passes < 0:
             parser.error(f"--passes must be >= 0, got {args.passes}")

@@ -48,6 +48,8 @@ FIELDS: dict[str, FieldSpec] = {
         FieldSpec("k2", "Min. principal curvature k2", True),
         FieldSpec("shape_index", "Shape index", True),
         FieldSpec("curvedness", "Curvedness", False),
+        FieldSpec("k_point", "Neighbourhood size k", False),
+        FieldSpec("outlier_score", "Outlier score", False),
         FieldSpec("normal_dev", "Normal deviation", False, "reference", "deg"),
         FieldSpec("err_mean", "Error of H", False, "truth"),
         FieldSpec("err_gaussian", "Error of K", False, "truth"),
@@ -108,6 +110,8 @@ def compute_fields(result, *, reference_normals=None, sample=None) -> dict[str, 
         "k2": result.k2,
         "shape_index": result.shape_index,
         "curvedness": result.curvedness,
+        "k_point": result.k_point,
+        "outlier_score": result.outlier_score,
     }
     if reference_normals is not None:
         out["normal_dev"] = _angle_deg(result.normals, np.asarray(reference_normals, dtype=float))

@@ -126,7 +126,7 @@ class ResultPresenter:
                     scene.set_highlight(None)
             return
         for scene, res, _fields in self._pairs():
-            neighbours = np.asarray(res.neighbours.indices)[index, : res.k]
+            neighbours = np.asarray(res.neighbours.indices)[index, : int(res.k_point[index])]
             scene.set_highlight(index, neighbours, {"e1": res.e1[index], "e2": res.e2[index], "n": res.normals[index]})
         self.inspector.show_point(point_info(out, index))
 
@@ -156,7 +156,8 @@ def status_line(out) -> str:
     """The status bar's description of a result."""
     res, req = out.result, out.request
     invalid = int(getattr(res, "n_invalid", int(np.count_nonzero(~np.asarray(res.valid)))))
-    text = f"{req.source.name}: {len(out.points):,} points  ·  {req.method.upper()} k={res.k}"
+    k = f"auto (median {int(np.median(res.k_point))})" if res.k == "auto" else res.k
+    text = f"{req.source.name}: {len(out.points):,} points  ·  {req.method.upper()} k={k}"
     if getattr(res, "passes", None) is not None and uses_passes(req.method):
         text += f" passes={res.passes}"
     if req.noise > 0:

@@ -18,7 +18,7 @@ from PySide6.QtCore import QObject, Signal
 __all__ = ["ViewerState", "ESTIMATE_KEYS"]
 
 #: Changing any of these asks the worker for a new estimate (debounced).
-ESTIMATE_KEYS = frozenset({"source", "k", "method", "passes", "noise", "use_input_normals", "compare_method"})
+ESTIMATE_KEYS = frozenset({"source", "k", "k_auto", "method", "passes", "noise", "use_input_normals", "compare_method"})
 
 
 @dataclass(frozen=True)
@@ -68,6 +68,7 @@ class ViewerState(QObject):
         "source": _Field(None),
         # estimation
         "k": _Field(15, int),
+        "k_auto": _Field(True, bool),  # core's k="auto" (NF/NR); the slider's k otherwise
         "method": _Field("nr", str),
         "passes": _Field(1, int),
         "noise": _Field(0.0, float),  # sigma, % of the mean point spacing

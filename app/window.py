@@ -391,7 +391,7 @@ class MainWindow(QMainWindow):
         if s.source is None or self._closed:
             return None
         return self.estimator.submit(
-            s.source, k=s.k, method=s.method, passes=s.passes, noise=s.noise,
+            s.source, k=s.k, k_auto=s.k_auto, method=s.method, passes=s.passes, noise=s.noise,
             use_input_normals=s.use_input_normals, compare_method=s.compare_method,
         )
 

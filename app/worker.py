@@ -46,6 +46,7 @@ class EstimateRequest:
     gen: int
     source: CloudSource
     k: int = 15
+    k_auto: bool = False
     method: str = "nr"
     passes: int | None = None
     noise: float = 0.0  # sigma in % of mean spacing
@@ -53,6 +54,17 @@ class EstimateRequest:
     orientation: str = "auto"
     compare_method: str | None = None
     seed: int = 0
+
+    def k_for(self, method: str):
+        """What core.estimate gets as k: "auto" where the method supports it."""
+        return "auto" if self.k_auto and method in ("nf", "nr") else int(self.k)
+
+    @property
+    def k_needed(self) -> int:
+        """Neighbours the request needs cached (the largest automatic k when auto)."""
+        from core.scale import AUTO_KS
+
+        return max(int(self.k), AUTO_KS[-1]) if self.k_auto else int(self.k)
 
     @property
     def cloud_key(self) -> tuple:
@@ -148,11 +160,12 @@ class EstimateWorker(QObject):
             timings = {}
             points = self._points(req)
             normals = req.source.normals if req.use_input_normals else None
-            reused = self._nb is not None and self._nb_key == req.cloud_key and self._nb.k_max >= req.k
+            need = min(req.k_needed, len(points))
+            reused = self._nb is not None and self._nb_key == req.cloud_key and self._nb.k_max >= need
             if not reused:
                 t = time.perf_counter()
-                k_max = max(int(req.k), K_MAX_HEADROOM)
-                k_max = min(k_max, len(points) - 1) if len(points) > req.k else int(req.k)
+                k_max = max(need, K_MAX_HEADROOM)
+                k_max = min(k_max, len(points) - 1) if len(points) > need else need
                 self._nb = core.build_neighbours(points, k_max, progress=_sub(callback, 0.0, 0.2, "neighbours"))
                 self._nb_key = req.cloud_key
                 timings["neighbours"] = time.perf_counter() - t
@@ -166,7 +179,7 @@ class EstimateWorker(QObject):
                 res = core.estimate(
                     points,
                     normals,
-                    k=req.k,
+                    k=req.k_for(method),
                     method=method,
                     passes=passes,
                     orientation=req.orientation,

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from PySide6.QtCore import Qt
-from PySide6.QtWidgets import QVBoxLayout, QWidget
+from PySide6.QtWidgets import QCheckBox, QVBoxLayout, QWidget
 from superqt import QLabeledSlider
 
 from ._bind import blocked, labelled
@@ -24,11 +24,23 @@ class KSlider(QWidget):
         box, _ = labelled(
             "Neighbours k", self.slider, "Number of nearest neighbours used by the fit (the point itself included)."
         )
+        self.auto = QCheckBox("automatic k per point (NF/NR)")
+        self.auto.setToolTip(
+            "Choose k per point from the data (bias-variance rule, core.scale); the slider's k is used "
+            "for the other methods. Show the choice with the field 'Neighbourhood size k'."
+        )
+        self.auto.setChecked(bool(state.k_auto))
+        self.slider.setEnabled(not state.k_auto)
         layout = QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addWidget(box)
+        layout.addWidget(self.auto)
         self.slider.valueChanged.connect(self._on_slider)
+        self.auto.toggled.connect(self._on_auto)
         state.changed.connect(self._on_state)
+
+    def _on_auto(self, checked: bool) -> None:
+        self._state.set(k_auto=bool(checked))
 
     def _on_slider(self, value: int) -> None:
         self._state.set(k=int(value))
@@ -38,3 +50,7 @@ class KSlider(QWidget):
         if name == "k":
             with blocked(self.slider):
                 self.slider.setValue(int(value))
+        elif name == "k_auto":
+            with blocked(self.auto):
+                self.auto.setChecked(bool(value))
+            self.slider.setEnabled(not value)

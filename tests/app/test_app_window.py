@@ -34,7 +34,7 @@ def test_default_bunny_shows_mean_curvature_colormap(make_window, qtbot):
 
 
 def test_slider_reestimates_and_reuses_neighbours(make_window, qtbot, torus):
-    window = make_window(torus)
+    window = make_window(torus, k_auto=False)
     first = window.output
     with wait_result(qtbot, window, 30_000) as blocker:
         window.k_slider.slider.setValue(20)
@@ -49,7 +49,7 @@ def test_slider_reestimates_and_reuses_neighbours(make_window, qtbot, torus):
 
 
 def test_burst_of_slider_moves_makes_one_request(make_window, qtbot, torus):
-    window = make_window(torus)
+    window = make_window(torus, k_auto=False)
     gen = window.estimator.generation
     with wait_result(qtbot, window, 30_000) as blocker:
         for k in (16, 17, 18, 19, 21):
@@ -65,7 +65,7 @@ def test_stale_result_is_dropped(make_window, qtbot, torus):
     window.estimator.cancelled.connect(cancelled.append)
     with wait_result(qtbot, window, 30_000) as blocker:
         old = window.estimator.submit(torus, k=10)
-        new = window.estimator.submit(torus, k=12)
+        new = window.estimator.submit(torus, k=12)  # k_auto is off in a bare request
     assert blocker.args[0].gen == new.gen and blocker.args[0].result.k == 12
     qtbot.waitUntil(lambda: not window.estimator.busy, timeout=30_000)
     assert old.gen in dropped + cancelled  # skipped, cancelled mid-run or dropped on arrival
@@ -133,7 +133,7 @@ def test_picking_fills_the_panel_and_highlights(make_window, qtbot, torus):
         assert key in values
     actors = window.plotter.actors
     assert {"pick-neighbours", "pick-point", "pick-frame-e1", "pick-frame-e2", "pick-frame-n"} <= set(actors)
-    assert actors["pick-neighbours"].mapper.dataset.n_points == res.k
+    assert actors["pick-neighbours"].mapper.dataset.n_points == res.k_point[target]
 
     # a drag is a rotation, not a pick; Esc clears
     window.state.set(picked=None)
@@ -166,7 +166,7 @@ def test_estimate_failure_reaches_the_notifier(make_window, qtbot):
     window = make_window(tiny)
     shown = window.output
     with qtbot.waitSignal(window.estimator.failed, timeout=30_000):
-        window.state.set(k=60)  # more neighbours than points
+        window.state.set(k=60, k_auto=False)  # more neighbours than points
     note = window.notifier.last
     assert note.level == "error" and "estimate failed" in note.message
     assert window.output is shown  # the last good result stays on screen
@@ -315,3 +315,14 @@ def test_gui_stays_responsive_while_estimating(make_window, qtbot):
     gaps = np.diff(ticks)
     assert len(ticks) > 5
     assert gaps.max() < 1.5, f"GUI thread blocked for {gaps.max():.2f} s"
+
+
+def test_automatic_k_is_the_default_and_can_be_turned_off(make_window, qtbot, torus):
+    window = make_window(torus)
+    assert window.state.k_auto and not window.k_slider.slider.isEnabled()
+    out = window.output
+    assert out.result.k == "auto" and out.request.k_auto
+    assert set(np.unique(out.result.k_point)) <= set(__import__("core").scale.AUTO_KS)
+    with wait_result(qtbot, window, 30_000) as blocker:
+        window.k_slider.auto.setChecked(False)
+    assert blocker.args[0].result.k == window.state.k and window.k_slider.slider.isEnabled()
