@@ -91,6 +91,8 @@ def estimate(
     m = get_method(method)
     opts = check_options(m, options)
     auto = isinstance(k, str) and k == "auto"
+    if auto and "robust" in opts and "robust" not in (options or {}):
+        opts["robust"] = "tukey"  # free on clean data, keeps 3 % outliers from spoiling their neighbours
     if auto:
         if m.name not in ("nf", "nr"):
             raise ValueError(f'k="auto" is available for methods nf and nr, not {m.name!r}; pass an integer k')

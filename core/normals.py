@@ -13,7 +13,7 @@ THETA_REACH = 1.1
 #: small relative to the largest
 COLLINEAR = 1e-10
 #: neighbours per point in the orientation graph (Hoppe et al. use a small k too)
-ORIENT_K = 10
+ORIENT_K = 8
 
 
 def pca_normals(points, idx, dist, *, progress=None):
