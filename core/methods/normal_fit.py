@@ -20,7 +20,9 @@ NR_DOC = NF_DOC + " NR repeats the fit with the refined normals of all points (�
 
 #: weights: "uniform" (paper eqs. 25–26) or "theta" (eq. 14's kernel on the distance);
 #: constraint: "project" (paper §4.4), "exact" (Lagrange multiplier in the metric of the
-#: normal equations) or "none".
+#: normal equations) or "none". Note that core.frame symmetrises the shape operator in an
+#: orthonormal basis of the tangent plane in every case, so "none" differs from "project"
+#: only by the tilt-dependent metric (measured: < 0.1 % on the torus and saddle).
 #: robust: None (least squares), "huber" or "tukey" (IRLS on the normal residuals, scale
 #: from the median absolute deviation; outlying neighbours and the far side of a crease
 #: lose their weight).
