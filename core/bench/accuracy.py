@@ -39,6 +39,8 @@ from ..methods import METHODS as _CORE_METHODS
 from ..neighbours import build_neighbours
 from ..normals import orient_normals, pca_normals
 from . import apss as _apss
+from ._args import levels as _levels
+from ._args import positive as _positive
 from ._table import fmt, markdown_table, style, text_table
 
 # ----------------------------------------------------------------------------- setup
@@ -1031,32 +1033,12 @@ def markdown(run_: AccuracyRun, *, command: str, images: dict) -> str:
 
 
 # ----------------------------------------------------------------------------- CLI
-def _levels(text: str):
-    try:
-        vals = tuple(float(x) for x in text.split(",") if x.strip())
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"levels must be comma-separated numbers, got {text!r}") from None
-    if not vals or any(not np.isfinite(v) or v < 0 for v in vals):
-        raise argparse.ArgumentTypeError(f"levels must be numbers >= 0, got {text!r}")
-    return vals
-
-
 def _shapes(text: str):
     vals = tuple(x.strip() for x in text.split(",") if x.strip())
     bad = [v for v in vals if v not in SHAPES]
     if not vals or bad:
         raise argparse.ArgumentTypeError(f"shapes must be a comma-separated subset of {','.join(SHAPES)}, got {text!r}")
     return vals
-
-
-def _positive(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-    if v < 1:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {v}")
-    return v
 
 
 def parser() -> argparse.ArgumentParser:

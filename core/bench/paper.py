@@ -26,6 +26,8 @@ from pathlib import Path
 import numpy as np
 
 from .. import build_neighbours, estimate, metrics, noise, shapes
+from ._args import levels as _levels
+from ._args import positive as _positive
 from ._table import error_panels, fmt, markdown_table, style, text_table
 
 #: every method run with estimated normals (columns of the tables)
@@ -432,26 +434,6 @@ def markdown(run_: PaperRun, *, command: str, images: dict) -> str:
 
 
 # ----------------------------------------------------------------------------- CLI
-def _levels(text: str):
-    try:
-        vals = tuple(float(x) for x in text.split(",") if x.strip())
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"levels must be comma-separated numbers, got {text!r}") from None
-    if not vals or any(not np.isfinite(v) or v < 0 for v in vals):
-        raise argparse.ArgumentTypeError(f"levels must be numbers >= 0, got {text!r}")
-    return vals
-
-
-def _positive(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-    if v < 1:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {v}")
-    return v
-
-
 def parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="python -m core bench paper",
