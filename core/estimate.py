@@ -145,23 +145,20 @@ def estimate(
     robust = opts.get("robust") is not None
     n_fits = passes + 1
     passes_run = 0
+    converged = False
     for p in range(n_fits):
         span = (1.0 - fit_start) / n_fits
         sub = report.sub(fit_start + span * p, fit_start + span * (p + 1))
         refined, k1, k2, e1, e2, valid, stats = _fit_all(pts, nrm, idx, kc, h, has_normal, m, opts, sub)
-        crease = _creases(valid, *stats)
-        if p == passes:
+        if p == passes or converged:
             break
         if robust and p == 0:  # outliers leave their neighbours' fits (and are not estimated)
             has_normal = has_normal & ~outlier
             refined[outlier] = np.nan
         new = np.where(valid[:, None], refined, nrm)
-        change = _mean_angle_deg(new, nrm, valid)
+        converged = tol is not None and _mean_angle_deg(new, nrm, valid) < tol
         nrm = new
         passes_run += 1
-        if tol is not None and change < tol:
-            refined, k1, k2, e1, e2, valid, _ = _fit_all(pts, nrm, idx, kc, h, has_normal, m, opts, sub)
-            break
     report(1.0, "done")
     params = dict(
         method=m.name, k="auto" if auto else k, passes=passes, passes_run=passes_run, tol=tol,
@@ -170,7 +167,7 @@ def estimate(
         normals_given=normals is not None, initial=None if normals is not None else initial,
     )
     normals_out = np.where(valid[:, None], refined, nrm)
-    crease &= valid
+    crease = _creases(valid, *stats)
     return CurvatureResult(
         points=pts, normals=normals_out, k1=k1, k2=k2, e1=e1, e2=e2, valid=valid,
         k_point=kc, outlier_score=scores, crease=crease,

@@ -70,9 +70,3 @@ def symmetric_eig2(a: np.ndarray, b: np.ndarray, c: np.ndarray):
     rad = np.hypot(half, b)
     phi = 0.5 * np.arctan2(b, half)
     return mean + rad, mean - rad, np.cos(phi), np.sin(phi)
-
-
-def smallest_eigvec3(C: np.ndarray):
-    """Eigenvector of the smallest eigenvalue of symmetric 3x3 matrices, and all eigenvalues."""
-    vals, vecs = np.linalg.eigh(C)
-    return vecs[:, :, 0], vals

@@ -75,11 +75,6 @@ class Patch:
     weight: np.ndarray
     h: np.ndarray
 
-    @property
-    def dist(self) -> np.ndarray:
-        """(M, k) distances to the centre, in units of h."""
-        return np.sqrt(self.u**2 + self.v**2 + self.w**2)
-
 
 def make_patch(chunk: Chunk) -> Patch:
     """Express each centre's neighbours in its local frame, lengths in units of h."""

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ._validate import check_int
+from .linalg import symmetric_eig2
 
 
 @dataclass(frozen=True, eq=False)
@@ -179,8 +180,6 @@ def _implicit_sample(name, F, grad, hess, n, rng, r_max, **params):
     a = np.einsum("mi,mij,mj->m", t1, H, t1)
     b = np.einsum("mi,mij,mj->m", t1, H, t2)
     c = np.einsum("mi,mij,mj->m", t2, H, t2)
-    from .linalg import symmetric_eig2
-
     k1, k2, cs, sn = symmetric_eig2(a, b, c)
     e1 = cs[:, None] * t1 + sn[:, None] * t2
     e2 = -sn[:, None] * t1 + cs[:, None] * t2
