@@ -15,6 +15,8 @@ from typing import Any, Callable
 import numpy as np
 from PySide6.QtCore import QObject, Signal
 
+from core.estimate import AUTO_PASSES
+
 __all__ = ["ViewerState", "ESTIMATE_KEYS"]
 
 #: Changing any of these asks the worker for a new estimate (debounced).
@@ -70,7 +72,7 @@ class ViewerState(QObject):
         "k": _Field(15, int),
         "k_auto": _Field(True, bool),  # core's k="auto" (NF/NR); the slider's k otherwise
         "method": _Field("nr", str),
-        "passes": _Field(1, int),
+        "passes": _Field(AUTO_PASSES, int),  # core's default with k="auto"
         "noise": _Field(0.0, float),  # sigma, % of the mean point spacing
         "use_input_normals": _Field(True, bool),
         "compare_method": _Field(None, _opt_str),

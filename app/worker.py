@@ -59,12 +59,12 @@ class EstimateRequest:
         """What core.estimate gets as k: "auto" where the method supports it."""
         return "auto" if self.k_auto and method in ("nf", "nr") else int(self.k)
 
-    @property
-    def k_needed(self) -> int:
-        """Neighbours the request needs cached (the largest automatic k when auto)."""
-        from core.scale import AUTO_KS
+    def k_needed(self, n_points: int) -> int:
+        """Neighbours the request needs cached on ``n_points`` (the largest automatic k when auto)."""
+        from core.scale import candidates
 
-        return max(int(self.k), AUTO_KS[-1]) if self.k_auto else int(self.k)
+        need = max(int(self.k), candidates(n_points)[-1]) if self.k_auto else int(self.k)
+        return min(need, n_points)
 
     @property
     def cloud_key(self) -> tuple:
@@ -160,7 +160,7 @@ class EstimateWorker(QObject):
             timings = {}
             points = self._points(req)
             normals = req.source.normals if req.use_input_normals else None
-            need = min(req.k_needed, len(points))
+            need = req.k_needed(len(points))
             reused = self._nb is not None and self._nb_key == req.cloud_key and self._nb.k_max >= need
             if not reused:
                 t = time.perf_counter()

@@ -19,6 +19,9 @@ _ORIENTATIONS = ("auto", "propagate", "outward", "keep")
 MAX_PASSES = 20
 #: k of the initial PCA normals when k is chosen automatically (the paper's k)
 PCA_K = 15
+#: NR refinement passes when k is chosen automatically: with the cubic normal fit the
+#: refined normals are unbiased, so each pass averages noise further (paper: 1)
+AUTO_PASSES = 2
 #: a point whose distance to its neighbours' plane exceeds this many spreads is an outlier
 OUTLIER_SCORE = 4.0
 #: crease: normals spread (RMS, unit normals) above this and a linear fit leaving more
@@ -91,17 +94,22 @@ def estimate(
     m = get_method(method)
     opts = check_options(m, options)
     auto = isinstance(k, str) and k == "auto"
-    if auto and "robust" in opts and "robust" not in (options or {}):
-        opts["robust"] = "tukey"  # free on clean data, keeps 3 % outliers from spoiling their neighbours
     if auto:
         if m.name not in ("nf", "nr"):
             raise ValueError(f'k="auto" is available for methods nf and nr, not {m.name!r}; pass an integer k')
         ks = scale.candidates(n)
         k_search = ks[-1]
+        given = options or {}
+        if "robust" not in given:
+            opts["robust"] = "tukey"  # free on clean data, keeps 3 % outliers from spoiling their neighbours
+        if "degree" not in given:  # a cubic normal field, unless the cloud is too small for it
+            opts["degree"] = scale.AUTO_DEGREE if ks[0] >= scale.AUTO_KS[0] else 1
+        if passes is None and m.default_passes:
+            passes = AUTO_PASSES
     else:
         if isinstance(k, str):
             raise ValueError(f'k must be an integer or "auto", got {k!r}')
-        k = check_int(k, name="k", low=m.min_k, high=n)
+        k = check_int(k, name="k", low=m.min_k_for(opts), high=n)
         k_search = k
     passes = m.default_passes if passes is None else check_int(passes, name="passes", low=0, high=MAX_PASSES)
     if tol is not None and not (isinstance(tol, (int, float)) and np.isfinite(tol) and tol > 0):
@@ -132,7 +140,7 @@ def estimate(
 
     fit_start = 0.45
     if auto:
-        kc = scale.choose_k(pts, nrm, nb, has_normal, ks, report.sub(0.45, 0.7))
+        kc = scale.choose_k(pts, nrm, nb, has_normal, ks, opts["degree"], report.sub(0.45, 0.7))
         fit_start = 0.7
     else:
         kc = np.full(n, k, dtype=np.int64)

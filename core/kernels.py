@@ -108,74 +108,132 @@ def pca_normals(points, idx, dist, start, reach, collinear, normals, ok):
             ok[i] = True
 
 
+#: most monomials of the normal fit (degree 3: 1, u, v, u^2, uv, v^2, u^3, u^2 v, u v^2, v^3)
+MAX_TERMS = 10
+# rows of the per-block vector scratch of the NF kernels
+_ROW, _BX, _BY, _CX, _CY, _C1, _C2, _D, _E = range(9)
+
+
+@njit(**_OPTS, inline="always")
+def n_terms(degree):
+    """Monomials of a bivariate polynomial of ``degree``."""
+    return (degree + 1) * (degree + 2) // 2
+
+
+@njit(**_OPTS, inline="always")
+def _poly_row(u, v, degree, row):
+    """Monomials of (u, v) by total degree: 1, u, v, u^2, uv, v^2, u^3, u^2 v, u v^2, v^3."""
+    row[0] = 1.0
+    prev = 0
+    c = 1
+    for d in range(1, degree + 1):
+        for b in range(d):
+            row[c] = row[prev + b] * u
+            c += 1
+        row[c] = row[prev + d - 1] * v
+        c += 1
+        prev += d
+
+
 @njit(**_OPTS)
-def _accumulate(u, v, X, Y, wt, j0, j1, S):
-    """Add neighbours j0..j1-1 to the weighted sums S of the NF normal equations."""
+def _cholesky(G, p, rcond, d, L):
+    """Cholesky factor L of the equilibrated p x p matrix G (lower triangle used; unit
+    diagonal after scaling by d = sqrt(diag G)). False when a pivot is <= rcond
+    (rank deficient: too few or collinear neighbours for the polynomial)."""
+    for a in range(p):
+        if not G[a, a] > 0.0:
+            return False
+        d[a] = math.sqrt(G[a, a])
+    for a in range(p):
+        for c in range(a + 1):
+            s = G[a, c] / (d[a] * d[c])
+            for e in range(c):
+                s -= L[a, e] * L[c, e]
+            if a == c:
+                if not s > rcond:
+                    return False
+                L[a, a] = math.sqrt(s)
+            else:
+                L[a, c] = s / L[c, c]
+    return True
+
+
+@njit(**_OPTS)
+def _chol_solve(L, d, p, b, x):
+    """x = G^-1 b with the factor of :func:`_cholesky` (x must not alias b)."""
+    for a in range(p):
+        s = b[a] / d[a]
+        for e in range(a):
+            s -= L[a, e] * x[e]
+        x[a] = s / L[a, a]
+    for a in range(p - 1, -1, -1):
+        s = x[a]
+        for e in range(a + 1, p):
+            s -= L[e, a] * x[e]
+        x[a] = s / L[a, a]
+    for a in range(p):
+        x[a] /= d[a]
+
+
+@njit(**_OPTS)
+def _accumulate(u, v, X, Y, wt, j0, j1, degree, vec, G, acc):
+    """Add neighbours j0..j1-1 to the weighted normal equations of X and Y on the
+    monomials (G lower triangle, right-hand sides vec[_BX], vec[_BY]) and to acc =
+    (sum w, sum w X^2, sum w Y^2)."""
+    p = n_terms(degree)
+    row = vec[_ROW]
     for j in range(j0, j1):
         w = wt[j]
         if w == 0.0:
             continue
-        uj, vj, Xj, Yj = u[j], v[j], X[j], Y[j]
-        S[0] += w
-        S[1] += w * uj
-        S[2] += w * vj
-        S[3] += w * uj * uj
-        S[4] += w * uj * vj
-        S[5] += w * vj * vj
-        S[6] += w * Xj
-        S[7] += w * uj * Xj
-        S[8] += w * vj * Xj
-        S[9] += w * Yj
-        S[10] += w * uj * Yj
-        S[11] += w * vj * Yj
-        S[12] += w * Xj * Xj
-        S[13] += w * Yj * Yj
+        _poly_row(u[j], v[j], degree, row)
+        Xj, Yj = X[j], Y[j]
+        for a in range(p):
+            ra = w * row[a]
+            vec[_BX, a] += ra * Xj
+            vec[_BY, a] += ra * Yj
+            for c in range(a + 1):
+                G[a, c] += ra * row[c]
+        acc[0] += w
+        acc[1] += w * Xj * Xj
+        acc[2] += w * Yj * Yj
 
 
 @njit(**_OPTS)
-def _solve_sums(S, rcond, coef):
-    """Least squares of X and Y on [1, u, v] from the sums S (eqs. 25–26).
+def _reset(degree, vec, G, acc):
+    p = n_terms(degree)
+    G[:p, :p] = 0.0
+    vec[_BX, :p] = 0.0
+    vec[_BY, :p] = 0.0
+    acc[:] = 0.0
 
-    Writes coef = (cX0, cX1, cX2, cY0, cY1, cY2, inv11, inv22, rssX, rssY, sumw, inv12,
-    inv01, inv02) and returns False when the equilibrated normal matrix is near singular
-    (determinant test).
+
+@njit(**_OPTS)
+def _solve(degree, rcond, vec, G, L, acc):
+    """Least squares of X and Y on the monomials (eqs. 25–26 for degree 1).
+
+    Fills vec[_CX], vec[_CY] (coefficients: constant = mu, then the slopes = W rows),
+    vec[_C1], vec[_C2] (columns 1, 2 of G^-1) and acc[3], acc[4] (residual sums of
+    squares of X, Y). False when G is near singular.
     """
-    s1, su, sv, suu, suv, svv = S[0], S[1], S[2], S[3], S[4], S[5]
-    x0, x1, x2, y0, y1, y2, xx, yy = S[6], S[7], S[8], S[9], S[10], S[11], S[12], S[13]
-    if not (s1 > 0.0 and suu > 0.0 and svv > 0.0):
+    p = n_terms(degree)
+    if not _cholesky(G, p, rcond, vec[_D], L):
         return False
-    d0, d1, d2 = math.sqrt(s1), math.sqrt(suu), math.sqrt(svv)
-    g01, g02, g12 = su / (d0 * d1), sv / (d0 * d2), suv / (d1 * d2)
-    i00 = 1.0 - g12 * g12
-    i01 = g02 * g12 - g01
-    i02 = g01 * g12 - g02
-    i11 = 1.0 - g02 * g02
-    i12 = g01 * g02 - g12
-    i22 = 1.0 - g01 * g01
-    det = i00 + g01 * i01 + g02 * i02
-    if not det > rcond:
-        return False
-    # G = D Gs D, so G^-1 = D^-1 adj(Gs) D^-1 / det
-    e00 = i00 / (det * d0 * d0)
-    e01 = i01 / (det * d0 * d1)
-    e02 = i02 / (det * d0 * d2)
-    e11 = i11 / (det * d1 * d1)
-    e12 = i12 / (det * d1 * d2)
-    e22 = i22 / (det * d2 * d2)
-    coef[0] = e00 * x0 + e01 * x1 + e02 * x2
-    coef[1] = e01 * x0 + e11 * x1 + e12 * x2
-    coef[2] = e02 * x0 + e12 * x1 + e22 * x2
-    coef[3] = e00 * y0 + e01 * y1 + e02 * y2
-    coef[4] = e01 * y0 + e11 * y1 + e12 * y2
-    coef[5] = e02 * y0 + e12 * y1 + e22 * y2
-    coef[6] = e11
-    coef[7] = e22
-    coef[8] = max(xx - (coef[0] * x0 + coef[1] * x1 + coef[2] * x2), 0.0)
-    coef[9] = max(yy - (coef[3] * y0 + coef[4] * y1 + coef[5] * y2), 0.0)
-    coef[10] = s1
-    coef[11] = e12
-    coef[12] = e01
-    coef[13] = e02
+    _chol_solve(L, vec[_D], p, vec[_BX], vec[_CX])
+    _chol_solve(L, vec[_D], p, vec[_BY], vec[_CY])
+    e = vec[_E]
+    e[:p] = 0.0
+    e[1] = 1.0
+    _chol_solve(L, vec[_D], p, e, vec[_C1])
+    e[1] = 0.0
+    e[2] = 1.0
+    _chol_solve(L, vec[_D], p, e, vec[_C2])
+    fx = fy = 0.0
+    for a in range(p):
+        fx += vec[_CX, a] * vec[_BX, a]
+        fy += vec[_CY, a] * vec[_BY, a]
+    acc[3] = max(acc[1] - fx, 0.0)
+    acc[4] = max(acc[2] - fy, 0.0)
     return True
 
 
@@ -208,21 +266,29 @@ def _gather(points, normals, idx, centres, h, t1, t2, z, r, n, weighting, theta_
 
 
 @njit(**_OPTS)
-def _slope_variances(coef, n):
+def _slope_variances(degree, n, vec, acc):
     """Least-squares variances of W11, (W12 + W21)/2 and W22 from the residuals."""
-    dof = max(coef[10] * (1.0 - 3.0 / max(n, 4)), 1e-12)
-    sx2 = coef[8] / dof
-    sy2 = coef[9] / dof
-    return sx2 * coef[6], 0.25 * (sx2 * coef[7] + sy2 * coef[6]), sy2 * coef[7]
+    p = n_terms(degree)
+    dof = max(acc[0] * (1.0 - p / max(n, p + 1)), 1e-12)
+    sx2 = acc[3] / dof
+    sy2 = acc[4] / dof
+    e11, e22 = vec[_C1, 1], vec[_C2, 2]
+    return sx2 * e11, 0.25 * (sx2 * e22 + sy2 * e11), sy2 * e22
 
 
 @njit(**_OPTS)
-def _robust_weights(u, v, X, Y, base, n, coef, kind, wt, res):
+def _robust_weights(u, v, X, Y, base, n, degree, vec, kind, wt, res):
     """IRLS weights from the residuals of the current fit (Huber 1.345 or Tukey 4.685 x MAD)."""
+    p = n_terms(degree)
+    row = vec[_ROW]
     m = 0
     for j in range(n):
-        rx = X[j] - (coef[0] + coef[1] * u[j] + coef[2] * v[j])
-        ry = Y[j] - (coef[3] + coef[4] * u[j] + coef[5] * v[j])
+        _poly_row(u[j], v[j], degree, row)
+        rx = X[j]
+        ry = Y[j]
+        for a in range(p):
+            rx -= vec[_CX, a] * row[a]
+            ry -= vec[_CY, a] * row[a]
         res[j] = math.sqrt(rx * rx + ry * ry)
         if base[j] > 0.0:
             m += 1
@@ -246,17 +312,20 @@ def _robust_weights(u, v, X, Y, base, n, coef, kind, wt, res):
 
 @njit(**_OPTS, parallel=True)
 def normal_fit(points, normals, idx, kc, h, centres, t1, t2, z, theta_reach, weighting, constraint,
-               robust, rcond, mu, W, var, rms, spread, ok):
-    """NF per point (§4.3–4.4): fit X, Y of the neighbours' normals with [1, u, v].
+               robust, degree, rcond, mu, W, var, rms, spread, ok):
+    """NF per point (§4.3–4.4): fit X, Y of the neighbours' normals with a polynomial in (u, v).
 
-    kc (M,): neighbours used per point (the first kc of each row of idx). weighting: 0
-    uniform (eqs. 25–26), 1 theta of eq. 14. constraint: 0 none, 1 Euclidean projection
-    onto the symmetry plane (§4.4), 2 exact (Lagrange multiplier in the metric of the
-    normal equations, two fixed-point iterations on mu). robust: 0 none, 1 Huber, 2 Tukey
-    (3 IRLS iterations). Coordinates are divided by h; W is returned in those units, with
-    var (M, 3) the least-squares variances of W11, (W12 + W21)/2, W22 and rms (M,) the
-    weighted RMS residual of the normal components, spread (M,) their weighted RMS
-    deviation from their mean (how much the normals turn over the neighbourhood).
+    kc (M,): neighbours used per point (the first kc of each row of idx). degree: 1 is
+    the paper's linear model [1, u, v] (eqs. 25–26); 2 and 3 add the higher monomials, so
+    the slopes at p (W) are not biased by the curving of the normal field over a wide
+    neighbourhood. weighting: 0 uniform (eqs. 25–26), 1 theta of eq. 14. constraint: 0
+    none, 1 Euclidean projection onto the symmetry plane (§4.4), 2 exact (Lagrange
+    multiplier in the metric of the normal equations, two fixed-point iterations on mu).
+    robust: 0 none, 1 Huber, 2 Tukey (3 IRLS iterations). Coordinates are divided by h;
+    W is returned in those units, with var (M, 3) the least-squares variances of W11,
+    (W12 + W21)/2, W22 and rms (M,) the weighted RMS residual of the normal components,
+    spread (M,) their weighted RMS deviation from their mean (how much the normals turn
+    over the neighbourhood).
     """
     m = len(centres)
     kmax = idx.shape[1]
@@ -270,38 +339,44 @@ def normal_fit(points, normals, idx, kc, h, centres, t1, t2, z, theta_reach, wei
         base = np.empty(kmax)
         wt = np.empty(kmax)
         res = np.empty(kmax)
-        coef = np.empty(14)
-        S = np.empty(14)
+        vec = np.zeros((9, MAX_TERMS))
+        G = np.zeros((MAX_TERMS, MAX_TERMS))
+        L = np.zeros((MAX_TERMS, MAX_TERMS))
+        acc = np.zeros(5)
         for r in range(blk * _BLOCK, min(m, (blk + 1) * _BLOCK)):
-            _nf_point(points, normals, idx, kc, h, centres, t1, t2, z, theta_reach, weighting,
-                      constraint, robust, rcond, mu, W, var, rms, spread, ok, r, u, v, X, Y, base, wt, res, coef, S)
+            _nf_point(points, normals, idx, kc, h, centres, t1, t2, z, theta_reach, weighting, constraint,
+                      robust, degree, rcond, mu, W, var, rms, spread, ok, r, u, v, X, Y, base, wt, res,
+                      vec, G, L, acc)
 
 
 @njit(**_OPTS)
 def _nf_point(points, normals, idx, kc, h, centres, t1, t2, z, theta_reach, weighting, constraint,
-              robust, rcond, mu, W, var, rms, spread, ok, r, u, v, X, Y, base, wt, res, coef, S):
+              robust, degree, rcond, mu, W, var, rms, spread, ok, r, u, v, X, Y, base, wt, res,
+              vec, G, L, acc):
     """The NF fit of centre ``r`` (see :func:`normal_fit`), using the scratch arrays given."""
     n = kc[r]
     _gather(points, normals, idx, centres, h, t1, t2, z, r, n, weighting, theta_reach, u, v, X, Y, base)
     for j in range(n):
         wt[j] = base[j]
-    S[:] = 0.0
-    _accumulate(u, v, X, Y, wt, 0, n, S)
-    ok[r] = _solve_sums(S, rcond, coef)
+    _reset(degree, vec, G, acc)
+    _accumulate(u, v, X, Y, wt, 0, n, degree, vec, G, acc)
+    ok[r] = _solve(degree, rcond, vec, G, L, acc)
     if robust > 0:
         for _ in range(3):
             if not ok[r]:
                 break
-            _robust_weights(u, v, X, Y, base, n, coef, robust, wt, res)
-            S[:] = 0.0
-            _accumulate(u, v, X, Y, wt, 0, n, S)
-            ok[r] = _solve_sums(S, rcond, coef)
+            _robust_weights(u, v, X, Y, base, n, degree, vec, robust, wt, res)
+            _reset(degree, vec, G, acc)
+            _accumulate(u, v, X, Y, wt, 0, n, degree, vec, G, acc)
+            ok[r] = _solve(degree, rcond, vec, G, L, acc)
     if not ok[r]:
         return
-    cx0, cx1, cx2, cy0, cy1, cy2 = coef[0], coef[1], coef[2], coef[3], coef[4], coef[5]
+    cx0, cx1, cx2 = vec[_CX, 0], vec[_CX, 1], vec[_CX, 2]
+    cy0, cy1, cy2 = vec[_CY, 0], vec[_CY, 1], vec[_CY, 2]
     if constraint == 2:
-        # G^-1 a for a = (0, g1, g2 | 0, g3, g4): rows 1, 2 of G^-1 are needed
-        e11, e22, e12, e01, e02 = coef[6], coef[7], coef[11], coef[12], coef[13]
+        # G^-1 a for a = (0, g1, g2, 0.. | 0, g3, g4, 0..): columns 1, 2 of G^-1 are needed
+        e01, e11, e12 = vec[_C1, 0], vec[_C1, 1], vec[_C1, 2]
+        e02, e22 = vec[_C2, 0], vec[_C2, 2]
         ex0, ex1, ex2, ey0, ey1, ey2 = cx0, cx1, cx2, cy0, cy1, cy2
         for _ in range(2):
             m1, m2 = cx0, cy0
@@ -329,10 +404,11 @@ def _nf_point(points, normals, idx, kc, h, centres, t1, t2, z, theta_reach, weig
     W[r, 0, 1] = w12
     W[r, 1, 0] = w21
     W[r, 1, 1] = w22
-    var[r, 0], var[r, 1], var[r, 2] = _slope_variances(coef, n)
-    rms[r] = math.sqrt((coef[8] + coef[9]) / max(coef[10], 1e-300))
-    total = S[12] - S[6] * S[6] / S[0] + S[13] - S[9] * S[9] / S[0]
-    spread[r] = math.sqrt(max(total, 0.0) / S[0])
+    var[r, 0], var[r, 1], var[r, 2] = _slope_variances(degree, n, vec, acc)
+    sw = max(acc[0], 1e-300)
+    rms[r] = math.sqrt((acc[3] + acc[4]) / sw)
+    mx, my = vec[_BX, 0] / sw, vec[_BY, 0] / sw
+    spread[r] = math.sqrt(max(acc[1] / sw - mx * mx + acc[2] / sw - my * my, 0.0))
 
 
 @njit(**_OPTS)
@@ -495,13 +571,14 @@ def outlier_scores(points, idx, floor, score):
 
 
 @njit(**_OPTS, parallel=True)
-def choose_scales(points, normals, idx, h, centres, t1, t2, z, ks, gamma, rcond, chosen):
+def choose_scales(points, normals, idx, h, centres, t1, t2, z, ks, degree, gamma, rcond, chosen):
     """Intersection of confidence intervals over nested neighbourhoods (see core.scale).
 
-    One pass over each centre's ks[-1] neighbours: the NF sums grow neighbour by
-    neighbour and are solved at each candidate size ks[c] (uniform weights, no constraint,
-    lengths in units of h = the distance to the largest neighbourhood). ``chosen`` gets
-    the largest k whose interval [W - gamma s, W + gamma s] still meets all previous ones.
+    One pass over each centre's ks[-1] neighbours: the NF sums (polynomial of
+    ``degree``) grow neighbour by neighbour and are solved at each candidate size ks[c]
+    (uniform weights, no constraint, lengths in units of h = the distance to the largest
+    neighbourhood). ``chosen`` gets the largest k whose interval [W - gamma s, W + gamma s]
+    still meets all previous ones.
     """
     m = len(centres)
     kmax = ks[-1]
@@ -512,26 +589,30 @@ def choose_scales(points, normals, idx, h, centres, t1, t2, z, ks, gamma, rcond,
         X = np.empty(kmax)
         Y = np.empty(kmax)
         base = np.empty(kmax)
-        coef = np.empty(14)
-        S = np.empty(14)
+        vec = np.zeros((9, MAX_TERMS))
+        G = np.zeros((MAX_TERMS, MAX_TERMS))
+        L = np.zeros((MAX_TERMS, MAX_TERMS))
+        acc = np.zeros(5)
         lo = np.empty(3)
         hi = np.empty(3)
         for r in range(blk * _BLOCK, min(m, (blk + 1) * _BLOCK)):
             _gather(points, normals, idx, centres, h, t1, t2, z, r, kmax, 0, 1.0, u, v, X, Y, base)
-            S[:] = 0.0
+            _reset(degree, vec, G, acc)
             lo[:] = -math.inf
             hi[:] = math.inf
             pick = ks[0]
             prev = 0
             for c in range(len(ks)):
-                _accumulate(u, v, X, Y, base, prev, ks[c], S)
+                _accumulate(u, v, X, Y, base, prev, ks[c], degree, vec, G, acc)
                 prev = ks[c]
-                if not _solve_sums(S, rcond, coef):
+                if not _solve(degree, rcond, vec, G, L, acc):
                     if c == 0:
                         continue
                     break
-                v0, v1, v2 = _slope_variances(coef, ks[c])
-                est0, est1, est2 = coef[1], 0.5 * (coef[2] + coef[4]), coef[5]
+                v0, v1, v2 = _slope_variances(degree, ks[c], vec, acc)
+                est0 = vec[_CX, 1]
+                est1 = 0.5 * (vec[_CX, 2] + vec[_CY, 1])
+                est2 = vec[_CY, 2]
                 lo[0] = max(lo[0], est0 - gamma * math.sqrt(v0))
                 hi[0] = min(hi[0], est0 + gamma * math.sqrt(v0))
                 lo[1] = max(lo[1], est1 - gamma * math.sqrt(v1))
@@ -557,10 +638,11 @@ def jet_normals(points, idx, h, centres, t1, t2, z, rcond, normals, ok):
     n_blocks = (m + _BLOCK - 1) // _BLOCK
     for blk in prange(n_blocks):
         G = np.empty((6, 6))
+        L = np.empty((6, 6))
         b = np.empty(6)
         row = np.empty(6)
-        L = np.empty((6, 6))
         d = np.empty(6)
+        x = np.empty(6)
         for r in range(blk * _BLOCK, min(m, (blk + 1) * _BLOCK)):
             ok[r] = False
             i = centres[r]
@@ -575,47 +657,15 @@ def jet_normals(points, idx, h, centres, t1, t2, z, rcond, normals, ok):
                 u = dx * t1[r, 0] + dy * t1[r, 1] + dz * t1[r, 2]
                 v = dx * t2[r, 0] + dy * t2[r, 1] + dz * t2[r, 2]
                 w = dx * z[r, 0] + dy * z[r, 1] + dz * z[r, 2]
-                row[0], row[1], row[2], row[3], row[4], row[5] = 1.0, u, v, u * u, u * v, v * v
+                _poly_row(u, v, 2, row)
                 for a in range(6):
                     b[a] += row[a] * w
                     for c in range(a + 1):
                         G[a, c] += row[a] * row[c]
-            good = True
-            for a in range(6):
-                d[a] = math.sqrt(G[a, a]) if G[a, a] > 0.0 else 0.0
-                if d[a] == 0.0:
-                    good = False
-            if not good:
+            if not _cholesky(G, 6, rcond, d, L):
                 continue
-            # Cholesky of the equilibrated matrix; a pivot below rcond means rank deficient
-            for a in range(6):
-                for c in range(a + 1):
-                    s = G[a, c] / (d[a] * d[c])
-                    for e in range(c):
-                        s -= L[a, e] * L[c, e]
-                    if a == c:
-                        if not s > rcond:
-                            good = False
-                            break
-                        L[a, a] = math.sqrt(s)
-                    else:
-                        L[a, c] = s / L[c, c]
-                if not good:
-                    break
-            if not good:
-                continue
-            # solve (L L^T) y = b / d, then x = y / d
-            for a in range(6):
-                s = b[a] / d[a]
-                for e in range(a):
-                    s -= L[a, e] * row[e]
-                row[a] = s / L[a, a]
-            for a in range(5, -1, -1):
-                s = row[a]
-                for e in range(a + 1, 6):
-                    s -= L[e, a] * row[e]
-                row[a] = s / L[a, a]
-            c1, c2 = row[1] / d[1], row[2] / d[2]
+            _chol_solve(L, d, 6, b, x)
+            c1, c2 = x[1], x[2]
             nrm = math.sqrt(1.0 + c1 * c1 + c2 * c2)
             for a in range(3):
                 normals[r, a] = (-c1 * t1[r, a] - c2 * t2[r, a] + z[r, a]) / nrm

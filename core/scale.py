@@ -20,7 +20,11 @@ from .methods.normal_fit import RCOND_DET
 from .patch import Chunk
 
 #: candidate neighbourhood sizes (about x1.4 apart)
-AUTO_KS = (12, 17, 24, 34, 48)
+AUTO_KS = (20, 28, 40, 56, 80, 113, 160, 226)
+#: the candidates stop where N x k would exceed this many cached neighbours (~0.8 GB)
+NEIGHBOUR_BUDGET = 64_000_000
+#: degree of the normal fit used by k="auto" (a cubic normal field: bias O(h^3))
+AUTO_DEGREE = 3
 #: width of the confidence intervals in standard deviations. The least-squares variance
 #: treats the neighbours' normals as independent, but neighbouring estimated normals
 #: share most of their own neighbours, so their errors are correlated and the variance
@@ -31,12 +35,13 @@ _CHUNK = 32_768
 
 
 def candidates(n_points: int) -> tuple[int, ...]:
-    """The candidate k that a cloud of ``n_points`` allows."""
-    ks = tuple(k for k in AUTO_KS if k <= n_points)
+    """The candidate k that a cloud of ``n_points`` allows (and the memory budget)."""
+    cap = min(n_points, max(AUTO_KS[0], NEIGHBOUR_BUDGET // max(n_points, 1)))
+    ks = tuple(k for k in AUTO_KS if k <= cap)
     return ks or (n_points,)
 
 
-def choose_k(points, normals, nb, has_normal, ks, report):
+def choose_k(points, normals, nb, has_normal, ks, degree, report):
     """Per-point k by ICI over ``ks`` (ascending); returns (N,) int (ks[0] where no normal)."""
     n = len(points)
     idx_all, dist_all = nb.take(ks[-1])
@@ -48,7 +53,7 @@ def choose_k(points, normals, nb, has_normal, ks, report):
         chunk = Chunk.build(points, normals, idx_all[centres], dist_all[centres, -1], centres)
         out = np.empty(len(centres), dtype=np.int64)
         kernels.choose_scales(chunk.points, chunk.normals, chunk.idx, chunk.h, chunk.centres,
-                              chunk.t1, chunk.t2, chunk.z, ks_arr, GAMMA, RCOND_DET, out)
+                              chunk.t1, chunk.t2, chunk.z, ks_arr, degree, GAMMA, RCOND_DET, out)
         chosen[centres] = out
         report(min(len(usable), start + _CHUNK) / max(len(usable), 1), "choosing k")
     return chosen

@@ -26,6 +26,7 @@ class Method:
     default_passes : normal refinement passes run by default (NR: 1).
     options : default values of the method's options.
     min_k : smallest neighbourhood that determines the fit.
+    min_k_of : optional ``min_k_of(**options) -> int`` where the options change it.
     """
 
     name: str
@@ -35,6 +36,11 @@ class Method:
     default_passes: int = 0
     options: dict = field(default_factory=dict)
     min_k: int = 3
+    min_k_of: Callable | None = None
+
+    def min_k_for(self, options: dict) -> int:
+        """Smallest neighbourhood that determines the fit with these options."""
+        return max(self.min_k, self.min_k_of(**options)) if self.min_k_of else self.min_k
 
     @property
     def uses_passes(self) -> bool:
@@ -45,8 +51,8 @@ class Method:
 def _registry():
     nf_opts = dict(normal_fit.DEFAULTS)
     entries = [
-        Method("nr", "NR – normal fitting + refinement", normal_fit.NR_DOC, normal_fit.fit, 1, nf_opts, 4),
-        Method("nf", "NF – normal fitting", normal_fit.NF_DOC, normal_fit.fit, 0, nf_opts, 4),
+        Method("nr", "NR – normal fitting + refinement", normal_fit.NR_DOC, normal_fit.fit, 1, nf_opts, 4, normal_fit.min_k),
+        Method("nf", "NF – normal fitting", normal_fit.NF_DOC, normal_fit.fit, 0, nf_opts, 4, normal_fit.min_k),
         Method("ct", "CT – curvature tensor", tensor.DOC, tensor.fit, 0, {}, 3),
         Method("qp", "QP – quadric fit to points", quadric.QP_DOC, quadric.fit_points, 0, {}, 4),
         Method("qn", "QN – quadric fit to normals", quadric.QN_DOC, quadric.fit_normals, 0, {}, 3),

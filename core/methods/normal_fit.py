@@ -13,7 +13,7 @@ RCOND_DET = 1e-10
 NF_DOC = (
     "Normal fitting (§4.3–4.4): in a frame at p, fit X ≈ μ1 + w11·u + w12·v and "
     "Y ≈ μ2 + w21·u + w22·v to the neighbours' normal components by least squares "
-    "(eqs. 25–26), enforce the symmetry constraint (eq. 22) by projecting w onto its plane, "
+    "(eqs. 25–26; option degree 2 or 3 adds higher terms in u, v), enforce the symmetry constraint (eq. 22) by projecting w onto its plane, "
     "and read the Weingarten matrix from w (eq. 21). The refined normal is (μ1, μ2, Z0)."
 )
 NR_DOC = NF_DOC + " NR repeats the fit with the refined normals of all points (§4.4 end; 1 pass by default)."
@@ -26,13 +26,25 @@ NR_DOC = NF_DOC + " NR repeats the fit with the refined normals of all points (�
 #: robust: None (least squares), "huber" or "tukey" (IRLS on the normal residuals, scale
 #: from the median absolute deviation; outlying neighbours and the far side of a crease
 #: lose their weight).
-DEFAULTS = {"weights": "uniform", "constraint": "project", "robust": None}
+#: degree: of the polynomial in (u, v) fitted to each normal component: 1 is the paper's
+#: linear model (eq. 23); 2 and 3 let the normal field curve over the neighbourhood, so
+#: W (the slopes at p) is not biased by it and wide, noise-averaging neighbourhoods stay
+#: accurate (k="auto" uses 3).
+DEFAULTS = {"weights": "uniform", "constraint": "project", "robust": None, "degree": 1}
+DEGREES = (1, 2, 3)
 _WEIGHTS = ("uniform", "theta")
 _CONSTRAINTS = ("none", "project", "exact")  # kernel codes 0, 1, 2
 _ROBUST = (None, "huber", "tukey")
 
 
-def fit(chunk, *, weights="uniform", constraint="project", robust=None):
+def min_k(degree=1, **_):
+    """Smallest neighbourhood that determines the fit: one more point than monomials."""
+    if degree not in DEGREES:
+        raise ValueError(f"degree {degree!r} is invalid; must be one of {list(DEGREES)}")
+    return (degree + 1) * (degree + 2) // 2 + 1
+
+
+def fit(chunk, *, weights="uniform", constraint="project", robust=None, degree=1):
     """Fit (mu, W) per point of a :class:`core.patch.Chunk`; see :data:`NF_DOC`.
 
     Returns ``(mu, W, ok, diag)`` with ``diag`` holding the least-squares variances of
@@ -45,6 +57,8 @@ def fit(chunk, *, weights="uniform", constraint="project", robust=None):
         raise ValueError(f"constraint {constraint!r} is invalid; must be one of {list(_CONSTRAINTS)}")
     if robust not in _ROBUST:
         raise ValueError(f"robust {robust!r} is invalid; must be one of {list(_ROBUST)}")
+    if degree not in DEGREES:
+        raise ValueError(f"degree {degree!r} is invalid; must be one of {list(DEGREES)}")
     m = len(chunk.centres)
     mu = np.zeros((m, 2))
     W = np.zeros((m, 2, 2))
@@ -55,6 +69,6 @@ def fit(chunk, *, weights="uniform", constraint="project", robust=None):
     kernels.normal_fit(
         chunk.points, chunk.normals, chunk.idx, chunk.kc, chunk.h, chunk.centres, chunk.t1, chunk.t2,
         chunk.z, THETA_REACH, _WEIGHTS.index(weights), _CONSTRAINTS.index(constraint),
-        _ROBUST.index(robust), RCOND_DET, mu, W, var, rms, spread, ok,
+        _ROBUST.index(robust), degree, RCOND_DET, mu, W, var, rms, spread, ok,
     )
     return mu, W, ok, {"var": var, "rms": rms, "spread": spread}

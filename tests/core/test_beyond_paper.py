@@ -49,7 +49,7 @@ def test_ici_kernel_matches_separate_fits():
     pick = np.full(200, scale.AUTO_KS[0])
     for k in scale.AUTO_KS:
         chunk = Chunk.build(nb.points, s.normals, idx[centres], h, centres, np.full(200, k))
-        _, W, ok, diag = m.fit(chunk, weights="uniform", constraint="none", robust=None)
+        _, W, ok, diag = m.fit(chunk, weights="uniform", constraint="none", robust=None, degree=scale.AUTO_DEGREE)
         est = np.stack([W[:, 0, 0], 0.5 * (W[:, 0, 1] + W[:, 1, 0]), W[:, 1, 1]], axis=1)
         sd = np.sqrt(diag["var"])
         lo, hi = np.maximum(lo, est - scale.GAMMA * sd), np.minimum(hi, est + scale.GAMMA * sd)
@@ -115,3 +115,66 @@ def test_tolerance_stops_refinement_early():
     assert full.params["passes_run"] == 10
     with pytest.raises(ValueError, match="tol must be a positive number"):
         core.estimate(p, k=15, tol=-1)
+
+
+@pytest.mark.parametrize("degree", [2, 3])
+def test_polynomial_normal_fit_matches_numpy_least_squares(degree):
+    """The compiled NF of any degree solves the same least squares as numpy's lstsq."""
+    from core.methods import get_method
+    from core.patch import Chunk
+
+    s = core.shapes.ellipsoid(2000, seed=5)
+    p = core.noise.add_noise(s.points, 0.1, seed=6)
+    nb = core.build_neighbours(p, 40)
+    idx, dist = nb.take(40)
+    centres = np.arange(50)
+    chunk = Chunk.build(p, s.normals, idx[centres], dist[centres, -1], centres)
+    mu, W, ok, _ = get_method("nf").fit(chunk, constraint="none", degree=degree)
+    pa = chunk.patch
+    u, v = pa.u, pa.v
+    cols = [np.ones_like(u), u, v, u * u, u * v, v * v]
+    if degree == 3:
+        cols += [u**3, u * u * v, u * v * v, v**3]
+    A = np.stack(cols, axis=2)
+    assert ok.all()
+    for r in range(len(centres)):
+        cx = np.linalg.lstsq(A[r], pa.X[r], rcond=None)[0]
+        cy = np.linalg.lstsq(A[r], pa.Y[r], rcond=None)[0]
+        np.testing.assert_allclose(mu[r], [cx[0], cy[0]], atol=1e-9)
+        np.testing.assert_allclose(W[r], [[cx[1], cx[2]], [cy[1], cy[2]]], atol=1e-7)
+
+
+def test_higher_degree_removes_the_bias_of_wide_neighbourhoods():
+    """Noise-free torus, exact normals, k = 80: the linear normal model (eq. 23) bends
+    over the patch; a cubic one follows it."""
+    s = core.shapes.torus(5000, seed=11)
+    err = {d: core.metrics.summary(core.estimate(s.points, s.normals, k=80, method="nf", options={"degree": d}), s)
+           for d in (1, 3)}
+    for key in ("mean", "gaussian", "direction_deg"):
+        assert err[3][key] < 0.3 * err[1][key], key
+
+
+def test_degree_options_are_validated():
+    pts = core.shapes.sphere(500, seed=1).points
+    with pytest.raises(ValueError, match=r"degree 4 is invalid; must be one of \[1, 2, 3\]"):
+        core.estimate(pts, k=30, options={"degree": 4})
+    with pytest.raises(ValueError, match=r"k=10 is out of range"):
+        core.estimate(pts, k=10, options={"degree": 3})  # 10 monomials need 11 neighbours
+    assert core.estimate(pts, k=11, options={"degree": 3}).valid.mean() > 0.95
+
+
+def test_auto_uses_the_cubic_normal_fit_and_stays_close_to_exact_normals_without_noise():
+    """Issue 4 target: noise-free, the default is within 1.5x of NF with exact normals."""
+    s = core.shapes.torus(5000, seed=12)
+    r = core.estimate(s.points)
+    assert r.params["options"]["degree"] == scale.AUTO_DEGREE and r.params["passes"] == 2
+    auto = core.metrics.summary(r, s)
+    nfe = core.metrics.summary(core.estimate(s.points, s.normals, k=15, method="nf"), s)
+    for key in ("mean", "gaussian", "direction_deg"):
+        assert auto[key] < 1.5 * nfe[key], key
+
+
+def test_auto_on_a_tiny_cloud_falls_back_to_the_linear_fit():
+    pts = core.shapes.sphere(12, seed=2).points
+    r = core.estimate(pts)
+    assert r.params["options"]["degree"] == 1 and set(np.unique(r.k_point)) == {12}
