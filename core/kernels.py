@@ -277,7 +277,42 @@ def _slope_variances(degree, n, vec, acc):
 
 
 @njit(**_OPTS)
-def _robust_weights(u, v, X, Y, base, n, degree, vec, kind, wt, res):
+def _select(a, lo, hi, kth):
+    """Partially order a[lo:hi] in place so a[kth] is the value a full sort would put there."""
+    while hi - lo > 1:
+        pivot = a[(lo + hi) // 2]
+        i, j = lo, hi - 1
+        while i <= j:
+            while a[i] < pivot:
+                i += 1
+            while a[j] > pivot:
+                j -= 1
+            if i <= j:
+                a[i], a[j] = a[j], a[i]
+                i += 1
+                j -= 1
+        if kth <= j:
+            hi = j + 1
+        elif kth >= i:
+            lo = i
+        else:
+            return
+    return
+
+
+@njit(**_OPTS)
+def _median(a, m):
+    """Median of a[:m] (reorders it), without the copy np.median makes."""
+    _select(a, 0, m, m // 2)
+    upper = a[m // 2]
+    if m % 2:
+        return upper
+    _select(a, 0, m // 2, m // 2 - 1)
+    return 0.5 * (upper + a[m // 2 - 1])
+
+
+@njit(**_OPTS)
+def _robust_weights(u, v, X, Y, base, n, degree, vec, kind, wt, res, tmp):
     """IRLS weights from the residuals of the current fit (Huber 1.345 or Tukey 4.685 x MAD)."""
     p = n_terms(degree)
     row = vec[_ROW]
@@ -294,13 +329,12 @@ def _robust_weights(u, v, X, Y, base, n, degree, vec, kind, wt, res):
             m += 1
     if m == 0:
         return
-    tmp = np.empty(m)
     c = 0
     for j in range(n):
         if base[j] > 0.0:
             tmp[c] = res[j]
             c += 1
-    scale = max(1.4826 * np.median(tmp), 1e-4)
+    scale = max(1.4826 * _median(tmp, m), 1e-4)
     for j in range(n):
         r = res[j] / scale
         if kind == 1:  # Huber
@@ -312,7 +346,7 @@ def _robust_weights(u, v, X, Y, base, n, degree, vec, kind, wt, res):
 
 @njit(**_OPTS, parallel=True)
 def normal_fit(points, normals, idx, kc, h, centres, t1, t2, z, theta_reach, weighting, constraint,
-               robust, degree, rcond, mu, W, var, rms, spread, ok):
+               robust, irls, degree, rcond, mu, W, var, rms, spread, ok):
     """NF per point (§4.3–4.4): fit X, Y of the neighbours' normals with a polynomial in (u, v).
 
     kc (M,): neighbours used per point (the first kc of each row of idx). degree: 1 is
@@ -321,7 +355,7 @@ def normal_fit(points, normals, idx, kc, h, centres, t1, t2, z, theta_reach, wei
     neighbourhood. weighting: 0 uniform (eqs. 25–26), 1 theta of eq. 14. constraint: 0
     none, 1 Euclidean projection onto the symmetry plane (§4.4), 2 exact (Lagrange
     multiplier in the metric of the normal equations, two fixed-point iterations on mu).
-    robust: 0 none, 1 Huber, 2 Tukey (3 IRLS iterations). Coordinates are divided by h;
+    robust: 0 none, 1 Huber, 2 Tukey (``irls`` reweighting iterations). Coordinates are divided by h;
     W is returned in those units, with var (M, 3) the least-squares variances of W11,
     (W12 + W21)/2, W22 and rms (M,) the weighted RMS residual of the normal components,
     spread (M,) their weighted RMS deviation from their mean (how much the normals turn
@@ -339,20 +373,21 @@ def normal_fit(points, normals, idx, kc, h, centres, t1, t2, z, theta_reach, wei
         base = np.empty(kmax)
         wt = np.empty(kmax)
         res = np.empty(kmax)
+        tmp = np.empty(kmax)
         vec = np.zeros((9, MAX_TERMS))
         G = np.zeros((MAX_TERMS, MAX_TERMS))
         L = np.zeros((MAX_TERMS, MAX_TERMS))
         acc = np.zeros(5)
         for r in range(blk * _BLOCK, min(m, (blk + 1) * _BLOCK)):
             _nf_point(points, normals, idx, kc, h, centres, t1, t2, z, theta_reach, weighting, constraint,
-                      robust, degree, rcond, mu, W, var, rms, spread, ok, r, u, v, X, Y, base, wt, res,
-                      vec, G, L, acc)
+                      robust, irls, degree, rcond, mu, W, var, rms, spread, ok, r, u, v, X, Y, base, wt, res,
+                      tmp, vec, G, L, acc)
 
 
 @njit(**_OPTS)
 def _nf_point(points, normals, idx, kc, h, centres, t1, t2, z, theta_reach, weighting, constraint,
-              robust, degree, rcond, mu, W, var, rms, spread, ok, r, u, v, X, Y, base, wt, res,
-              vec, G, L, acc):
+              robust, irls, degree, rcond, mu, W, var, rms, spread, ok, r, u, v, X, Y, base, wt, res,
+              tmp, vec, G, L, acc):
     """The NF fit of centre ``r`` (see :func:`normal_fit`), using the scratch arrays given."""
     n = kc[r]
     _gather(points, normals, idx, centres, h, t1, t2, z, r, n, weighting, theta_reach, u, v, X, Y, base)
@@ -362,10 +397,10 @@ def _nf_point(points, normals, idx, kc, h, centres, t1, t2, z, theta_reach, weig
     _accumulate(u, v, X, Y, wt, 0, n, degree, vec, G, acc)
     ok[r] = _solve(degree, rcond, vec, G, L, acc)
     if robust > 0:
-        for _ in range(3):
+        for _ in range(irls):
             if not ok[r]:
                 break
-            _robust_weights(u, v, X, Y, base, n, degree, vec, robust, wt, res)
+            _robust_weights(u, v, X, Y, base, n, degree, vec, robust, wt, res, tmp)
             _reset(degree, vec, G, acc)
             _accumulate(u, v, X, Y, wt, 0, n, degree, vec, G, acc)
             ok[r] = _solve(degree, rcond, vec, G, L, acc)

@@ -32,6 +32,8 @@ NR_DOC = NF_DOC + " NR repeats the fit with the refined normals of all points (Â
 #: accurate (k="auto" uses 3).
 DEFAULTS = {"weights": "uniform", "constraint": "project", "robust": None, "degree": 1}
 DEGREES = (1, 2, 3)
+#: reweighting iterations of the robust fits (each one re-solves the least squares)
+IRLS_ITERATIONS = 2
 _WEIGHTS = ("uniform", "theta")
 _CONSTRAINTS = ("none", "project", "exact")  # kernel codes 0, 1, 2
 _ROBUST = (None, "huber", "tukey")
@@ -69,6 +71,6 @@ def fit(chunk, *, weights="uniform", constraint="project", robust=None, degree=1
     kernels.normal_fit(
         chunk.points, chunk.normals, chunk.idx, chunk.kc, chunk.h, chunk.centres, chunk.t1, chunk.t2,
         chunk.z, THETA_REACH, _WEIGHTS.index(weights), _CONSTRAINTS.index(constraint),
-        _ROBUST.index(robust), degree, RCOND_DET, mu, W, var, rms, spread, ok,
+        _ROBUST.index(robust), IRLS_ITERATIONS, degree, RCOND_DET, mu, W, var, rms, spread, ok,
     )
     return mu, W, ok, {"var": var, "rms": rms, "spread": spread}
