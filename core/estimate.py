@@ -55,10 +55,13 @@ def estimate(
         kept); otherwise weighted PCA (eqs. 13–14) estimates them.
     k : "auto" (default) or int. Neighbourhood size including the point itself (the paper
         uses 15). "auto" (NF/NR only) chooses k per point by a bias–variance rule, see
-        :mod:`core.scale`; the result's ``k_point`` holds the choice.
+        :mod:`core.scale`; the result's ``k_point`` holds the choice. Unless set in
+        ``options``/``passes``, "auto" also fits a cubic normal field (``degree=3``),
+        Tukey-robust, with 2 refinement passes for NR.
     method : str, one of :data:`core.METHODS` ("nr", "nf", "ct", "qp", "qn", "cf", "cn", "jet").
     passes : int, optional. Normal refinement passes after the first fit (NR, §4.4);
-        default: the method's (1 for "nr", 0 otherwise). 0 gives plain NF.
+        default: the method's (1 for "nr", 0 otherwise; 2 for "nr" with k="auto"). 0 gives
+        plain NF.
     tol : float, optional. Stop refining early once the mean change of the normals in a
         pass is below ``tol`` degrees (``passes`` is then the maximum).
     initial : "auto", "pca" or "jet": how normals are estimated when none are given.

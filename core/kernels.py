@@ -111,7 +111,7 @@ def pca_normals(points, idx, dist, start, reach, collinear, normals, ok):
 #: most monomials of the normal fit (degree 3: 1, u, v, u^2, uv, v^2, u^3, u^2 v, u v^2, v^3)
 MAX_TERMS = 10
 # rows of the per-block vector scratch of the NF kernels
-_ROW, _BX, _BY, _CX, _CY, _C1, _C2, _D, _E = range(9)
+_BX, _BY, _CX, _CY, _C1, _C2, _D, _E = range(8)
 
 
 @njit(**_OPTS, inline="always")
@@ -176,27 +176,53 @@ def _chol_solve(L, d, p, b, x):
 
 
 @njit(**_OPTS)
-def _accumulate(u, v, X, Y, wt, j0, j1, degree, vec, G, acc):
+def _monomials(u, v, n, degree, R):
+    """R[:, j] = the monomials of neighbour j < n in the order of :func:`_poly_row`,
+    once per point: every reweighting and every nested size reuses them."""
+    for j in range(n):
+        uj, vj = u[j], v[j]
+        R[0, j] = 1.0
+        prev = 0
+        c = 1
+        for d in range(1, degree + 1):
+            for b in range(d):
+                R[c, j] = R[prev + b, j] * uj
+                c += 1
+            R[c, j] = R[prev + d - 1, j] * vj
+            c += 1
+            prev += d
+
+
+@njit(cache=True, nogil=True, fastmath=True)
+def _accumulate(R, X, Y, wt, j0, j1, degree, vec, G, acc):
     """Add neighbours j0..j1-1 to the weighted normal equations of X and Y on the
-    monomials (G lower triangle, right-hand sides vec[_BX], vec[_BY]) and to acc =
-    (sum w, sum w X^2, sum w Y^2)."""
+    monomials R (G lower triangle, right-hand sides vec[_BX], vec[_BY]) and to acc =
+    (sum w, sum w X^2, sum w Y^2). Sums run over neighbours innermost (vectorised)."""
     p = n_terms(degree)
-    row = vec[_ROW]
+    for a in range(p):
+        sx = 0.0
+        sy = 0.0
+        for j in range(j0, j1):
+            t = wt[j] * R[a, j]
+            sx += t * X[j]
+            sy += t * Y[j]
+        vec[_BX, a] += sx
+        vec[_BY, a] += sy
+        for c in range(a + 1):
+            g = 0.0
+            for j in range(j0, j1):
+                g += wt[j] * R[a, j] * R[c, j]
+            G[a, c] += g
+    s0 = 0.0
+    s1 = 0.0
+    s2 = 0.0
     for j in range(j0, j1):
-        w = wt[j]
-        if w == 0.0:
-            continue
-        _poly_row(u[j], v[j], degree, row)
-        Xj, Yj = X[j], Y[j]
-        for a in range(p):
-            ra = w * row[a]
-            vec[_BX, a] += ra * Xj
-            vec[_BY, a] += ra * Yj
-            for c in range(a + 1):
-                G[a, c] += ra * row[c]
-        acc[0] += w
-        acc[1] += w * Xj * Xj
-        acc[2] += w * Yj * Yj
+        s0 += wt[j]
+        s1 += wt[j] * X[j] * X[j]
+        s2 += wt[j] * Y[j] * Y[j]
+    acc[0] += s0
+    acc[1] += s1
+    acc[2] += s2
 
 
 @njit(**_OPTS)
@@ -312,18 +338,16 @@ def _median(a, m):
 
 
 @njit(**_OPTS)
-def _robust_weights(u, v, X, Y, base, n, degree, vec, kind, wt, res, tmp):
+def _robust_weights(R, X, Y, base, n, degree, vec, kind, wt, res, tmp):
     """IRLS weights from the residuals of the current fit (Huber 1.345 or Tukey 4.685 x MAD)."""
     p = n_terms(degree)
-    row = vec[_ROW]
     m = 0
     for j in range(n):
-        _poly_row(u[j], v[j], degree, row)
         rx = X[j]
         ry = Y[j]
         for a in range(p):
-            rx -= vec[_CX, a] * row[a]
-            ry -= vec[_CY, a] * row[a]
+            rx -= vec[_CX, a] * R[a, j]
+            ry -= vec[_CY, a] * R[a, j]
         res[j] = math.sqrt(rx * rx + ry * ry)
         if base[j] > 0.0:
             m += 1
@@ -374,35 +398,37 @@ def normal_fit(points, normals, idx, kc, h, centres, t1, t2, z, theta_reach, wei
         wt = np.empty(kmax)
         res = np.empty(kmax)
         tmp = np.empty(kmax)
-        vec = np.zeros((9, MAX_TERMS))
+        R = np.empty((MAX_TERMS, kmax))
+        vec = np.zeros((8, MAX_TERMS))
         G = np.zeros((MAX_TERMS, MAX_TERMS))
         L = np.zeros((MAX_TERMS, MAX_TERMS))
         acc = np.zeros(5)
         for r in range(blk * _BLOCK, min(m, (blk + 1) * _BLOCK)):
             _nf_point(points, normals, idx, kc, h, centres, t1, t2, z, theta_reach, weighting, constraint,
                       robust, irls, degree, rcond, mu, W, var, rms, spread, ok, r, u, v, X, Y, base, wt, res,
-                      tmp, vec, G, L, acc)
+                      tmp, R, vec, G, L, acc)
 
 
 @njit(**_OPTS)
 def _nf_point(points, normals, idx, kc, h, centres, t1, t2, z, theta_reach, weighting, constraint,
               robust, irls, degree, rcond, mu, W, var, rms, spread, ok, r, u, v, X, Y, base, wt, res,
-              tmp, vec, G, L, acc):
+              tmp, R, vec, G, L, acc):
     """The NF fit of centre ``r`` (see :func:`normal_fit`), using the scratch arrays given."""
     n = kc[r]
     _gather(points, normals, idx, centres, h, t1, t2, z, r, n, weighting, theta_reach, u, v, X, Y, base)
     for j in range(n):
         wt[j] = base[j]
+    _monomials(u, v, n, degree, R)
     _reset(degree, vec, G, acc)
-    _accumulate(u, v, X, Y, wt, 0, n, degree, vec, G, acc)
+    _accumulate(R, X, Y, wt, 0, n, degree, vec, G, acc)
     ok[r] = _solve(degree, rcond, vec, G, L, acc)
     if robust > 0:
         for _ in range(irls):
             if not ok[r]:
                 break
-            _robust_weights(u, v, X, Y, base, n, degree, vec, robust, wt, res, tmp)
+            _robust_weights(R, X, Y, base, n, degree, vec, robust, wt, res, tmp)
             _reset(degree, vec, G, acc)
-            _accumulate(u, v, X, Y, wt, 0, n, degree, vec, G, acc)
+            _accumulate(R, X, Y, wt, 0, n, degree, vec, G, acc)
             ok[r] = _solve(degree, rcond, vec, G, L, acc)
     if not ok[r]:
         return
@@ -624,7 +650,8 @@ def choose_scales(points, normals, idx, h, centres, t1, t2, z, ks, degree, gamma
         X = np.empty(kmax)
         Y = np.empty(kmax)
         base = np.empty(kmax)
-        vec = np.zeros((9, MAX_TERMS))
+        R = np.empty((MAX_TERMS, kmax))
+        vec = np.zeros((8, MAX_TERMS))
         G = np.zeros((MAX_TERMS, MAX_TERMS))
         L = np.zeros((MAX_TERMS, MAX_TERMS))
         acc = np.zeros(5)
@@ -632,13 +659,14 @@ def choose_scales(points, normals, idx, h, centres, t1, t2, z, ks, degree, gamma
         hi = np.empty(3)
         for r in range(blk * _BLOCK, min(m, (blk + 1) * _BLOCK)):
             _gather(points, normals, idx, centres, h, t1, t2, z, r, kmax, 0, 1.0, u, v, X, Y, base)
+            _monomials(u, v, kmax, degree, R)
             _reset(degree, vec, G, acc)
             lo[:] = -math.inf
             hi[:] = math.inf
             pick = ks[0]
             prev = 0
             for c in range(len(ks)):
-                _accumulate(u, v, X, Y, base, prev, ks[c], degree, vec, G, acc)
+                _accumulate(R, X, Y, base, prev, ks[c], degree, vec, G, acc)
                 prev = ks[c]
                 if not _solve(degree, rcond, vec, G, L, acc):
                     if c == 0:
