@@ -197,7 +197,45 @@ def _monomials(u, v, n, degree, R):
 def _accumulate(R, X, Y, wt, j0, j1, degree, vec, G, acc):
     """Add neighbours j0..j1-1 to the weighted normal equations of X and Y on the
     monomials R (G lower triangle, right-hand sides vec[_BX], vec[_BY]) and to acc =
-    (sum w, sum w X^2, sum w Y^2). Sums run over neighbours innermost (vectorised)."""
+    (sum w, sum w X^2, sum w Y^2). Sums run over neighbours innermost (vectorised), or
+    all in one pass for degree 1, whose few sums over short neighbourhoods gain nothing
+    from vectors."""
+    if degree == 1:
+        s1 = su = sv = suu = suv = svv = x0 = x1 = x2 = y0 = y1 = y2 = xx = yy = 0.0
+        for j in range(j0, j1):
+            w = wt[j]
+            uj, vj, Xj, Yj = R[1, j], R[2, j], X[j], Y[j]
+            wu, wv = w * uj, w * vj
+            s1 += w
+            su += wu
+            sv += wv
+            suu += wu * uj
+            suv += wu * vj
+            svv += wv * vj
+            x0 += w * Xj
+            x1 += wu * Xj
+            x2 += wv * Xj
+            y0 += w * Yj
+            y1 += wu * Yj
+            y2 += wv * Yj
+            xx += w * Xj * Xj
+            yy += w * Yj * Yj
+        G[0, 0] += s1
+        G[1, 0] += su
+        G[2, 0] += sv
+        G[1, 1] += suu
+        G[2, 1] += suv
+        G[2, 2] += svv
+        vec[_BX, 0] += x0
+        vec[_BX, 1] += x1
+        vec[_BX, 2] += x2
+        vec[_BY, 0] += y0
+        vec[_BY, 1] += y1
+        vec[_BY, 2] += y2
+        acc[0] += s1
+        acc[1] += xx
+        acc[2] += yy
+        return
     p = n_terms(degree)
     for a in range(p):
         sx = 0.0
@@ -235,6 +273,46 @@ def _reset(degree, vec, G, acc):
 
 
 @njit(**_OPTS)
+def _solve_linear(rcond, vec, G, acc):
+    """:func:`_solve` for degree 1 (the paper's eqs. 25–26) by the closed-form inverse of
+    the equilibrated 3x3 matrix: the common case, and twice as fast as a Cholesky."""
+    s1, su, sv, suu, suv, svv = G[0, 0], G[1, 0], G[2, 0], G[1, 1], G[2, 1], G[2, 2]
+    if not (s1 > 0.0 and suu > 0.0 and svv > 0.0):
+        return False
+    d0, d1, d2 = math.sqrt(s1), math.sqrt(suu), math.sqrt(svv)
+    g01, g02, g12 = su / (d0 * d1), sv / (d0 * d2), suv / (d1 * d2)
+    i00 = 1.0 - g12 * g12
+    i01 = g02 * g12 - g01
+    i02 = g01 * g12 - g02
+    i11 = 1.0 - g02 * g02
+    i12 = g01 * g02 - g12
+    i22 = 1.0 - g01 * g01
+    det = i00 + g01 * i01 + g02 * i02
+    if not det > rcond:
+        return False
+    # G = D Gs D, so G^-1 = D^-1 adj(Gs) D^-1 / det
+    e00 = i00 / (det * d0 * d0)
+    e01 = i01 / (det * d0 * d1)
+    e02 = i02 / (det * d0 * d2)
+    e11 = i11 / (det * d1 * d1)
+    e12 = i12 / (det * d1 * d2)
+    e22 = i22 / (det * d2 * d2)
+    x0, x1, x2 = vec[_BX, 0], vec[_BX, 1], vec[_BX, 2]
+    y0, y1, y2 = vec[_BY, 0], vec[_BY, 1], vec[_BY, 2]
+    vec[_CX, 0] = e00 * x0 + e01 * x1 + e02 * x2
+    vec[_CX, 1] = e01 * x0 + e11 * x1 + e12 * x2
+    vec[_CX, 2] = e02 * x0 + e12 * x1 + e22 * x2
+    vec[_CY, 0] = e00 * y0 + e01 * y1 + e02 * y2
+    vec[_CY, 1] = e01 * y0 + e11 * y1 + e12 * y2
+    vec[_CY, 2] = e02 * y0 + e12 * y1 + e22 * y2
+    vec[_C1, 0], vec[_C1, 1], vec[_C1, 2] = e01, e11, e12
+    vec[_C2, 0], vec[_C2, 1], vec[_C2, 2] = e02, e12, e22
+    acc[3] = max(acc[1] - (vec[_CX, 0] * x0 + vec[_CX, 1] * x1 + vec[_CX, 2] * x2), 0.0)
+    acc[4] = max(acc[2] - (vec[_CY, 0] * y0 + vec[_CY, 1] * y1 + vec[_CY, 2] * y2), 0.0)
+    return True
+
+
+@njit(**_OPTS)
 def _solve(degree, rcond, vec, G, L, acc):
     """Least squares of X and Y on the monomials (eqs. 25–26 for degree 1).
 
@@ -242,6 +320,8 @@ def _solve(degree, rcond, vec, G, L, acc):
     vec[_C1], vec[_C2] (columns 1, 2 of G^-1) and acc[3], acc[4] (residual sums of
     squares of X, Y). False when G is near singular.
     """
+    if degree == 1:
+        return _solve_linear(rcond, vec, G, acc)
     p = n_terms(degree)
     if not _cholesky(G, p, rcond, vec[_D], L):
         return False
