@@ -44,6 +44,15 @@ def _parse_option(text):
     return key, value
 
 
+def _k(text):
+    if text == "auto":
+        return text
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"k {text!r} must be an integer or auto") from None
+
+
 def _viewpoint(text):
     try:
         vals = [float(v) for v in text.split(",")]
@@ -115,7 +124,8 @@ def build_parser() -> argparse.ArgumentParser:
     e = sub.add_parser("estimate", help="estimate the Darboux frame of every point and write PLY/CSV")
     e.add_argument("input", help="point cloud file (PLY, XYZ/PTS/TXT/CSV, PCD, OBJ, STL, VTK/VTP, LAS/LAZ)")
     e.add_argument("-o", "--output", required=True, help="output file (.ply or .csv)")
-    e.add_argument("--k", type=int, default=15, help="neighbours per point, itself included (default 15)")
+    e.add_argument("--k", type=_k, default="auto",
+                   help="neighbours per point, itself included, or auto (default; chosen per point, NF/NR)")
     e.add_argument("--method", default="nr", choices=list(METHODS), help="estimator (default nr)")
     e.add_argument("--passes", type=int, default=None, help="normal refinement passes (default: method's)")
     e.add_argument("--orientation", default="auto", choices=["auto", "propagate", "outward", "keep"])
