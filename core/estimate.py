@@ -141,19 +141,22 @@ def estimate(
     nrm = orient_normals(pts, nrm, idx_p, mode, ok=has_normal)
     report(0.45, "orientation")
 
+    scores = np.full(n, np.nan)
+    kernels.outlier_scores(pts, np.ascontiguousarray(idx_p), _OUTLIER_FLOOR, scores)
+    outlier = scores > OUTLIER_SCORE
+    robust = opts.get("robust") is not None
+
     fit_start = 0.45
-    if auto:
-        kc = scale.choose_k(pts, nrm, nb, has_normal, ks, opts["degree"], report.sub(0.45, 0.7))
+    if auto:  # a robust estimate leaves the outliers out of the choice of k too
+        inliers = has_normal & ~outlier if robust else has_normal
+        kc = scale.choose_k(pts, np.where(inliers[:, None], nrm, np.nan), nb, inliers, ks, opts["degree"],
+                            report.sub(0.45, 0.7))
         fit_start = 0.7
     else:
         kc = np.full(n, k, dtype=np.int64)
     idx, dist = nb.take(int(kc.max()))
     h = dist[np.arange(n), kc - 1]
 
-    scores = np.full(n, np.nan)
-    kernels.outlier_scores(pts, np.ascontiguousarray(idx_p), _OUTLIER_FLOOR, scores)
-    outlier = scores > OUTLIER_SCORE
-    robust = opts.get("robust") is not None
     n_fits = passes + 1
     passes_run = 0
     converged = False

@@ -108,6 +108,8 @@ def pca_normals(points, idx, dist, start, reach, collinear, normals, ok):
             ok[i] = True
 
 
+#: share of a ring of neighbours that may lie off the tangent graph before k stops growing
+FOLD_FRACTION = 0.2
 #: most monomials of the normal fit (degree 3: 1, u, v, u^2, uv, v^2, u^3, u^2 v, u v^2, v^3)
 MAX_TERMS = 10
 # rows of the per-block vector scratch of the NF kernels
@@ -711,6 +713,32 @@ def outlier_scores(points, idx, floor, score):
         score[i] = d / unit if unit > 0.0 else (0.0 if d == 0.0 else math.inf)
 
 
+@njit(**_OPTS)
+def _folded(points, normals, idx, centres, z, r, j0, j1):
+    """Whether the ring of neighbours j0..j1-1 of centre r has left the graph of a
+    function over the tangent plane: more than FOLD_FRACTION of it seen at more than 45
+    degrees above or below that plane, or with normals facing the other way (the far side
+    of a thin part, another sheet). No model of the normal field fits there, and the
+    residual variance such a ring adds would hide the bias from the ICI test."""
+    i = centres[r]
+    c0, c1, c2 = z[r, 0], z[r, 1], z[r, 2]
+    bad = 0
+    seen = 0
+    for j in range(j0, j1):
+        q = idx[r, j]
+        if not math.isfinite(normals[q, 0]):  # no normal (or a known outlier): not counted
+            continue
+        seen += 1
+        dx = points[q, 0] - points[i, 0]
+        dy = points[q, 1] - points[i, 1]
+        dz = points[q, 2] - points[i, 2]
+        w = dx * c0 + dy * c1 + dz * c2
+        facing = normals[q, 0] * c0 + normals[q, 1] * c1 + normals[q, 2] * c2
+        if 2.0 * w * w > dx * dx + dy * dy + dz * dz or facing < 0.0:
+            bad += 1
+    return bad > FOLD_FRACTION * seen
+
+
 @njit(**_OPTS, parallel=True)
 def choose_scales(points, normals, idx, h, centres, t1, t2, z, ks, degree, gamma, rcond, chosen):
     """Intersection of confidence intervals over nested neighbourhoods (see core.scale).
@@ -746,6 +774,8 @@ def choose_scales(points, normals, idx, h, centres, t1, t2, z, ks, degree, gamma
             pick = ks[0]
             prev = 0
             for c in range(len(ks)):
+                if c > 0 and _folded(points, normals, idx, centres, z, r, prev, ks[c]):
+                    break
                 _accumulate(R, X, Y, base, prev, ks[c], degree, vec, G, acc)
                 prev = ks[c]
                 if not _solve(degree, rcond, vec, G, L, acc):
