@@ -147,8 +147,14 @@ def estimate(
     robust = opts.get("robust") is not None
 
     fit_start = 0.45
-    if auto:  # a robust estimate leaves the outliers out of the choice of k too
-        inliers = has_normal & ~outlier if robust else has_normal
+    if auto:
+        # creases are judged by the paper's linear fit at the initial scale: a cubic over a
+        # wide neighbourhood explains half of a step, so its residuals do not show it
+        lin = {**opts, "degree": 1, "robust": None}
+        *_, v_lin, lin_stats = _fit_all(pts, nrm, idx_p, np.full(n, idx_p.shape[1]), dist_p[:, -1],
+                                        has_normal, m, lin, report.sub(0.45, 0.47))
+        crease_initial = _creases(v_lin, *lin_stats)
+        inliers = has_normal & ~outlier if robust else has_normal  # outliers sit out the choice of k
         kc = scale.choose_k(pts, np.where(inliers[:, None], nrm, np.nan), nb, inliers, ks, opts["degree"],
                             report.sub(0.45, 0.7))
         fit_start = 0.7
@@ -181,7 +187,7 @@ def estimate(
         normals_given=normals is not None, initial=None if normals is not None else initial,
     )
     normals_out = np.where(valid[:, None], refined, nrm)
-    crease = _creases(valid, *stats)
+    crease = valid & crease_initial if auto else _creases(valid, *stats)
     return CurvatureResult(
         points=pts, normals=normals_out, k1=k1, k2=k2, e1=e1, e2=e2, valid=valid,
         k_point=kc, outlier_score=scores, crease=crease,

@@ -110,6 +110,8 @@ def pca_normals(points, idx, dist, start, reach, collinear, normals, ok):
 
 #: share of a ring of neighbours that may lie off the tangent graph before k stops growing
 FOLD_FRACTION = 0.2
+#: a neighbour whose normal turns more than 70 degrees from the centre's is off the graph
+FOLD_COS = 0.34
 #: most monomials of the normal fit (degree 3: 1, u, v, u^2, uv, v^2, u^3, u^2 v, u v^2, v^3)
 MAX_TERMS = 10
 # rows of the per-block vector scratch of the NF kernels
@@ -734,7 +736,7 @@ def _folded(points, normals, idx, centres, z, r, j0, j1):
         dz = points[q, 2] - points[i, 2]
         w = dx * c0 + dy * c1 + dz * c2
         facing = normals[q, 0] * c0 + normals[q, 1] * c1 + normals[q, 2] * c2
-        if 2.0 * w * w > dx * dx + dy * dy + dz * dz or facing < 0.0:
+        if 2.0 * w * w > dx * dx + dy * dy + dz * dz or facing < FOLD_COS:
             bad += 1
     return bad > FOLD_FRACTION * seen
 

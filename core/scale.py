@@ -9,7 +9,9 @@ Weingarten entries (W11, (W12 + W21)/2, W22) with their least-squares standard
 deviations s_k. While the intervals [W_k - G s_k, W_k + G s_k] of all scales so far
 still intersect, the larger k only removes noise; the first k whose interval leaves the
 common intersection shows bias, and the previous k is kept. Noise sets s_k, curvature
-sets the bias, and both are read from the data: nothing is tuned per shape."""
+sets the bias, and both are read from the data: nothing is tuned per shape. k also stops
+growing where a ring of new neighbours folds over (see ``kernels._folded``): past the far
+side of a thin part the residuals explode and would hide the bias from the intervals."""
 
 from __future__ import annotations
 

@@ -94,12 +94,13 @@ def test_robust_fit_keeps_inliers_accurate_with_outliers():
     assert np.isnan(rob.k1[is_out & rob.outlier]).all()
 
 
-def test_crease_flags_cube_edges_not_faces_or_smooth_shapes():
+@pytest.mark.parametrize("k, caught", [(15, 0.4), ("auto", 0.8)])
+def test_crease_flags_cube_edges_not_faces_or_smooth_shapes(k, caught):
     cube = core.shapes.cube(20000, seed=1)
-    r = core.estimate(cube.points, k=15)
+    r = core.estimate(cube.points, k=k)
     d = np.where(np.abs(cube.points) < 1 - 1e-9, 1 - np.abs(cube.points), np.inf).min(axis=1)
     spacing = core.noise.mean_spacing(cube.points)
-    assert r.crease[d < 2 * spacing].mean() > 0.4
+    assert r.crease[d < 2 * spacing].mean() > caught
     assert r.crease[d > 8 * spacing].mean() < 0.01
     for shape in ("torus", "saddle", "ellipsoid"):
         s = core.shapes.SHAPES[shape](4000, seed=2)
