@@ -719,8 +719,8 @@ def outlier_scores(points, idx, floor, score):
 def _folded(points, normals, idx, centres, z, r, j0, j1):
     """Whether the ring of neighbours j0..j1-1 of centre r has left the graph of a
     function over the tangent plane: more than FOLD_FRACTION of it seen at more than 45
-    degrees above or below that plane, or with normals facing the other way (the far side
-    of a thin part, another sheet). No model of the normal field fits there, and the
+    degrees above or below that plane, or with normals turned more than 70 degrees (the
+    far side of a thin part, another sheet, a crease). No model of the normal field fits there, and the
     residual variance such a ring adds would hide the bias from the ICI test."""
     i = centres[r]
     c0, c1, c2 = z[r, 0], z[r, 1], z[r, 2]
