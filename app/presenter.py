@@ -137,13 +137,18 @@ class ResultPresenter:
         self.pick()
 
 
+def _passes_text(result) -> str:
+    """Refinement passes kept, with the maximum when fewer were (k="auto" stops early)."""
+    run = getattr(result, "params", {}).get("passes_run", result.passes)
+    return f"{run}" if run == result.passes else f"{run} of max {result.passes}"
+
+
 def _title(out, method: str, result, summary: dict | None) -> str:
     """Top-left caption of a view: method and parameters, cloud, errors."""
     req = out.request
     text = f"{method_title(method)}\nk = {result.k}"
-    passes = getattr(result, "passes", None)
-    if passes is not None and uses_passes(method):
-        text += f",  passes = {passes}"
+    if getattr(result, "passes", None) is not None and uses_passes(method):
+        text += f",  passes = {_passes_text(result)}"
     if req.noise > 0:
         text += f",  noise {req.noise:g}%"
     text += f"\n{req.source.name}"
@@ -159,7 +164,7 @@ def status_line(out) -> str:
     k = f"auto (median {int(np.median(res.k_point))})" if res.k == "auto" else res.k
     text = f"{req.source.name}: {len(out.points):,} points  ·  {req.method.upper()} k={k}"
     if getattr(res, "passes", None) is not None and uses_passes(req.method):
-        text += f" passes={res.passes}"
+        text += f" passes={_passes_text(res)}"
     if req.noise > 0:
         text += f"  ·  noise {req.noise:g}%"
     text += f"  ·  {invalid:,} invalid (grey)" if invalid else "  ·  all valid"

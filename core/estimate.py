@@ -19,9 +19,13 @@ _ORIENTATIONS = ("auto", "propagate", "outward", "keep")
 MAX_PASSES = 20
 #: k of the initial PCA normals when k is chosen automatically (the paper's k)
 PCA_K = 15
-#: NR refinement passes when k is chosen automatically: with the cubic normal fit the
-#: refined normals are unbiased, so each pass averages noise further (paper: 1)
-AUTO_PASSES = 2
+#: most NR refinement passes when k is chosen automatically (paper: 1). With the cubic
+#: normal fit the refined normals are nearly unbiased, so a pass averages noise further,
+#: and the change it makes to the normals decays geometrically. Once a pass changes them
+#: by more than PASS_DECAY x the previous one, it is smoothing the shape itself (the
+#: drift that remains noise-free) and is undone.
+AUTO_PASSES = 4
+PASS_DECAY = 0.7
 #: a point whose distance to its neighbours' plane exceeds this many spreads is an outlier
 OUTLIER_SCORE = 4.0
 #: crease: normals spread (RMS, unit normals) above this and a linear fit leaving more
@@ -56,12 +60,14 @@ def estimate(
     k : "auto" (default) or int. Neighbourhood size including the point itself (the paper
         uses 15). "auto" (NF/NR only) chooses k per point by a bias–variance rule, see
         :mod:`core.scale`; the result's ``k_point`` holds the choice. Unless set in
-        ``options``/``passes``, "auto" also fits a cubic normal field (``degree=3``),
-        Tukey-robust, with 2 refinement passes for NR.
+        ``options``, "auto" also fits a cubic normal field (``degree=3``), Tukey-robust,
+        and NR refines while it removes noise (see ``passes``).
     method : str, one of :data:`core.METHODS` ("nr", "nf", "ct", "qp", "qn", "cf", "cn", "jet").
     passes : int, optional. Normal refinement passes after the first fit (NR, §4.4);
-        default: the method's (1 for "nr", 0 otherwise; 2 for "nr" with k="auto"). 0 gives
-        plain NF.
+        default: the method's (1 for "nr", 0 otherwise). With k="auto" it is a maximum
+        (default 4): a pass is undone, and refinement stops, once it changes the normals by
+        more than 0.7x the pass before (smoothing the shape rather than the noise;
+        ``params["passes_run"]`` tells how many were kept). 0 gives plain NF.
     tol : float, optional. Stop refining early once the mean change of the normals in a
         pass is below ``tol`` degrees (``passes`` is then the maximum).
     initial : "auto", "pca" or "jet": how normals are estimated when none are given.
@@ -164,21 +170,31 @@ def estimate(
     h = dist[np.arange(n), kc - 1]
 
     n_fits = passes + 1
-    passes_run = 0
     converged = False
+    best = None
     for p in range(n_fits):
         span = (1.0 - fit_start) / n_fits
         sub = report.sub(fit_start + span * p, fit_start + span * (p + 1))
-        refined, k1, k2, e1, e2, valid, stats = _fit_all(pts, nrm, idx, kc, h, has_normal, m, opts, sub)
+        fit = _fit_all(pts, nrm, idx, kc, h, has_normal, m, opts, sub)
+        refined, valid = fit[0], fit[5]
+        change = _mean_angle_deg(np.where(valid[:, None], refined, nrm), nrm, valid)
+        if auto and best is not None and change > PASS_DECAY * last_change:
+            break  # this pass smoothed the shape rather than the noise: keep the previous fit
+        best, best_input, passes_run, last_change = fit, nrm, p, change
         if p == passes or converged:
             break
+        new = np.where(valid[:, None], refined, nrm)
         if robust and p == 0:  # outliers leave their neighbours' fits (and are not estimated)
             has_normal = has_normal & ~outlier
-            refined[outlier] = np.nan
-        new = np.where(valid[:, None], refined, nrm)
-        converged = tol is not None and _mean_angle_deg(new, nrm, valid) < tol
+            new[outlier] = np.nan
+        converged = tol is not None and change < tol
         nrm = new
-        passes_run += 1
+    refined, k1, k2, e1, e2, valid, stats = best
+    nrm = best_input
+    if robust and valid[outlier].any():  # kept the first fit, which still estimated them
+        valid = valid & ~outlier
+        for a in (refined, k1, k2, e1, e2):
+            a[outlier] = np.nan
     report(1.0, "done")
     params = dict(
         method=m.name, k="auto" if auto else k, passes=passes, passes_run=passes_run, tol=tol,
