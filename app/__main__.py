@@ -10,6 +10,8 @@ import argparse
 import sys
 from pathlib import Path
 
+from core.estimate import AUTO_PASSES
+
 __all__ = ["main", "build_parser"]
 
 
@@ -24,7 +26,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--points", type=int, default=5000, metavar="N", help="points of the synthetic shape (default 5000)")
     p.add_argument("--k", metavar="N|auto", help="neighbours per point, or auto (default: auto for NF/NR)")
     p.add_argument("--method", metavar="NAME", help="estimator from core.METHODS (default nr)")
-    p.add_argument("--passes", type=int, metavar="N", help="NR refinement passes (0 = NF; default 2)")
+    p.add_argument("--passes", type=int, metavar="N",
+                   help=f"NR refinement passes (0 = NF; default {AUTO_PASSES}, a maximum with automatic k)")
     p.add_argument("--noise", type=float, metavar="PCT", help="Gaussian noise, sigma in %% of the mean spacing")
     p.add_argument("--field", metavar="NAME", help="displayed field: mean (H), gaussian (K), k1, k2, shape_index, "
                    "curvedness, normal_dev, err_mean, err_gaussian, ...")

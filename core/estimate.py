@@ -162,7 +162,7 @@ def estimate(
         crease_initial = _creases(v_lin, *lin_stats)
         inliers = has_normal & ~outlier if robust else has_normal  # outliers sit out the choice of k
         kc = scale.choose_k(pts, np.where(inliers[:, None], nrm, np.nan), nb, inliers, ks, opts["degree"],
-                            report.sub(0.45, 0.7))
+                            report.sub(0.47, 0.7))
         fit_start = 0.7
     else:
         kc = np.full(n, k, dtype=np.int64)
@@ -177,7 +177,8 @@ def estimate(
         sub = report.sub(fit_start + span * p, fit_start + span * (p + 1))
         fit = _fit_all(pts, nrm, idx, kc, h, has_normal, m, opts, sub)
         refined, valid = fit[0], fit[5]
-        change = _mean_angle_deg(np.where(valid[:, None], refined, nrm), nrm, valid)
+        # mean turn of the normals in this fit: what the adaptive stop and tol compare
+        change = _mean_angle_deg(refined, nrm, valid) if auto or tol is not None else None
         if auto and best is not None and change > PASS_DECAY * last_change:
             break  # this pass smoothed the shape rather than the noise: keep the previous fit
         best, best_input, passes_run, last_change = fit, nrm, p, change

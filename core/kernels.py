@@ -180,21 +180,23 @@ def _chol_solve(L, d, p, b, x):
 
 
 @njit(**_OPTS)
+def _fit_scratch(kmax):
+    """Per-block scratch of the NF solves: monomials R, the vectors of :func:`_solve`
+    (rows _BX.._E), the normal matrix G, its factor L and the sums acc."""
+    R = np.empty((MAX_TERMS, kmax))
+    vec = np.zeros((_E + 1, MAX_TERMS))
+    G = np.zeros((MAX_TERMS, MAX_TERMS))
+    L = np.zeros((MAX_TERMS, MAX_TERMS))
+    acc = np.zeros(5)
+    return R, vec, G, L, acc
+
+
+@njit(**_OPTS)
 def _monomials(u, v, n, degree, R):
-    """R[:, j] = the monomials of neighbour j < n in the order of :func:`_poly_row`,
-    once per point: every reweighting and every nested size reuses them."""
+    """R[:, j] = the monomials (:func:`_poly_row`) of neighbour j < n, once per point:
+    every reweighting and every nested size reuses them."""
     for j in range(n):
-        uj, vj = u[j], v[j]
-        R[0, j] = 1.0
-        prev = 0
-        c = 1
-        for d in range(1, degree + 1):
-            for b in range(d):
-                R[c, j] = R[prev + b, j] * uj
-                c += 1
-            R[c, j] = R[prev + d - 1, j] * vj
-            c += 1
-            prev += d
+        _poly_row(u[j], v[j], degree, R[:, j])
 
 
 @njit(cache=True, nogil=True, fastmath=True)
@@ -482,11 +484,7 @@ def normal_fit(points, normals, idx, kc, h, centres, t1, t2, z, theta_reach, wei
         wt = np.empty(kmax)
         res = np.empty(kmax)
         tmp = np.empty(kmax)
-        R = np.empty((MAX_TERMS, kmax))
-        vec = np.zeros((8, MAX_TERMS))
-        G = np.zeros((MAX_TERMS, MAX_TERMS))
-        L = np.zeros((MAX_TERMS, MAX_TERMS))
-        acc = np.zeros(5)
+        R, vec, G, L, acc = _fit_scratch(kmax)
         for r in range(blk * _BLOCK, min(m, (blk + 1) * _BLOCK)):
             _nf_point(points, normals, idx, kc, h, centres, t1, t2, z, theta_reach, weighting, constraint,
                       robust, irls, degree, rcond, mu, W, var, rms, spread, ok, r, u, v, X, Y, base, wt, res,
@@ -760,11 +758,7 @@ def choose_scales(points, normals, idx, h, centres, t1, t2, z, ks, degree, gamma
         X = np.empty(kmax)
         Y = np.empty(kmax)
         base = np.empty(kmax)
-        R = np.empty((MAX_TERMS, kmax))
-        vec = np.zeros((8, MAX_TERMS))
-        G = np.zeros((MAX_TERMS, MAX_TERMS))
-        L = np.zeros((MAX_TERMS, MAX_TERMS))
-        acc = np.zeros(5)
+        R, vec, G, L, acc = _fit_scratch(kmax)
         lo = np.empty(3)
         hi = np.empty(3)
         for r in range(blk * _BLOCK, min(m, (blk + 1) * _BLOCK)):

@@ -3,8 +3,8 @@
 Small neighbourhoods give unbiased but noisy normal derivatives; large ones average the
 noise away but the model of the normal field bends over a curved patch: the bias of W
 is O(h) for the linear model of eq. 23 (O(h^2) on a symmetric neighbourhood) and O(h^3)
-for the cubic one "auto" uses, which is why "auto" can go up to 226 neighbours. The rule is the *intersection of confidence intervals* (ICI;
-Goldenshluger & Nemirovski 1997, Katkovnik 1999): fit NF at increasing k, each giving the
+for the cubic one "auto" uses, which is why "auto" can go up to 226 neighbours. The
+rule is the *intersection of confidence intervals* (ICI; Goldenshluger & Nemirovski 1997, Katkovnik 1999): fit NF at increasing k, each giving the
 Weingarten entries (W11, (W12 + W21)/2, W22) with their least-squares standard
 deviations s_k. While the intervals [W_k - G s_k, W_k + G s_k] of all scales so far
 still intersect, the larger k only removes noise; the first k whose interval leaves the

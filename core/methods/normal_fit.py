@@ -13,8 +13,9 @@ RCOND_DET = 1e-10
 NF_DOC = (
     "Normal fitting (§4.3–4.4): in a frame at p, fit X ≈ μ1 + w11·u + w12·v and "
     "Y ≈ μ2 + w21·u + w22·v to the neighbours' normal components by least squares "
-    "(eqs. 25–26; option degree 2 or 3 adds higher terms in u, v), enforce the symmetry constraint (eq. 22) by projecting w onto its plane, "
-    "and read the Weingarten matrix from w (eq. 21). The refined normal is (μ1, μ2, Z0)."
+    "(eqs. 25–26; option degree 2 or 3 adds higher terms in u, v), enforce the symmetry "
+    "constraint (eq. 22) by projecting w onto its plane, and read the Weingarten matrix "
+    "from w (eq. 21). The refined normal is (μ1, μ2, Z0)."
 )
 NR_DOC = NF_DOC + " NR repeats the fit with the refined normals of all points (§4.4 end; 1 pass by default)."
 
@@ -39,10 +40,14 @@ _CONSTRAINTS = ("none", "project", "exact")  # kernel codes 0, 1, 2
 _ROBUST = (None, "huber", "tukey")
 
 
-def min_k(degree=1, **_):
-    """Smallest neighbourhood that determines the fit: one more point than monomials."""
+def _check_degree(degree):
     if degree not in DEGREES:
         raise ValueError(f"degree {degree!r} is invalid; must be one of {list(DEGREES)}")
+
+
+def min_k(degree=1, **_):
+    """Smallest neighbourhood that determines the fit: one more point than monomials."""
+    _check_degree(degree)
     return (degree + 1) * (degree + 2) // 2 + 1
 
 
@@ -59,8 +64,7 @@ def fit(chunk, *, weights="uniform", constraint="project", robust=None, degree=1
         raise ValueError(f"constraint {constraint!r} is invalid; must be one of {list(_CONSTRAINTS)}")
     if robust not in _ROBUST:
         raise ValueError(f"robust {robust!r} is invalid; must be one of {list(_ROBUST)}")
-    if degree not in DEGREES:
-        raise ValueError(f"degree {degree!r} is invalid; must be one of {list(DEGREES)}")
+    _check_degree(degree)
     m = len(chunk.centres)
     mu = np.zeros((m, 2))
     W = np.zeros((m, 2, 2))
