@@ -32,6 +32,8 @@ OUTLIER_SCORE = 4.0
 #: than CREASE_RATIO of that spread unexplained
 CREASE_SPREAD = 0.15
 CREASE_RATIO = 0.25
+#: ... and a residual above this many times the cloud's median residual (the noise)
+CREASE_NOISE = 3.0
 _OUTLIER_FLOOR = 0.05
 
 
@@ -217,11 +219,16 @@ def _creases(valid, rms, spread):
 
     On a smooth patch the linear model of eq. 23 explains the turning of the normals and
     the residual is a small part of it; across a sharp edge the normals jump and a line
-    explains only part of the jump. Measured on the initial (PCA) normals.
+    explains only part of the jump. Measured on the initial (PCA) normals. Noise leaves
+    residuals everywhere: a crease must also stand out against the cloud's typical
+    residual (its median: creases are a minority of the points), or a noisy scan would
+    be flagged all over.
     """
     with np.errstate(invalid="ignore", divide="ignore"):
         ratio = rms / spread
-    return valid & (spread > CREASE_SPREAD) & (ratio > CREASE_RATIO)
+    seen = rms[valid & np.isfinite(rms)]  # methods without a normal fit report no residual
+    typical = np.median(seen) if len(seen) else 0.0
+    return valid & (spread > CREASE_SPREAD) & (ratio > CREASE_RATIO) & (rms > CREASE_NOISE * typical)
 
 
 def _mean_angle_deg(a, b, mask):

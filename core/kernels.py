@@ -110,8 +110,12 @@ def pca_normals(points, idx, dist, start, reach, collinear, normals, ok):
 
 #: share of a ring of neighbours that may lie off the tangent graph before k stops growing
 FOLD_FRACTION = 0.2
-#: a neighbour whose normal turns more than 70 degrees from the centre's is off the graph
+#: a neighbour whose normal turns more than 70 degrees from the local mean normal is off the graph
 FOLD_COS = 0.34
+#: heights within this many RMS heights of the smallest neighbourhood are noise, not a fold
+FOLD_NOISE = 3.0
+#: fewest off-graph neighbours that make a fold (a few turned normals in a small ring are noise)
+FOLD_MIN_BAD = 3
 #: most monomials of the normal fit (degree 3: 1, u, v, u^2, uv, v^2, u^3, u^2 v, u v^2, v^3)
 MAX_TERMS = 10
 # rows of the per-block vector scratch of the NF kernels
@@ -714,14 +718,63 @@ def outlier_scores(points, idx, floor, score):
 
 
 @njit(**_OPTS)
-def _folded(points, normals, idx, centres, z, r, j0, j1):
-    """Whether the ring of neighbours j0..j1-1 of centre r has left the graph of a
-    function over the tangent plane: more than FOLD_FRACTION of it seen at more than 45
-    degrees above or below that plane, or with normals turned more than 70 degrees (the
-    far side of a thin part, another sheet, a crease). No model of the normal field fits there, and the
-    residual variance such a ring adds would hide the bias from the ICI test."""
-    i = centres[r]
+def _local_reference(points, normals, idx, r, n, z, ref):
+    """What a fold of centre r is judged against, from its neighbours 0..n-1 (the
+    smallest neighbourhood): ``ref`` gets their centroid (0:3) and mean normal (3:6,
+    sign-aligned with z), which unlike the centre's own point and normal are not thrown
+    far off by noise, the RMS height of the neighbours over that plane (6: the scale of
+    the position noise, plus a little curvature) and the share of them whose normals
+    turn more than FOLD_COS from the mean (7: what the normal noise alone does)."""
     c0, c1, c2 = z[r, 0], z[r, 1], z[r, 2]
+    ref[:] = 0.0
+    seen = 0
+    for j in range(n):
+        q = idx[r, j]
+        nx, ny, nz = normals[q, 0], normals[q, 1], normals[q, 2]
+        if not math.isfinite(nx):
+            continue
+        sgn = 1.0 if nx * c0 + ny * c1 + nz * c2 >= 0.0 else -1.0
+        for a in range(3):
+            ref[a] += points[q, a]
+            ref[3 + a] += sgn * normals[q, a]
+        seen += 1
+    norm = math.sqrt(ref[3] ** 2 + ref[4] ** 2 + ref[5] ** 2)
+    if seen == 0 or norm == 0.0:
+        ref[0:3] = points[idx[r, 0]]
+        ref[3], ref[4], ref[5] = c0, c1, c2
+        ref[6] = ref[7] = 0.0
+        return
+    ref[0:3] /= seen
+    ref[3:6] /= norm
+    height2 = 0.0
+    turned = 0
+    for j in range(n):
+        q = idx[r, j]
+        if not math.isfinite(normals[q, 0]):
+            continue
+        w = 0.0
+        facing = 0.0
+        for a in range(3):
+            w += (points[q, a] - ref[a]) * ref[3 + a]
+            facing += normals[q, a] * ref[3 + a]
+        height2 += w * w
+        if facing < FOLD_COS:
+            turned += 1
+    ref[6] = math.sqrt(height2 / seen)
+    ref[7] = turned / seen
+
+
+@njit(**_OPTS)
+def _folded(points, normals, idx, r, j0, j1, ref):
+    """Whether the ring of neighbours j0..j1-1 of centre r has left the graph of a
+    function over the local plane ``ref`` (see :func:`_local_reference`): more of it
+    than FOLD_FRACTION (plus the share of the smallest neighbourhood) seen more than 45
+    degrees above or below the plane (beyond FOLD_NOISE x the noise height), or with
+    normals turned more than 70 degrees: the far side of a thin part, another sheet, a
+    crease. No model of the normal field fits there, and the residual variance such a
+    ring adds would hide the bias from the ICI test. Judged against the neighbourhood,
+    not the centre alone, so a noisy centre is not taken for a fold."""
+    margin = FOLD_NOISE * ref[6]
     bad = 0
     seen = 0
     for j in range(j0, j1):
@@ -729,14 +782,33 @@ def _folded(points, normals, idx, centres, z, r, j0, j1):
         if not math.isfinite(normals[q, 0]):  # no normal (or a known outlier): not counted
             continue
         seen += 1
-        dx = points[q, 0] - points[i, 0]
-        dy = points[q, 1] - points[i, 1]
-        dz = points[q, 2] - points[i, 2]
-        w = dx * c0 + dy * c1 + dz * c2
-        facing = normals[q, 0] * c0 + normals[q, 1] * c1 + normals[q, 2] * c2
-        if 2.0 * w * w > dx * dx + dy * dy + dz * dz or facing < FOLD_COS:
+        w = 0.0
+        d2 = 0.0
+        facing = 0.0
+        for a in range(3):
+            d = points[q, a] - ref[a]
+            w += d * ref[3 + a]
+            d2 += d * d
+            facing += normals[q, a] * ref[3 + a]
+        lift = max(abs(w) - margin, 0.0)
+        if 2.0 * lift * lift > d2 or facing < FOLD_COS:
             bad += 1
-    return bad > FOLD_FRACTION * seen
+    return bad >= FOLD_MIN_BAD and bad > (FOLD_FRACTION + ref[7]) * seen
+
+
+@njit(**_OPTS)
+def _fold_limit(points, normals, idx, r, ks, ref):
+    """How many of the candidate sizes ``ks`` stay on the graph: the first ring that folds
+    ends them, if the next ring folds too (a fold persists as the neighbourhood grows;
+    a ring that noise alone makes look folded is seldom followed by another)."""
+    stop = len(ks)
+    last = False
+    for c in range(len(ks) - 1, 0, -1):  # from the outside in, remembering the ring beyond
+        folded = _folded(points, normals, idx, r, ks[c - 1], ks[c], ref)
+        if folded and (last or c == len(ks) - 1):
+            stop = c
+        last = folded
+    return stop
 
 
 @njit(**_OPTS, parallel=True)
@@ -761,6 +833,7 @@ def choose_scales(points, normals, idx, h, centres, t1, t2, z, ks, degree, gamma
         R, vec, G, L, acc = _fit_scratch(kmax)
         lo = np.empty(3)
         hi = np.empty(3)
+        ref = np.empty(8)
         for r in range(blk * _BLOCK, min(m, (blk + 1) * _BLOCK)):
             _gather(points, normals, idx, centres, h, t1, t2, z, r, kmax, 0, 1.0, u, v, X, Y, base)
             _monomials(u, v, kmax, degree, R)
@@ -769,9 +842,9 @@ def choose_scales(points, normals, idx, h, centres, t1, t2, z, ks, degree, gamma
             hi[:] = math.inf
             pick = ks[0]
             prev = 0
-            for c in range(len(ks)):
-                if c > 0 and _folded(points, normals, idx, centres, z, r, prev, ks[c]):
-                    break
+            _local_reference(points, normals, idx, r, ks[0], z, ref)
+            stop = _fold_limit(points, normals, idx, r, ks, ref)
+            for c in range(stop):
                 _accumulate(R, X, Y, base, prev, ks[c], degree, vec, G, acc)
                 prev = ks[c]
                 if not _solve(degree, rcond, vec, G, L, acc):

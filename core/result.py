@@ -23,7 +23,8 @@ class CurvatureResult:
     outlier_score : (N,) distance of each point from its neighbours' plane in units of
         their spread; :attr:`outlier` is ``outlier_score > 4``.
     crease : (N,) bool, points where the linear normal model fails (RMS residual of the
-        normal fit > 0.25): sharp edges and corners, flagged rather than trusted.
+        normal fit > 0.25 of the normals' spread, and > 3x the cloud's median residual, so
+        that noise is not taken for edges): sharp edges and corners, flagged rather than trusted.
     method, k, passes, params : what was run (``k`` is an int or "auto").
     neighbours : the :class:`core.Neighbours` used, to pass back for a fast re-estimate.
     """

@@ -11,7 +11,10 @@ still intersect, the larger k only removes noise; the first k whose interval lea
 common intersection shows bias, and the previous k is kept. Noise sets s_k, curvature
 sets the bias, and both are read from the data: nothing is tuned per shape. k also stops
 growing where a ring of new neighbours folds over (see ``kernels._folded``): past the far
-side of a thin part the residuals explode and would hide the bias from the intervals."""
+side of a thin part the residuals explode and would hide the bias from the intervals.
+A fold is judged against the smallest neighbourhood (its centroid, mean normal and noise
+height), not the centre alone, and must persist into the next ring: with noise of a whole
+spacing, a test on the centre's own noisy normal stopped a quarter of the points at 20."""
 
 from __future__ import annotations
 
