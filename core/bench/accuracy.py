@@ -57,7 +57,7 @@ SHAPES = {
     "saddle": ("saddle surface", lambda n, seed: shapes.saddle(n, seed=seed)),
     "ellipsoid": ("ellipsoid (1.5, 1, 0.75; four umbilics)", lambda n, seed: shapes.ellipsoid(n, seed=seed)),
 }
-DEFAULT_LEVELS = (0.0, 0.05, 0.1, 0.2)
+DEFAULT_LEVELS = (0.0, 0.05, 0.1, 0.2, 0.5, 1.0)
 PAPER_K = 15
 #: k grid of the oracle columns (NR, jet): about x1.4 apart
 K_GRID = (15, 20, 30, 45, 60, 90, 130, 180)
@@ -1049,7 +1049,7 @@ def parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--points", type=_positive, default=None, help="points per sample (default 5000; --quick 1000)")
     p.add_argument("--levels", type=_levels, default=None,
-                   help="noise σ as fractions of the mean spacing, comma-separated (default 0,0.05,0.1,0.2; --quick 0.1)")
+                   help="noise σ as fractions of the mean spacing, comma-separated (default 0,0.05,0.1,0.2,0.5,1; --quick 0.1)")
     p.add_argument("--seeds", type=_positive, default=None, help="samples averaged per entry (default 2; --quick 1)")
     p.add_argument("--shapes", type=_shapes, default=tuple(SHAPES),
                    help=f"comma-separated subset of {','.join(SHAPES)} (default all)")
