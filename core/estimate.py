@@ -76,6 +76,10 @@ def estimate(
         "pca" is the paper's weighted PCA (eqs. 13–14); "jet" refines it with the normal
         of an osculating 2-jet (Cazals & Pouget), markedly closer on curved patches.
         "auto" is "pca" for an integer k (the paper's pipeline) and "jet" for k="auto".
+        With k="auto" the initial neighbourhood grows as the square root of the noise,
+        measured from the residuals of 2-jets on 15 neighbours (``params["noise"]``, in
+        units of their radius; ``params["initial_k"]``; see :data:`core.scale.INITIAL_K0`),
+        and in robust mode leaves out the points flagged as outliers.
     orientation : "auto" (keep given normals; orient estimated ones outward), "propagate"
         (Hoppe et al. 1992), "outward", "keep", or a (3,) viewpoint.
     neighbours : :class:`core.Neighbours`, optional, from :func:`build_neighbours` on the
@@ -138,10 +142,28 @@ def estimate(
 
     nb = _neighbours(pts, k_search, neighbours, report.sub(0.0, 0.3))
     idx_p, dist_p = nb.take(min(PCA_K, k_search) if auto else k_search)
+    scores = np.full(n, np.nan)
+    kernels.outlier_scores(pts, np.ascontiguousarray(idx_p), _OUTLIER_FLOOR, scores)
+    outlier = scores > OUTLIER_SCORE
+    robust = opts.get("robust") is not None
+    noise = k_init = None
     if normals is None:
-        nrm, has_normal = pca_normals(pts, idx_p, dist_p, progress=report.sub(0.3, 0.4))
-        if initial == "jet":
-            nrm = jet_normals(pts, nrm, has_normal, idx_p, dist_p, progress=report.sub(0.4, 0.43))
+        nrm, has_normal = pca_normals(pts, idx_p, dist_p, progress=report.sub(0.3, 0.37))
+        if auto:  # initial normals from a neighbourhood that grows with the measured noise
+            jet, height = jet_normals(pts, nrm, has_normal, idx_p, dist_p)
+            clean = ~outlier[idx_p].any(axis=1)  # an outlier inflates the residuals around it
+            noise = scale.noise_ratio(np.where(clean, height, np.nan) if clean.any() else height, dist_p[:, -1])
+            k_init = scale.initial_k(noise, idx_p.shape[1], k_search)
+            shun = robust and outlier.any()  # known outliers stay out of the initial normals
+            if k_init > idx_p.shape[1] or shun:
+                idx_i, dist_i = nb.take_without(k_init, outlier) if shun else nb.take(k_init)
+                nrm, has_normal = pca_normals(pts, idx_i, dist_i, progress=report.sub(0.37, 0.4))
+                if initial == "jet":
+                    nrm, _ = jet_normals(pts, nrm, has_normal, idx_i, dist_i, progress=report.sub(0.4, 0.43))
+            elif initial == "jet":
+                nrm = jet
+        elif initial == "jet":
+            nrm, _ = jet_normals(pts, nrm, has_normal, idx_p, dist_p, progress=report.sub(0.4, 0.43))
         mode = "outward" if isinstance(view, str) and view == "auto" else view
     else:
         nrm, has_normal = normals, np.ones(n, dtype=bool)
@@ -149,10 +171,6 @@ def estimate(
     nrm = orient_normals(pts, nrm, idx_p, mode, ok=has_normal)
     report(0.45, "orientation")
 
-    scores = np.full(n, np.nan)
-    kernels.outlier_scores(pts, np.ascontiguousarray(idx_p), _OUTLIER_FLOOR, scores)
-    outlier = scores > OUTLIER_SCORE
-    robust = opts.get("robust") is not None
 
     fit_start = 0.45
     if auto:
@@ -204,6 +222,7 @@ def estimate(
         orientation=orientation if isinstance(orientation, str) else "viewpoint",
         options=opts, n_points=n, dropped=int(np.count_nonzero(~kept)),
         normals_given=normals is not None, initial=None if normals is not None else initial,
+        initial_k=k_init, noise=noise,
     )
     normals_out = np.where(valid[:, None], refined, nrm)
     crease = valid & crease_initial if auto else _creases(valid, *stats)

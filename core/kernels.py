@@ -868,12 +868,14 @@ def choose_scales(points, normals, idx, h, centres, t1, t2, z, ks, degree, gamma
 
 
 @njit(**_OPTS, parallel=True)
-def jet_normals(points, idx, h, centres, t1, t2, z, rcond, normals, ok):
+def jet_normals(points, idx, h, centres, t1, t2, z, rcond, normals, height, ok):
     """Normals of the osculating 2-jet (Cazals & Pouget 2005) in the frames given.
 
     Fits w = c0 + c1 u + c2 v + c3 u^2 + c4 uv + c5 v^2 to the neighbours (lengths / h) by
     least squares (6x6 normal equations, equilibrated, Cholesky); the normal of the graph
-    at the origin is (-c1, -c2, 1) / |.|. Near-singular systems leave ok False.
+    at the origin is (-c1, -c2, 1) / |.|, ``height`` the RMS residual of w (in length
+    units, corrected for the 6 fitted terms): the noise of the positions along the
+    normal, once the quadric has taken up the curvature. Near-singular systems leave ok False.
     """
     m = len(centres)
     k = idx.shape[1]
@@ -891,6 +893,7 @@ def jet_normals(points, idx, h, centres, t1, t2, z, rcond, normals, ok):
             hi = h[r]
             G[:, :] = 0.0
             b[:] = 0.0
+            ww = 0.0
             for j in range(k):
                 q = idx[r, j]
                 dx = (points[q, 0] - points[i, 0]) / hi
@@ -900,6 +903,7 @@ def jet_normals(points, idx, h, centres, t1, t2, z, rcond, normals, ok):
                 v = dx * t2[r, 0] + dy * t2[r, 1] + dz * t2[r, 2]
                 w = dx * z[r, 0] + dy * z[r, 1] + dz * z[r, 2]
                 _poly_row(u, v, 2, row)
+                ww += w * w
                 for a in range(6):
                     b[a] += row[a] * w
                     for c in range(a + 1):
@@ -911,4 +915,8 @@ def jet_normals(points, idx, h, centres, t1, t2, z, rcond, normals, ok):
             nrm = math.sqrt(1.0 + c1 * c1 + c2 * c2)
             for a in range(3):
                 normals[r, a] = (-c1 * t1[r, a] - c2 * t2[r, a] + z[r, a]) / nrm
+            rss = ww
+            for a in range(6):
+                rss -= x[a] * b[a]
+            height[r] = hi * math.sqrt(max(rss, 0.0) / max(k - 6, 1))
             ok[r] = True

@@ -12,6 +12,8 @@ from ._progress import Progress
 from ._validate import as_points, check_int
 
 _CHUNK = 200_000
+#: rows per step when neighbours are re-ordered (bounds the temporary arrays)
+_ROWS = 65_536
 
 
 @dataclass(frozen=True, eq=False)
@@ -38,6 +40,23 @@ class Neighbours:
         if k > self.k_max:
             raise ValueError(f"k={k} exceeds the cached neighbourhood size k_max={self.k_max}")
         return self.indices[:, :k], self.distances[:, :k]
+
+    def take_without(self, k: int, drop: np.ndarray):
+        """The ``k`` nearest not flagged in ``drop`` (N,) bool, each point itself first;
+        a row short of unflagged neighbours ends with its nearest flagged ones (copies)."""
+        if k > self.k_max:
+            raise ValueError(f"k={k} exceeds the cached neighbourhood size k_max={self.k_max}")
+        n = len(self.indices)
+        idx = np.empty((n, k), dtype=self.indices.dtype)
+        dist = np.empty((n, k), dtype=self.distances.dtype)
+        for start in range(0, n, _ROWS):
+            rows = slice(start, min(n, start + _ROWS))
+            flagged = drop[self.indices[rows]]
+            flagged[:, 0] = False
+            order = np.argsort(flagged, axis=1, kind="stable")[:, :k]
+            idx[rows] = np.take_along_axis(self.indices[rows], order, axis=1)
+            dist[rows] = np.take_along_axis(self.distances[rows], order, axis=1)
+        return idx, dist
 
     def matches(self, points: np.ndarray) -> bool:
         """True when these neighbours were computed on exactly ``points``."""
