@@ -713,7 +713,8 @@ def reading(run_: AccuracyRun) -> list[str]:
                    "of the evaluated points, depending on the case (median k per case in the 'chosen' tables)")
             if min(fr) > 0.8:
                 txt += (f": on these shapes the bias–variance rule almost never stops early, so the default behaves "
-                        f"like a fixed k={kmax} fit on top of initial normals from 15 neighbours")
+                        f"like a fixed k={kmax} fit on top of initial normals from a smaller, noise-set "
+                        "neighbourhood (15 noise-free)")
             out.append(txt + ".")
         parts = []
         for tab in tabs.values():
@@ -728,8 +729,9 @@ def reading(run_: AccuracyRun) -> list[str]:
                          for q, _, _ in QUANTITIES)
             n_cp = sum(1 for t in tabs.values() if t.coupling) * len(QUANTITIES)
             out.append(f"*Fixed k vs auto, initial normals*: `estimate(points, k=K)` computes its initial PCA normals "
-                       "with the same K neighbours, while auto computes its initial normals on 15 neighbours "
-                       f"(`initial=\"auto\"`: PCA, refined by a 2-jet in this core). At σ={cp0['level']:g}, NR at "
+                       "with the same K neighbours, while auto computes its initial normals on a neighbourhood "
+                       "set by the measured noise (`params[\"initial_k\"]`: 15 noise-free, ~28 at σ=0.1; "
+                       f"`initial=\"auto\"`: PCA, refined by a 2-jet in this core). At σ={cp0['level']:g}, NR at "
                        "k = the median auto k with PCA on k neighbours → PCA on 15 neighbours (given as normals) "
                        "(→ auto): " + " | ".join(parts)
                        + f". PCA at 15 is better in {better}/{n_cp} entries"
