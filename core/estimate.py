@@ -148,29 +148,14 @@ def estimate(
     robust = opts.get("robust") is not None
     noise = k_init = None
     if normals is None:
-        nrm, has_normal = pca_normals(pts, idx_p, dist_p, progress=report.sub(0.3, 0.37))
-        if auto:  # initial normals from a neighbourhood that grows with the measured noise
-            jet, height = jet_normals(pts, nrm, has_normal, idx_p, dist_p)
-            clean = ~outlier[idx_p].any(axis=1)  # an outlier inflates the residuals around it
-            noise = scale.noise_ratio(np.where(clean, height, np.nan) if clean.any() else height, dist_p[:, -1])
-            k_init = scale.initial_k(noise, idx_p.shape[1], k_search)
-            shun = robust and outlier.any()  # known outliers stay out of the initial normals
-            if k_init > idx_p.shape[1] or shun:
-                idx_i, dist_i = nb.take_without(k_init, outlier) if shun else nb.take(k_init)
-                nrm, has_normal = pca_normals(pts, idx_i, dist_i, progress=report.sub(0.37, 0.4))
-                if initial == "jet":
-                    nrm, _ = jet_normals(pts, nrm, has_normal, idx_i, dist_i, progress=report.sub(0.4, 0.43))
-            elif initial == "jet":
-                nrm = jet
-        elif initial == "jet":
-            nrm, _ = jet_normals(pts, nrm, has_normal, idx_p, dist_p, progress=report.sub(0.4, 0.43))
+        nrm, has_normal, noise, k_init = _initial_normals(pts, nb, idx_p, dist_p, initial, auto, outlier,
+                                                          robust, k_search, report)
         mode = "outward" if isinstance(view, str) and view == "auto" else view
     else:
         nrm, has_normal = normals, np.ones(n, dtype=bool)
         mode = "keep" if isinstance(view, str) and view == "auto" else view
     nrm = orient_normals(pts, nrm, idx_p, mode, ok=has_normal)
     report(0.45, "orientation")
-
 
     fit_start = 0.45
     if auto:
@@ -231,6 +216,30 @@ def estimate(
         k_point=kc, outlier_score=scores, crease=crease,
         method=m.name, k="auto" if auto else k, passes=passes, params=params, neighbours=nb,
     )
+
+
+def _initial_normals(pts, nb, idx_p, dist_p, initial, auto, outlier, robust, k_max, report):
+    """PCA normals (eqs. 13-14), refined by a 2-jet if ``initial == "jet"``, on ``idx_p``;
+    with k="auto" on a neighbourhood that grows with the noise the 2-jets on ``idx_p``
+    measure (:func:`core.scale.initial_k`), without the known outliers in robust mode.
+    Returns (normals, has_normal, noise, k_init); the last two are None for an integer k."""
+    nrm, ok = pca_normals(pts, idx_p, dist_p, progress=report.sub(0.3, 0.37))
+    if not auto:
+        if initial == "jet":
+            nrm, _ = jet_normals(pts, nrm, ok, idx_p, dist_p, progress=report.sub(0.37, 0.43))
+        return nrm, ok, None, None
+    jet, height = jet_normals(pts, nrm, ok, idx_p, dist_p)
+    clean = ~outlier[idx_p].any(axis=1)  # an outlier inflates the residuals around it
+    noise = scale.noise_ratio(np.where(clean, height, np.nan) if clean.any() else height, dist_p[:, -1])
+    k_init = scale.initial_k(noise, idx_p.shape[1], k_max)
+    shun = robust and outlier.any()
+    if k_init == idx_p.shape[1] and not shun:
+        return (jet if initial == "jet" else nrm), ok, noise, k_init
+    idx, dist = nb.take_without(k_init, outlier) if shun else nb.take(k_init)
+    nrm, ok = pca_normals(pts, idx, dist, progress=report.sub(0.37, 0.4))
+    if initial == "jet":
+        nrm, _ = jet_normals(pts, nrm, ok, idx, dist, progress=report.sub(0.4, 0.43))
+    return nrm, ok, noise, k_init
 
 
 def _creases(valid, rms, spread):
