@@ -800,15 +800,15 @@ def _folded(points, normals, idx, r, j0, j1, ref):
 def _fold_limit(points, normals, idx, r, ks, ref):
     """How many of the candidate sizes ``ks`` stay on the graph: the first ring that folds
     ends them, if the next ring folds too (a fold persists as the neighbourhood grows;
-    a ring that noise alone makes look folded is seldom followed by another)."""
-    stop = len(ks)
-    last = False
-    for c in range(len(ks) - 1, 0, -1):  # from the outside in, remembering the ring beyond
+    a ring that noise alone makes look folded is seldom followed by another). The last
+    ring has no ring beyond it and ends them on its own."""
+    before = False
+    for c in range(1, len(ks)):
         folded = _folded(points, normals, idx, r, ks[c - 1], ks[c], ref)
-        if folded and (last or c == len(ks) - 1):
-            stop = c
-        last = folded
-    return stop
+        if before and folded:
+            return c - 1
+        before = folded
+    return len(ks) - 1 if before else len(ks)
 
 
 @njit(**_OPTS, parallel=True)

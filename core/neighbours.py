@@ -37,15 +37,13 @@ class Neighbours:
 
     def take(self, k: int):
         """Indices and distances of the ``k`` nearest (views, no copy)."""
-        if k > self.k_max:
-            raise ValueError(f"k={k} exceeds the cached neighbourhood size k_max={self.k_max}")
+        self._check_k(k)
         return self.indices[:, :k], self.distances[:, :k]
 
     def take_without(self, k: int, drop: np.ndarray):
         """The ``k`` nearest not flagged in ``drop`` (N,) bool, each point itself first;
         a row short of unflagged neighbours ends with its nearest flagged ones (copies)."""
-        if k > self.k_max:
-            raise ValueError(f"k={k} exceeds the cached neighbourhood size k_max={self.k_max}")
+        self._check_k(k)
         n = len(self.indices)
         idx = np.empty((n, k), dtype=self.indices.dtype)
         dist = np.empty((n, k), dtype=self.distances.dtype)
@@ -57,6 +55,10 @@ class Neighbours:
             idx[rows] = np.take_along_axis(self.indices[rows], order, axis=1)
             dist[rows] = np.take_along_axis(self.distances[rows], order, axis=1)
         return idx, dist
+
+    def _check_k(self, k: int) -> None:
+        if k > self.k_max:
+            raise ValueError(f"k={k} exceeds the cached neighbourhood size k_max={self.k_max}")
 
     def matches(self, points: np.ndarray) -> bool:
         """True when these neighbours were computed on exactly ``points``."""

@@ -10,16 +10,11 @@ from core import scale
 from core.normals import jet_normals, pca_normals
 
 
-def _plane(n=4000, seed=0):
-    rng = np.random.default_rng(seed)
-    return np.column_stack([rng.random((n, 2)) * 4 - 2, np.zeros(n)])
-
-
 @pytest.mark.parametrize("sigma", [0.01, 0.03])
 def test_jet_height_is_the_noise_along_the_normal(sigma):
     """On a plane with Gaussian heights the RMS residual of the 2-jet, corrected for its 6
     fitted terms, is the noise's standard deviation."""
-    pts = _plane()
+    pts = core.shapes.plane(4000, size=4.0).points
     pts[:, 2] = np.random.default_rng(1).normal(scale=sigma, size=len(pts))
     idx, dist = core.build_neighbours(pts, 15).take(15)
     nrm, ok = pca_normals(pts, idx, dist)
@@ -37,7 +32,7 @@ def test_jet_height_vanishes_on_a_clean_curved_surface():
 
 
 def test_take_without_skips_flagged_neighbours_but_keeps_the_point_itself():
-    pts = _plane(500)
+    pts = core.shapes.plane(500, size=4.0).points
     nb = core.build_neighbours(pts, 30)
     drop = np.zeros(len(pts), dtype=bool)
     drop[::7] = True
