@@ -42,14 +42,18 @@ def as_normals(normals, n_points: int, *, name: str = "normals"):
     arr = np.array(arr, dtype=np.float64, order="C", copy=True)
     if not np.isfinite(arr).all():
         raise ValueError(f"{name} contains NaN or inf values")
-    length = np.linalg.norm(arr, axis=1)
+    # scaled by the largest component first: the norm of (1e300, 0, 0) would overflow to inf
+    # (and the normal become 0) and that of (1e-300, 0, 0) underflow to 0
+    big = np.abs(arr).max(axis=1) if len(arr) else np.zeros(0)
+    unit = arr / np.where(big > 0, big, 1.0)[:, None]
+    length = np.linalg.norm(unit, axis=1) * big
     tiny = length < 1e-12
     if tiny.any():
         raise ValueError(
             f"{name} has {int(tiny.sum())} zero-length vector(s) (first at row {int(np.flatnonzero(tiny)[0])}); "
             "pass normals=None to estimate them"
         )
-    return arr / length[:, None]
+    return unit / np.linalg.norm(unit, axis=1)[:, None]
 
 
 def check_int(value, *, name: str, low: int, high: int | None = None) -> int:
@@ -57,6 +61,9 @@ def check_int(value, *, name: str, low: int, high: int | None = None) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
         raise ValueError(f"{name} must be an integer, got {value!r}")
     value = int(value)
+    if high is not None and high < low:
+        raise ValueError(f"{name}={value} cannot be used: it must be at least {low} and at most {high}, "
+                         f"so no value is allowed here")
     if value < low or (high is not None and value > high):
         allowed = f">= {low}" if high is None else f"in [{low}, {high}]"
         raise ValueError(f"{name}={value} is out of range; allowed: {allowed}")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import kernels, scale
+from . import degenerate, kernels, scale
 from ._progress import Progress
 from ._validate import as_normals, as_points, check_int
 from .frame import darboux_frame
@@ -108,6 +108,12 @@ def estimate(
         raise ValueError(f"points must hold at least 3 points, got {n}")
     m = get_method(method)
     opts = check_options(m, options)
+    # harden: a cloud no fit can be made on gets valid=False everywhere, not a crash
+    why = degenerate.reason(pts, m.min_k_for(opts))
+    if why:
+        given = None if normals is None else np.asarray(normals)[kept]
+        return degenerate.invalid_result(pts, given, method=m.name, k=k, passes=passes, why=why,
+                                         params={"dropped": int(np.count_nonzero(~kept))})
     auto = isinstance(k, str) and k == "auto"
     if auto:
         if m.name not in ("nf", "nr"):

@@ -105,6 +105,8 @@ def orient_normals(points, normals, idx, mode, *, ok=None):
 def _outward(points, normals, labels, n_comp):
     """Flip whole components so that most normals point away from the component centroid."""
     have = labels >= 0
+    if not have.any():  # harden: no point has a normal (empty bincounts would be int)
+        return
     lab = labels[have]
     count = np.bincount(lab, minlength=n_comp).astype(float)
     centre = np.stack([np.bincount(lab, points[have, j], n_comp) for j in range(3)], axis=1)
