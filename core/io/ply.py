@@ -16,6 +16,9 @@ from plyfile import PlyData, PlyElement, PlyListProperty, PlyParseError
 
 from .cloud import CloudFileError, RawCloud, find_normals, remaining_bytes
 
+#: numpy type code -> the PLY type name, for messages
+_PLY_NAMES = {"i1": "char", "u1": "uchar", "i2": "short", "u2": "ushort", "i4": "int", "u4": "uint",
+              "f4": "float", "f8": "double"}
 _PLY_DTYPES = {np.dtype(t) for t in ("i1", "u1", "i2", "u2", "i4", "u4", "f4", "f8")}
 
 
@@ -33,10 +36,41 @@ def read_ply(path) -> RawCloud:
             raise CloudFileError(path, f"has no 'vertex' element (elements: {', '.join(names) or 'none'})")
         if any(el.count < 0 for el in header.elements):
             raise CloudFileError(path, "not a valid PLY header: negative element count")
+        _check_declared_size(header, remaining_bytes(f), path)
         props = _read_vertex_fast(f, header, names.index("vertex"), path)
     if props is None:
         props = _read_vertex_plyfile(path)
     return _raw_from_properties(props, path)
+
+
+def _min_row_bytes(element, header) -> int:
+    """The fewest bytes one row of ``element`` can take: its scalars and list counts in
+    binary, or one digit and one separator per property in ASCII."""
+    if header.text:
+        return 2 * len(element.properties)
+    order = header.byte_order
+    size = 0
+    for prop in element.properties:
+        if isinstance(prop, PlyListProperty):
+            size += np.dtype(prop.list_dtype(order)[0]).itemsize
+        else:
+            size += np.dtype(prop.dtype(order)).itemsize
+    return size
+
+
+def _plural(name: str) -> str:
+    return {"vertex": "vertices", "face": "faces", "edge": "edges"}.get(name, f"{name!r} rows")
+
+
+def _check_declared_size(header, have: int, path) -> None:
+    """Refuse element counts the file cannot hold, before anything is allocated for them."""
+    for element in header.elements:
+        need = element.count * _min_row_bytes(element, header)
+        if need > have:
+            raise CloudFileError(
+                path, f"truncated: the header declares {element.count} {_plural(element.name)} (at least "
+                f"{need} bytes) but only {have} bytes follow the header",
+            )
 
 
 def _read_vertex_fast(f, header, index, path):
@@ -77,7 +111,23 @@ def _read_ascii_vertex(f, vertex, path):
         )
     if table.shape[1] != len(vertex.properties):
         return None
-    return {p.name: table[:, i].astype(p.dtype(), copy=False) for i, p in enumerate(vertex.properties)}
+    return {p.name: _ascii_column(table[:, i], p, path) for i, p in enumerate(vertex.properties)}
+
+
+def _ascii_column(values: np.ndarray, prop, path) -> np.ndarray:
+    """An ASCII column in the declared type; integers out of range or with a fraction are refused
+    (a cast would wrap 300 to 44 in a uchar)."""
+    dtype = np.dtype(prop.dtype())
+    if dtype.kind in "iu":
+        info = np.iinfo(dtype)
+        bad = (values < info.min) | (values > info.max) | (values != np.round(values))
+        if bad.any():
+            row = int(np.flatnonzero(bad)[0])
+            raise CloudFileError(
+                path, f"vertex {row}: property {prop.name!r} ({_PLY_NAMES.get(prop.val_dtype, prop.val_dtype)}) has the value {values[row]:g}, "
+                f"not an integer in [{info.min}, {info.max}]",
+            )
+    return values.astype(dtype, copy=False)
 
 
 def _read_vertex_plyfile(path):
@@ -86,7 +136,7 @@ def _read_vertex_plyfile(path):
     except PlyParseError as exc:
         problem = "truncated" if "end-of-file" in str(exc) else "malformed PLY data"
         raise CloudFileError(path, f"{problem}: {exc}") from None
-    except ValueError as exc:
+    except (ValueError, OverflowError) as exc:  # OverflowError: an integer out of its type's range
         raise CloudFileError(path, f"malformed PLY data: {exc}") from None
     return {p.name: vertex.data[p.name] for p in vertex.properties if not isinstance(p, PlyListProperty)}
 

@@ -35,9 +35,29 @@ def read_text(path, fmt: str) -> RawCloud:
 
 
 def _encoding(path) -> str:
+    """UTF-8 (with a BOM) or UTF-16 (with a BOM) as marked; otherwise latin-1, which never
+    fails to decode and reads ASCII numbers right. NUL bytes without a BOM are refused."""
     with open(path, "rb") as f:
-        bom = f.read(3) == b"\xef\xbb\xbf"
-    return "utf-8-sig" if bom else "latin-1"  # numbers are ASCII; latin-1 never fails to decode
+        start = f.read(4096)
+    if start.startswith(b"\xef\xbb\xbf"):
+        return "utf-8-sig"
+    if start.startswith((b"\xff\xfe", b"\xfe\xff")):
+        return "utf-16"
+    if b"\0" in start:
+        kind = "UTF-16 text without a byte-order mark" if start[1::2].count(0) > len(start) // 4 else "binary data"
+        raise CloudFileError(path, f"is not a text point cloud: it looks like {kind} (NUL bytes); "
+                             "save it as UTF-8 or ASCII text")
+    return "latin-1"
+
+
+def _decimal_comma(text: str) -> bool:
+    """Whether ``text`` is numbers with decimal commas ("1,5;2,25;3" or "1,5 2,25 3")."""
+    for delimiter in (";", None):
+        tokens = _split(text, delimiter)
+        if len(tokens) >= 3 and any("," in t for t in tokens) and \
+                all(_is_number(t.replace(",", ".")) and t.count(",") <= 1 for t in tokens):
+            return True
+    return False
 
 
 def _guess_delimiter(text: str) -> str | None:
@@ -78,6 +98,11 @@ def _scan_head(path, encoding) -> dict:
             delimiter = _guess_delimiter(text)
             tokens = _split(text, delimiter)
             if not all(_is_number(t) for t in tokens):
+                if _decimal_comma(text):
+                    raise CloudFileError(
+                        path, f"line {lineno}: {text[:40]!r} uses decimal commas; write numbers with a decimal "
+                        "point (1.5, not 1,5), separated by commas, semicolons or spaces",
+                    )
                 header.append((False, text))
                 continue
             if len(tokens) == 1 and count is None and tokens[0].isdigit() and all(c for c, _ in header):

@@ -1,0 +1,146 @@
+"""Hostile files: values out of their declared type, sizes the file cannot hold, broken
+LAS headers and LAZ data, text in encodings or number styles the reader does not take,
+and degenerate clouds arriving through files."""
+
+from __future__ import annotations
+
+import struct
+import time
+
+import numpy as np
+import pytest
+
+import core
+from core.io import CloudFileError
+
+HEAD = "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+
+
+def _error(path, *parts):
+    with pytest.raises(CloudFileError) as info:
+        core.io.read_cloud(path)
+    for part in (path.name, *parts):
+        assert part in str(info.value), str(info.value)
+
+
+@pytest.mark.parametrize("prop, rows, parts", [
+    ("uchar red", "0 0 0 300\n1 1 1 2\n", ("vertex 0", "'red' (uchar)", "300", "[0, 255]")),
+    ("short s", "0 0 0 4\n1 1 1 40000\n", ("vertex 1", "'s' (short)", "40000", "[-32768, 32767]")),
+    ("int i", "0 0 0 4.5\n1 1 1 4\n", ("vertex 0", "4.5", "not an integer")),
+    ("char c", "0 0 0 -129\n1 1 1 4\n", ("-129", "[-128, 127]")),
+])
+def test_ascii_ply_integers_out_of_range_refused(tmp_path, prop, rows, parts):
+    path = tmp_path / "bad.ply"
+    path.write_text(f"{HEAD}property {prop}\nend_header\n{rows}")
+    _error(path, *parts)
+
+
+def test_ascii_ply_in_range_integers_kept(tmp_path):
+    path = tmp_path / "ok.ply"
+    path.write_text(f"{HEAD}property uchar red\nproperty short s\nend_header\n0 0 0 255 -32768\n1 1 1 0 32767\n")
+    cloud = core.io.read_cloud(path)
+    assert cloud.fields["red"].dtype == np.uint8 and cloud.fields["red"].tolist() == [255, 0]
+    assert cloud.fields["s"].tolist() == [-32768, 32767]
+
+
+def test_ascii_ply_with_list_property_out_of_range_refused(tmp_path):
+    path = tmp_path / "list.ply"
+    path.write_text(f"{HEAD}property uchar red\nproperty list uchar int idx\nend_header\n0 0 0 300 1 5\n1 1 1 2 1 5\n")
+    _error(path, "malformed PLY data", "300")
+
+
+@pytest.mark.parametrize("fmt, element, tail", [
+    ("binary_little_endian", "vertex 1000000000000", b""),
+    ("ascii", "vertex 1000000000000", b"0 0 0\n"),
+    ("binary_little_endian", "vertex 1\nproperty float x\nproperty float y\nproperty float z\nelement face 500000000\n"
+     "property list uchar int vertex_indices", b"\0" * 12),
+])
+def test_ply_declared_size_checked_before_allocating(tmp_path, fmt, element, tail):
+    path = tmp_path / "huge.ply"
+    props = "" if "face" in element else "\nproperty float x\nproperty float y\nproperty float z"
+    path.write_bytes(f"ply\nformat {fmt} 1.0\nelement {element}{props}\nend_header\n".encode() + tail)
+    t0 = time.perf_counter()
+    _error(path, "truncated: the header declares")
+    assert time.perf_counter() - t0 < 1.0
+
+
+def _las(path, scale=(0.01, 0.01, 0.01)):
+    laspy = pytest.importorskip("laspy")
+    header = laspy.LasHeader(point_format=3, version="1.2")
+    header.scales, header.offsets = list(scale), [0.0, 0.0, 0.0]
+    las = laspy.LasData(header)
+    t = np.arange(30.0)
+    las.x, las.y, las.z = np.cos(t), np.sin(t), t / 10
+    las.write(path)
+    return path
+
+
+@pytest.mark.parametrize("value", [0.0, float("nan"), float("inf")])
+def test_las_zero_or_nonfinite_scale_refused(tmp_path, value):
+    data = bytearray(_las(tmp_path / "a.las").read_bytes())
+    data[139:147] = struct.pack("<d", value)  # the y scale factor of a LAS 1.2 header
+    path = tmp_path / "bad.las"
+    path.write_bytes(bytes(data))
+    _error(path, "invalid header", "scales")
+
+
+def test_corrupt_or_truncated_laz_is_one_clear_error(tmp_path):
+    pytest.importorskip("lazrs")
+    data = _las(tmp_path / "a.laz").read_bytes()
+    (tmp_path / "trunc.laz").write_bytes(data[:-40])
+    _error(tmp_path / "trunc.laz", "LAZ")
+    broken = bytearray(data)
+    broken[-60:-20] = bytes(b ^ 0x5A for b in broken[-60:-20])
+    (tmp_path / "corrupt.laz").write_bytes(bytes(broken))
+    _error(tmp_path / "corrupt.laz", "LAZ")
+
+
+CSV = "x,y,z\n0,0,0\n1,0,0\n0,1,0\n1,1,1.5\n"
+
+
+def test_utf16_csv_with_bom_read(tmp_path):
+    for codec in ("utf-16", "utf-16-be"):
+        path = tmp_path / f"{codec}.csv"
+        data = CSV.encode(codec)
+        path.write_bytes(data if codec == "utf-16" else b"\xfe\xff" + data)
+        np.testing.assert_array_equal(core.io.read_cloud(path).points[3], [1, 1, 1.5])
+
+
+def test_utf16_csv_without_bom_named(tmp_path):
+    path = tmp_path / "u16.csv"
+    path.write_bytes(CSV.encode("utf-16-le"))
+    _error(path, "UTF-16")
+
+
+@pytest.mark.parametrize("name, text", [
+    ("semi.csv", "x;y;z\n0,5;0;0\n1;0,25;0\n0;1;0\n"),
+    ("space.xyz", "0,5 0 0\n1 0,25 0\n0 1 0\n"),
+])
+def test_decimal_comma_named(tmp_path, name, text):
+    path = tmp_path / name
+    path.write_text(text)
+    _error(path, "decimal commas")
+
+
+def _write_identical(path, ext):
+    pts = np.full((60, 3), 2.5)
+    if ext == "ply":
+        core.io.write_cloud(path, pts)
+    elif ext == "vtp":
+        pv = pytest.importorskip("pyvista")
+        pv.PolyData(pts).save(path)
+    else:
+        laspy = pytest.importorskip("laspy")
+        las = laspy.LasData(laspy.LasHeader(point_format=3, version="1.2"))
+        las.header.scales, las.header.offsets = [0.01] * 3, [0.0] * 3
+        las.x, las.y, las.z = pts[:, 0], pts[:, 1], pts[:, 2]
+        las.write(path)
+
+
+@pytest.mark.parametrize("ext", ["ply", "vtp", "las"])
+def test_identical_points_through_files_invalid(tmp_path, ext):
+    path = tmp_path / f"same.{ext}"
+    _write_identical(path, ext)
+    cloud = core.io.read_cloud(path)
+    res = core.estimate(cloud.points, cloud.normals, k=10)
+    assert not res.valid.any() and "identical" in res.params["degenerate"]
