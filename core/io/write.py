@@ -34,7 +34,7 @@ def write_cloud(path, points, *, normals=None, fields=None, format=None) -> path
 
     Parameters
     ----------
-    path : str or path-like
+    path : str, path-like, or a binary stream (then ``format`` is required)
     points : (N, 3) array_like
     normals : (N, 3) array_like, optional
     fields : dict, optional
@@ -49,7 +49,8 @@ def write_cloud(path, points, *, normals=None, fields=None, format=None) -> path
     -------
     pathlib.Path
         ``path``. The file is written to a temporary file first and renamed over ``path``:
-        on failure no partial file is left and an existing file is untouched.
+        on failure (or SIGTERM) no partial file is left and an existing file is untouched.
+        A device or FIFO is written into; a read-only existing file is refused.
 
     Raises
     ------
@@ -58,6 +59,12 @@ def write_cloud(path, points, *, normals=None, fields=None, format=None) -> path
     CloudFileError
         Unsupported format, or the file cannot be written (missing directory, permissions).
     """
+    if hasattr(path, "write"):  # an open binary stream, e.g. sys.stdout.buffer
+        if format is None:
+            raise ValueError("format= is required when writing to a stream (e.g. format='csv')")
+        fmt = resolve_format(pathlib.Path("<stream>"), format, WRITE_FORMATS, "writing")
+        _WRITERS[fmt](path, _columns(points, normals, fields))
+        return path
     path = pathlib.Path(os.fspath(path))
     fmt = resolve_format(path, format, WRITE_FORMATS, "writing")
     columns = _columns(points, normals, fields)
