@@ -1,47 +1,43 @@
-"""Command line: ``darboux-cli`` / ``python -m core`` — estimate, info, bench."""
+"""Command line: ``darboux-cli`` / ``python -m core`` — estimate, info, warmup, bench.
+
+The parser is built from one small function per group of options; the commands live in
+:mod:`core._cli_commands`. Exit codes: 0 success, 1 a run failed (out of memory, a
+compiled kernel failed), 2 bad input or arguments, 130 interrupted (Ctrl-C).
+"""
 
 from __future__ import annotations
 
 import argparse
 import sys
-import time
 
-import numpy as np
+from . import __version__, _cli_commands
 
 BENCHES = ("paper", "perf", "accuracy")
+PROG = "darboux-cli"
+_NONE = ("none", "null")
+_BOOLS = {"true": True, "false": False}
 
 
-class _Bar:
-    """A one-line progress bar on stderr (only when it is a terminal or forced)."""
-
-    def __init__(self, enabled: bool):
-        self.enabled = enabled
-        self._last = -1
-
-    def __call__(self, fraction, stage):
-        if not self.enabled:
-            return
-        pct = int(fraction * 100)
-        if pct != self._last:
-            self._last = pct
-            bar = "#" * (pct // 4)
-            sys.stderr.write(f"\r{stage:>12} [{bar:<25}] {pct:3d}%")
-            sys.stderr.flush()
-
-    def close(self):
-        if self.enabled:
-            sys.stderr.write("\n")
+def _parse_value(text: str):
+    """An option value: None/null, true/false, an int, a float, else the string."""
+    low = text.strip().lower()
+    if low in _NONE:
+        return None
+    if low in _BOOLS:
+        return _BOOLS[low]
+    for kind in (int, float):
+        try:
+            return kind(text)
+        except ValueError:
+            pass
+    return text
 
 
 def _parse_option(text):
     key, sep, value = text.partition("=")
-    if not sep:
-        raise argparse.ArgumentTypeError(f"option {text!r} must look like key=value")
-    try:
-        value = int(value)
-    except ValueError:
-        pass
-    return key, value
+    if not sep or not key:
+        raise argparse.ArgumentTypeError(f"option {text!r} must look like key=value (e.g. robust=None, degree=3)")
+    return key.strip(), _parse_value(value)
 
 
 def _k(text):
@@ -63,46 +59,69 @@ def _viewpoint(text):
     return vals
 
 
-def _cmd_estimate(args) -> int:
-    import core
-
-    cloud = core.io.read_cloud(args.input, drop_nonfinite=args.drop_nonfinite)
-    normals = None if args.ignore_normals else cloud.normals
-    orientation = args.viewpoint if args.viewpoint is not None else args.orientation
-    bar = _Bar(not args.quiet and (sys.stderr.isatty() or args.progress))
-    t0 = time.perf_counter()
-    try:
-        res = core.estimate(
-            cloud.points, normals, k=args.k, method=args.method, passes=args.passes,
-            orientation=orientation, options=dict(args.option or []), progress=bar,
-        )
-    finally:
-        bar.close()
-    elapsed = time.perf_counter() - t0
-    out = core.io.write_result(args.output, res)
-    if not args.quiet:
-        v = res.valid
-        print(f"{cloud.path}: {len(res)} points, method {res.method}, k {res.k}, passes {res.passes}, "
-              f"{elapsed:.2f} s")
-        print(f"invalid points: {res.n_invalid}")
-        if v.any():
-            for name in ("mean", "gaussian", "k1", "k2"):
-                f = res.field(name)[v]
-                print(f"  {name:>9}: median {np.median(f):+.4g}  [p5 {np.percentile(f, 5):+.4g}, "
-                      f"p95 {np.percentile(f, 95):+.4g}]")
-        print(f"wrote {out}")
-    return 0
+def _add_io_arguments(e) -> None:
+    e.add_argument("inputs", nargs="+", metavar="input",
+                   help="point cloud file(s) or glob patterns (PLY, XYZ/PTS/TXT/CSV, PCD, OBJ, STL, VTK/VTP, "
+                        "LAS/LAZ); - reads standard input (see --input-format)")
+    e.add_argument("-o", "--output", required=True,
+                   help="output file (.ply, .csv, .xyz, .txt); - writes standard output; with several inputs a "
+                        "directory or a pattern with {stem}, e.g. out/{stem}_k.csv")
+    e.add_argument("--format", dest="out_format", default=None,
+                   help="output format when it cannot come from the extension (default: csv for -, ply in a directory)")
+    e.add_argument("--input-format", default="xyz", help="format of standard input (default xyz)")
+    e.add_argument("--drop-nonfinite", action="store_true", help="drop points with NaN/inf coordinates")
+    e.add_argument("--ignore-normals", action="store_true", help="estimate normals even if the file has some")
 
 
-def _cmd_info(args) -> int:
-    import core
+def _add_method_arguments(e) -> None:
+    from .methods import METHODS
 
-    for path in args.files:
-        info = core.io.describe(path)
-        print(path)
-        for key, val in info.items():
-            print(f"  {key}: {val}")
-    return 0
+    e.add_argument("--k", type=_k, default="auto",
+                   help="neighbours per point, itself included, or auto (default; chosen per point, NF/NR)")
+    e.add_argument("--method", default="nr", choices=list(METHODS), help="estimator (default nr)")
+    e.add_argument("--passes", type=int, default=None, help="normal refinement passes (default: method's)")
+    e.add_argument("--orientation", default="auto", choices=["auto", "propagate", "outward", "keep"])
+    e.add_argument("--viewpoint", type=_viewpoint, default=None, help="orient normals towards x,y,z")
+    e.add_argument("--option", type=_parse_option, action="append",
+                   help="method option key=value; values None, true/false, numbers (e.g. robust=None, degree=3)")
+
+
+def add_execution_arguments(e) -> argparse._ArgumentGroup:
+    """How the estimate runs: progress and output chatter. Tiled / parallel execution
+    options (--tile-points, --workers, --memory, --scheduler) belong in this group."""
+    g = e.add_argument_group("execution")
+    g.add_argument("--progress", action="store_true", help="show the progress bar even when not a terminal")
+    g.add_argument("-q", "--quiet", action="store_true", help="no summary and no progress bar")
+    return g
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog=PROG, description="Normals, principal curvatures and directions of point clouds (Cheng & Zhang 2009).",
+    )
+    p.add_argument("--version", action="version", version=f"{PROG} {__version__}")
+    sub = p.add_subparsers(dest="command", required=True)
+
+    e = sub.add_parser("estimate", help="estimate the Darboux frame of every point and write PLY/CSV")
+    _add_io_arguments(e)
+    _add_method_arguments(e)
+    add_execution_arguments(e)
+    e.set_defaults(func=_cli_commands.cmd_estimate)
+
+    i = sub.add_parser("info", help="describe point cloud files")
+    i.add_argument("files", nargs="+", help="files or glob patterns")
+    i.add_argument("--json", action="store_true", help="print a JSON list of objects")
+    i.set_defaults(func=_cli_commands.cmd_info)
+
+    w = sub.add_parser("warmup", help="compile (and cache) every numerical kernel once")
+    w.add_argument("-q", "--quiet", action="store_true")
+    w.set_defaults(func=_cli_commands.cmd_warmup)
+
+    b = sub.add_parser("bench", help="benchmarks: paper (torus experiment), perf (speed/memory), accuracy")
+    b.add_argument("which", choices=BENCHES)
+    b.add_argument("rest", nargs=argparse.REMAINDER, help="options of the benchmark (see --help)")
+    b.set_defaults(func=_cmd_bench)
+    return p
 
 
 def _cmd_bench(args) -> int:
@@ -112,49 +131,39 @@ def _cmd_bench(args) -> int:
     return module.main(args.rest)
 
 
-def build_parser() -> argparse.ArgumentParser:
-    from core.methods import METHODS
+def _library_error(exc: BaseException) -> str | None:
+    """A one-line description of an error from a compiled library, or None."""
+    top = type(exc).__module__.split(".")[0]
+    if top == "numba":
+        return f"a compiled kernel failed ({type(exc).__name__}): {str(exc).strip().splitlines()[0]}"
+    if top == "lazrs":
+        return f"LAZ decompression failed: {exc}"
+    return None
 
-    p = argparse.ArgumentParser(
-        prog="darboux-cli",
-        description="Normals, principal curvatures and directions of point clouds (Cheng & Zhang 2009).",
-    )
-    sub = p.add_subparsers(dest="command", required=True)
 
-    e = sub.add_parser("estimate", help="estimate the Darboux frame of every point and write PLY/CSV")
-    e.add_argument("input", help="point cloud file (PLY, XYZ/PTS/TXT/CSV, PCD, OBJ, STL, VTK/VTP, LAS/LAZ)")
-    e.add_argument("-o", "--output", required=True, help="output file (.ply or .csv)")
-    e.add_argument("--k", type=_k, default="auto",
-                   help="neighbours per point, itself included, or auto (default; chosen per point, NF/NR)")
-    e.add_argument("--method", default="nr", choices=list(METHODS), help="estimator (default nr)")
-    e.add_argument("--passes", type=int, default=None, help="normal refinement passes (default: method's)")
-    e.add_argument("--orientation", default="auto", choices=["auto", "propagate", "outward", "keep"])
-    e.add_argument("--viewpoint", type=_viewpoint, default=None, help="orient normals towards x,y,z")
-    e.add_argument("--option", type=_parse_option, action="append", help="method option key=value")
-    e.add_argument("--ignore-normals", action="store_true", help="estimate normals even if the file has some")
-    e.add_argument("--drop-nonfinite", action="store_true", help="drop points with NaN/inf coordinates")
-    e.add_argument("--progress", action="store_true", help="show the progress bar even when not a terminal")
-    e.add_argument("-q", "--quiet", action="store_true")
-    e.set_defaults(func=_cmd_estimate)
-
-    i = sub.add_parser("info", help="describe point cloud files")
-    i.add_argument("files", nargs="+")
-    i.set_defaults(func=_cmd_info)
-
-    b = sub.add_parser("bench", help="benchmarks: paper (torus experiment), perf (speed/memory), accuracy")
-    b.add_argument("which", choices=BENCHES)
-    b.add_argument("rest", nargs=argparse.REMAINDER, help="options of the benchmark (see --help)")
-    b.set_defaults(func=_cmd_bench)
-    return p
+def _error(message: str, code: int) -> int:
+    print(f"{PROG}: error: {message}", file=sys.stderr)
+    return code
 
 
 def main(argv=None) -> int:
-    args = build_parser().parse_args(argv)
     try:
+        args = build_parser().parse_args(argv)
         return args.func(args)
+    except KeyboardInterrupt:
+        print(f"{PROG}: interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:  # e.g. `darboux-cli estimate a.ply -o - | head`
+        return 141
+    except MemoryError:
+        return _error("out of memory; try fewer points, a smaller k or --k 15", 1)
     except (ValueError, OSError) as exc:  # bad input: one clear line, no traceback
-        print(f"darboux-cli: error: {exc}", file=sys.stderr)
-        return 2
+        return _error(str(exc), 2)
+    except Exception as exc:
+        message = _library_error(exc)
+        if message is None:
+            raise
+        return _error(message, 1)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -1,0 +1,189 @@
+"""The commands of :mod:`core.cli`: estimate (one or many files, or stdin/stdout), info, warmup."""
+
+from __future__ import annotations
+
+import glob
+import json
+import os
+import pathlib
+import shutil
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+from . import io as cio
+from .io.formats import READ_FORMATS, WRITE_FORMATS, resolve_format
+
+STDIO = "-"
+#: output name in a directory, when several inputs share one -o directory
+DIR_PATTERN = "{stem}_darboux.{ext}"
+SUMMARY_FIELDS = ("mean", "gaussian", "k1", "k2")
+
+
+def expand_inputs(patterns) -> list[str]:
+    """Files named, plus the matches of glob patterns (for shells that do not expand them)."""
+    out = []
+    for pattern in patterns:
+        if pattern == STDIO or os.path.exists(pattern) or not glob.has_magic(pattern):
+            out.append(pattern)
+            continue
+        matches = sorted(glob.glob(pattern, recursive=True))
+        if not matches:
+            raise ValueError(f"no file matches {pattern!r}")
+        out += matches
+    if out.count(STDIO) > 1:
+        raise ValueError("standard input (-) can be read only once")
+    return out
+
+
+def plan_outputs(inputs, output: str, out_format) -> list[tuple[str, str]]:
+    """``[(output path or '-', format)]``, one per input, all checked before any estimate."""
+    fmt_of = (lambda p: resolve_format(pathlib.Path(p), out_format, WRITE_FORMATS, "writing"))
+    if output == STDIO:
+        if len(inputs) > 1:
+            raise ValueError("-o - (standard output) takes a single input")
+        return [(STDIO, resolve_format(pathlib.Path(STDIO), out_format or "csv", WRITE_FORMATS, "writing"))]
+    if len(inputs) == 1 and not os.path.isdir(output):
+        return [(output, fmt_of(output))]
+    if "{stem}" in output:
+        paths = [output.format(stem=_stem(src)) for src in inputs]
+    elif os.path.isdir(output):
+        ext = resolve_format(pathlib.Path("x.ply"), out_format, WRITE_FORMATS, "writing")
+        paths = [os.path.join(output, DIR_PATTERN.format(stem=_stem(src), ext=ext)) for src in inputs]
+    else:
+        raise ValueError(f"with {len(inputs)} inputs, -o must be an existing directory or a pattern with {{stem}}, "
+                         f"got {output!r}")
+    if len(set(paths)) != len(paths):
+        raise ValueError(f"the outputs {output!r} would collide (inputs with the same name); use a {{stem}} pattern")
+    plan = [(path, fmt_of(path)) for path in paths]
+    for src, (dst, _) in zip(inputs, plan):
+        if src != STDIO and os.path.exists(dst) and os.path.samefile(src, dst):
+            raise ValueError(f"output {dst!r} is the input file; choose another name")
+    return plan
+
+
+def _stem(src: str) -> str:
+    return "stdin" if src == STDIO else pathlib.Path(src).stem
+
+
+def read_input(src: str, input_format: str, drop_nonfinite: bool):
+    """The cloud of a file, or of standard input (stored in a temporary file to be parsed)."""
+    if src != STDIO:
+        return cio.read_cloud(src, drop_nonfinite=drop_nonfinite)
+    fmt = resolve_format(pathlib.Path("-"), input_format, READ_FORMATS, "reading")
+    with tempfile.TemporaryDirectory(prefix="darboux-stdin-") as tmp:
+        path = pathlib.Path(tmp) / f"stdin.{fmt}"
+        with open(path, "wb") as f:
+            shutil.copyfileobj(sys.stdin.buffer, f)
+        return cio.read_cloud(path, drop_nonfinite=drop_nonfinite)
+
+
+class ProgressBar:
+    """A tqdm bar with the stage and an ETA on stderr (when it is a terminal or forced)."""
+
+    def __init__(self, enabled: bool, label: str):
+        self._bar = None
+        if enabled:
+            try:
+                from tqdm import tqdm
+            except ImportError:  # the library works without it: no bar
+                return
+            self._bar = tqdm(total=1000, desc=label, leave=False, file=sys.stderr, dynamic_ncols=True,
+                             bar_format="{desc} {percentage:3.0f}%|{bar}| [{elapsed}<{remaining}]")
+
+    def __call__(self, fraction, stage):
+        if self._bar is not None:
+            self._bar.set_postfix_str(stage, refresh=False)
+            self._bar.update(int(fraction * 1000) - self._bar.n)
+
+    def close(self):
+        if self._bar is not None:
+            self._bar.close()
+
+
+def cmd_estimate(args) -> int:
+    inputs = expand_inputs(args.inputs)
+    plan = plan_outputs(inputs, args.output, args.out_format)  # refuse bad outputs before any work
+    options = dict(args.option or [])
+    failed = 0
+    for src, (dst, fmt) in zip(inputs, plan):
+        try:
+            _estimate_one(args, src, dst, fmt, options)
+        except ValueError as exc:  # this file is bad: say so and go on with the others
+            if len(inputs) == 1:
+                raise
+            print(f"darboux-cli: error: {exc}", file=sys.stderr)
+            failed += 1
+    return 2 if failed else 0
+
+
+def _estimate_one(args, src, dst, fmt, options) -> None:
+    import core
+
+    cloud = read_input(src, args.input_format, args.drop_nonfinite)
+    normals = None if args.ignore_normals else cloud.normals
+    orientation = args.viewpoint if args.viewpoint is not None else args.orientation
+    bar = ProgressBar(not args.quiet and (sys.stderr.isatty() or args.progress), _stem(src))
+    t0 = time.perf_counter()
+    try:
+        res = core.estimate(cloud.points, normals, k=args.k, method=args.method, passes=args.passes,
+                            orientation=orientation, options=options, progress=bar)
+    finally:
+        bar.close()
+    elapsed = time.perf_counter() - t0
+    if dst == STDIO:
+        cio.write_result(sys.stdout.buffer, res, format=fmt)
+        sys.stdout.flush()
+    else:
+        cio.write_result(dst, res, format=fmt)
+    if not args.quiet:
+        _summary(res, "stdin" if src == STDIO else cloud.path, elapsed, dst,
+                 sys.stderr if dst == STDIO else sys.stdout)
+
+
+def _summary(res, name, elapsed, dst, out) -> None:
+    print(f"{name}: {len(res)} points, method {res.method}, k {res.k}, passes {res.passes}, {elapsed:.2f} s",
+          file=out)
+    print(f"invalid points: {res.n_invalid}", file=out)
+    if "degenerate" in res.params:
+        print(f"  no estimate: {res.params['degenerate']}", file=out)
+    v = res.valid
+    if v.any():
+        for name in SUMMARY_FIELDS:
+            f = res.field(name)[v]
+            print(f"  {name:>9}: median {np.median(f):+.4g}  [p5 {np.percentile(f, 5):+.4g}, "
+                  f"p95 {np.percentile(f, 95):+.4g}]", file=out)
+    print(f"wrote {'standard output' if dst == STDIO else dst}", file=out)
+
+
+def cmd_info(args) -> int:
+    records, failed = [], 0
+    for path in expand_inputs(args.files):
+        try:
+            records.append(cio.describe(path))
+        except ValueError as exc:
+            print(f"darboux-cli: error: {exc}", file=sys.stderr)
+            failed += 1
+    if args.json:
+        json.dump(records, sys.stdout, indent=2)
+        print()
+    else:
+        for info in records:
+            print(info["path"])
+            for key, val in info.items():
+                if key != "path":
+                    print(f"  {key}: {val}")
+    return 2 if failed else 0
+
+
+def cmd_warmup(args) -> int:
+    """Run tiny estimates of every method, so numba compiles and caches each kernel."""
+    from .warmup import warm_up
+
+    t0 = time.perf_counter()
+    runs = warm_up()
+    if not args.quiet:
+        print(f"compiled {runs} configurations in {time.perf_counter() - t0:.1f} s")
+    return 0

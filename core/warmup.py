@@ -1,0 +1,30 @@
+"""Compile every numerical kernel once (``python -m core warmup``), so that numba's cache
+holds them and the first estimate of a session, or the viewer's first view, starts at once."""
+
+from __future__ import annotations
+
+from . import shapes
+from .estimate import estimate
+from .methods import METHODS
+
+#: option sets beyond each method's defaults that select other compiled code paths
+EXTRA_OPTIONS = {
+    "nr": [{"degree": 1, "robust": None}, {"degree": 2}, {"weights": "uniform", "constraint": "exact"},
+           {"robust": "huber"}],
+    "jet": [{"degree": 2}, {"degree": 3}],
+}
+
+
+def warm_up(n_points: int = 400) -> int:
+    """Run tiny estimates of every method at k=15 (and k="auto" for NF/NR); returns the count."""
+    cloud = shapes.torus(n_points, seed=0)
+    runs = 0
+    for name in METHODS:
+        for options in [{}, *EXTRA_OPTIONS.get(name, [])]:
+            estimate(cloud.points, k=15, method=name, options=options)
+            runs += 1
+        if name in ("nf", "nr"):
+            estimate(cloud.points, method=name)
+            estimate(cloud.points, cloud.normals, method=name)
+            runs += 2
+    return runs
