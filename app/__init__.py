@@ -18,8 +18,18 @@ from pathlib import Path
 
 __all__ = ["RESOURCES", "DEFAULT_CLOUD", "ICON"]
 
-#: Bundled data, next to the package (``<repo>/resources``).
-RESOURCES = Path(__file__).resolve().parent.parent / "resources"
+
+
+def _resources_dir() -> Path:
+    """The bundled data: the package data ``app/resources`` of an installed wheel, else
+    ``<repo>/resources`` of a checkout (or an editable install)."""
+    here = Path(__file__).resolve().parent
+    installed = here / "resources"
+    return installed if (installed / "bunny.ply").is_file() else here.parent / "resources"
+
+
+#: Bundled data (see :func:`_resources_dir`).
+RESOURCES = _resources_dir()
 #: The cloud opened when no file is given: the Stanford bunny.
 DEFAULT_CLOUD = RESOURCES / "bunny.ply"
 #: The application icon.

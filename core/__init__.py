@@ -4,12 +4,16 @@ The augmented Darboux frame (p, n, e1, e2, k1, k2) of every point by the normal-
 method of Cheng & Zhang (2009) and the baselines it is compared with. numpy/scipy only.
 """
 
-from . import io, metrics, noise, shapes
-from ._progress import Cancelled
-from .estimate import estimate
-from .methods import METHODS, Method, get_method
-from .neighbours import Neighbours, build_neighbours
-from .result import FIELDS, CurvatureResult
+from ._numba_cache import configure as _configure_numba_cache
+
+_configure_numba_cache()  # before any kernel is compiled: a read-only install must still import
+
+from . import io, metrics, noise, shapes  # noqa: E402
+from ._progress import Cancelled  # noqa: E402
+from .estimate import estimate  # noqa: E402
+from .methods import METHODS, Method, get_method  # noqa: E402
+from .neighbours import Neighbours, build_neighbours  # noqa: E402
+from .result import FIELDS, CurvatureResult  # noqa: E402
 
 __all__ = [
     "estimate", "build_neighbours", "Neighbours", "CurvatureResult", "METHODS", "Method",

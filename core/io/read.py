@@ -99,8 +99,16 @@ def _path_and_format(path, format):
     return path, fmt
 
 
+#: the extra that installs the optional package a format needs
+_EXTRAS = {"las": "las", "laz": "las", "vtk": "viewer", "vtp": "viewer"}
+
+
 def _read_raw(path, fmt) -> RawCloud:
     try:
         return _READERS[fmt](path)
+    except ModuleNotFoundError as exc:  # an optional reader dependency is not installed
+        extra = _EXTRAS.get(fmt)
+        hint = f"pip install 'darboux[{extra}]'" if extra else f"pip install {exc.name}"
+        raise CloudFileError(path, f"reading .{fmt} files needs the Python package {exc.name!r}; {hint}") from None
     except OSError as exc:
         raise CloudFileError(path, f"cannot be read: {exc.strerror or exc}") from exc
