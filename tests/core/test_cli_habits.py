@@ -173,3 +173,8 @@ def test_parser_has_an_execution_group():
     parser = cli.build_parser()
     estimate = parser._subparsers._group_actions[0].choices["estimate"]
     assert any(g.title == "execution" for g in estimate._action_groups)
+
+
+def test_warmup_runs_every_method(capsys):
+    assert cli.main(["warmup"]) == 0
+    assert "compiled" in capsys.readouterr().out
