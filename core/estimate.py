@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import degenerate, kernels, scale
+from . import degenerate, interop, kernels, scale
 from ._progress import Progress
 from ._validate import as_normals, as_points, check_int
 from .frame import darboux_frame
@@ -56,7 +56,9 @@ def estimate(
 
     Parameters
     ----------
-    points : (N, 3) array_like of finite coordinates.
+    points : (N, 3) array_like of finite coordinates, or a point-cloud object of pyvista,
+        Open3D, trimesh or laspy (or a :class:`core.io.Cloud`), whose normals, if it has
+        any, are used unless ``normals`` is given (see :mod:`core.interop`).
     normals : (N, 3) array_like, optional. Used as the initial normals (their signs are
         kept); otherwise weighted PCA (eqs. 13–14) estimates them.
     k : "auto" (default) or int. Neighbourhood size including the point itself (the paper
@@ -102,6 +104,7 @@ def estimate(
     >>> bool(abs(np.median(r.mean) - 0.5) < 0.01)
     True
     """
+    points, normals = interop.unwrap(points, normals)  # harden: pyvista/Open3D/trimesh/laspy objects
     pts, kept = as_points(points, drop_nonfinite=drop_nonfinite)
     n = len(pts)
     if n < 3:

@@ -92,6 +92,13 @@ class CurvatureResult:
         """Koenderink's curvedness sqrt((k1^2 + k2^2) / 2)."""
         return np.sqrt(0.5 * (self.k1**2 + self.k2**2))
 
+    def to_pyvista(self):
+        """A ``pyvista.PolyData`` with the normals and every per-point field as point data
+        (pyvista is imported only here; see :func:`core.interop.to_pyvista`)."""
+        from .interop import to_pyvista
+
+        return to_pyvista(self)
+
     def field(self, name: str) -> np.ndarray:
         """A scalar field by name: one of :data:`FIELDS`."""
         if name not in FIELDS:
