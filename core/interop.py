@@ -59,7 +59,7 @@ def kind_of(obj) -> str | None:
     return next((k.name for k in KINDS if k.matches(obj)), None)
 
 
-def unwrap(points, normals=None):
+def unwrap(points: Any, normals: Any = None) -> tuple[Any, Any]:
     """``(points, normals)``: arrays from a point-cloud object, or the arguments unchanged.
 
     Given ``normals`` win over the object's own; an object without normals gives None.
@@ -83,7 +83,7 @@ def point_fields(result) -> dict:
     return fields
 
 
-def to_pyvista(result):
+def to_pyvista(result) -> "pyvista.PolyData":  # noqa: F821 - imported lazily
     """A ``pyvista.PolyData`` of the result's points with its normals (active normals
     "Normals") and every per-point field as point data; the active scalars are "mean"."""
     import pyvista as pv

@@ -39,6 +39,8 @@ def _smallest_eigvec_sym3(a00, a01, a02, a11, a12, a22):
     if p2 <= 0.0:
         return q, q, q, math.nan, math.nan, math.nan
     p = math.sqrt(p2 / 6.0)
+    if p * p * p == 0.0:  # harden: underflows for entries below ~1e-103; no direction then
+        return q, q, q, math.nan, math.nan, math.nan
     det = (
         b00 * (b11 * b22 - a12 * a12)
         - a01 * (a01 * b22 - a12 * a02)

@@ -4,13 +4,17 @@ is kept apart from *which estimator*)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable, Union
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.spatial import cKDTree
 
 from ._progress import Progress
 from ._validate import as_points, check_int
 
+#: ``progress(fraction, stage)``; returning False cancels
+ProgressCallback = Callable[[float, str], Union[bool, None]]
 _CHUNK = 200_000
 #: a kd-tree query inside a group of c identical points costs O(c): 80k copies take 17 s
 #: for k=20 (4x per doubling). Larger groups are searched once, on the distinct points.
@@ -76,7 +80,7 @@ class Neighbours:
         return float(np.mean(self.distances[:, 1]))
 
 
-def build_neighbours(points, k_max: int, *, progress=None) -> Neighbours:
+def build_neighbours(points: ArrayLike, k_max: int, *, progress: ProgressCallback | None = None) -> Neighbours:
     """Find the ``k_max`` nearest neighbours of each point with scipy's cKDTree (all cores).
 
     Parameters
@@ -88,6 +92,7 @@ def build_neighbours(points, k_max: int, *, progress=None) -> Neighbours:
     Examples
     --------
     >>> import numpy as np
+from numpy.typing import ArrayLike
     >>> nb = build_neighbours(np.random.default_rng(0).random((100, 3)), 8)
     >>> nb.indices.shape, bool((nb.indices[:, 0] == np.arange(100)).all())
     ((100, 8), True)

@@ -8,6 +8,7 @@ nx/ny/nz or normal_x/... are the normals.
 from __future__ import annotations
 
 import os
+import struct
 
 import numpy as np
 
@@ -18,6 +19,7 @@ def read_las(path) -> RawCloud:
     """Points, normals (from extra bytes, if any) and all other point dimensions."""
     import laspy
 
+    _check_record_counts(path)
     try:
         with laspy.open(path) as reader:
             header = reader.header
@@ -37,7 +39,7 @@ def read_las(path) -> RawCloud:
             las = reader.read()
     except CloudFileError:
         raise
-    except (laspy.errors.LaspyException, ValueError, EOFError) as exc:
+    except (laspy.errors.LaspyException, ValueError, EOFError, struct.error) as exc:
         raise CloudFileError(path, f"not a readable LAS/LAZ file: {exc}") from None
     except RuntimeError as exc:  # lazrs.LazrsError: corrupt or truncated LAZ chunks
         if type(exc).__module__.split(".")[0] != "lazrs":
@@ -63,3 +65,73 @@ def _check_scales(header, path) -> None:
             path, f"invalid header: coordinate scales {scales.tolist()} and offsets {offsets.tolist()} must be finite "
             "and the scales non-zero",
         )
+
+
+#: smallest (extended) variable-length record: its header without data
+_VLR_HEADER, _EVLR_HEADER = 54, 60
+
+
+def _check_record_counts(path) -> None:
+    """Refuse record counts the file cannot hold: laspy would loop over a corrupt count of
+    4 billion variable-length records, reading nothing at the end of the file."""
+    size = os.path.getsize(path)
+    with open(path, "rb") as f:
+        head = f.read(247)
+    if len(head) < 111 or not head.startswith(b"LASF"):
+        return  # not a LAS header: laspy says what is wrong
+    header_size, _, n_vlrs = struct.unpack_from("<HII", head, 94)
+    if header_size + n_vlrs * _VLR_HEADER > size:
+        raise CloudFileError(path, f"corrupt header: it declares {n_vlrs} variable-length records, more than "
+                                   f"the {size} bytes of the file can hold")
+    if head[24:26] >= bytes([1, 4]) and len(head) >= 247:
+        start, n_evlrs = struct.unpack_from("<QI", head, 235)
+        if n_evlrs and start + n_evlrs * _EVLR_HEADER > size:
+            raise CloudFileError(path, f"corrupt header: it declares {n_evlrs} extended variable-length records "
+                                       f"from byte {start}, more than the {size} bytes of the file can hold")
+    _check_laz_sizes(path, head, size)
+
+
+#: user id and record id of the LASzip VLR, and the chunk size meaning "variable chunks"
+_LASZIP = (b"laszip encoded", 22204)
+_VARIABLE_CHUNKS = 0xFFFFFFFF
+#: a chunk buffer above this is refused when it is also larger than the file's points
+_MAX_CHUNK_BYTES = 1 << 30
+
+
+def _check_laz_sizes(path, head: bytes, size: int) -> None:
+    """lazrs aborts the process (not an exception) when it cannot allocate what a corrupt
+    LASzip record asks for: a chunk of 4 billion points, or a chunk table of 4 billion
+    entries. Such sizes are refused here first."""
+    header_size, offset, n_vlrs = struct.unpack_from("<HII", head, 94)
+    record_length = struct.unpack_from("<H", head, 105)[0]
+    n_points = struct.unpack_from("<I", head, 107)[0]
+    if head[24:26] >= bytes([1, 4]) and len(head) >= 255:
+        n_points = max(n_points, struct.unpack_from("<Q", head, 247)[0])
+    with open(path, "rb") as f:
+        chunk_size = _laszip_chunk_size(f, header_size, n_vlrs)
+        if chunk_size is None:
+            return  # not LASzip-compressed
+        if chunk_size != _VARIABLE_CHUNKS and chunk_size > n_points and chunk_size * record_length > _MAX_CHUNK_BYTES:
+            raise CloudFileError(path, f"corrupt LAZ header: chunks of {chunk_size} points for a file of {n_points}")
+        f.seek(offset)
+        table = struct.unpack("<q", f.read(8))[0] if offset + 8 <= size else -1
+        if 0 <= table <= size - 8:
+            f.seek(table)
+            _, n_chunks = struct.unpack("<II", f.read(8))
+            if n_chunks > min(size, n_points + 1):
+                raise CloudFileError(path, f"corrupt LAZ data: a chunk table of {n_chunks} chunks for {n_points} "
+                                           f"points in {size} bytes")
+
+
+def _laszip_chunk_size(f, header_size: int, n_vlrs: int):
+    """The chunk size of the LASzip VLR, or None without one."""
+    f.seek(header_size)
+    for _ in range(n_vlrs):
+        vlr = f.read(_VLR_HEADER)
+        if len(vlr) < _VLR_HEADER:
+            return None
+        user_id, record_id, length = vlr[2:18].split(b"\0")[0], *struct.unpack_from("<HH", vlr, 18)
+        data = f.read(length)
+        if (user_id, record_id) == _LASZIP:
+            return struct.unpack_from("<I", data, 12)[0] if len(data) >= 16 else None
+    return None

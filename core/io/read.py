@@ -28,7 +28,7 @@ _READERS = {
 assert set(_READERS) == {ext[1:] for ext in READ_FORMATS}
 
 
-def read_cloud(path, *, format=None, drop_nonfinite=False) -> Cloud:
+def read_cloud(path: str | os.PathLike, *, format: str | None = None, drop_nonfinite: bool = False) -> Cloud:
     """Read the points (and normals and other per-point properties) of a file.
 
     Parameters
@@ -55,7 +55,7 @@ def read_cloud(path, *, format=None, drop_nonfinite=False) -> Cloud:
     return finalize(_read_raw(path, fmt), path, fmt, drop_nonfinite=drop_nonfinite)
 
 
-def describe(path, *, format=None) -> dict:
+def describe(path: str | os.PathLike, *, format: str | None = None) -> dict:
     """A summary of a point-cloud file, for an ``info`` command.
 
     Returns

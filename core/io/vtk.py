@@ -48,6 +48,8 @@ def _read(reader, path) -> RawCloud:
         vtkOutputWindow.SetInstance(previous)
         vtkLogger.SetStderrVerbosity(vtkLogger.ConvertToVerbosity(verbosity))
     messages = window.GetOutput()
+    if isinstance(messages, bytes):  # VTK hands back bytes when a message is not valid UTF-8
+        messages = messages.decode("utf-8", "replace")
     if "error" in messages.lower():
         raise CloudFileError(path, f"VTK cannot read it: {_first_message(messages)}")
     data = reader.GetOutputDataObject(0)

@@ -7,8 +7,10 @@ import pathlib
 import re
 from collections.abc import Mapping
 from functools import partial
+from typing import BinaryIO
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import ply, text
 from .atomic import atomic_write
@@ -29,7 +31,8 @@ _NAME = re.compile(r'^[^\s,;"#]+$')
 RESULT_FIELDS = ("k1", "k2", "e1", "e2", "gaussian", "mean", "valid")
 
 
-def write_cloud(path, points, *, normals=None, fields=None, format=None) -> pathlib.Path:
+def write_cloud(path: str | os.PathLike | BinaryIO, points: ArrayLike, *, normals: ArrayLike | None = None,
+                fields: Mapping[str, ArrayLike] | None = None, format: str | None = None) -> pathlib.Path | BinaryIO:
     """Write points (with optional normals and per-point fields) to a PLY or text file.
 
     Parameters
@@ -76,7 +79,7 @@ def write_cloud(path, points, *, normals=None, fields=None, format=None) -> path
     return path
 
 
-def write_result(path, result, *, format=None) -> pathlib.Path:
+def write_result(path: str | os.PathLike | BinaryIO, result, *, format: str | None = None) -> pathlib.Path | BinaryIO:
     """Write a curvature result: x y z nx ny nz k1 k2 e1_x e1_y e1_z e2_x e2_y e2_z gaussian mean valid.
 
     ``result`` is anything with the attributes ``points``, ``normals`` and

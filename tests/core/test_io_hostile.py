@@ -144,3 +144,43 @@ def test_identical_points_through_files_invalid(tmp_path, ext):
     cloud = core.io.read_cloud(path)
     res = core.estimate(cloud.points, cloud.normals, k=10)
     assert not res.valid.any() and "identical" in res.params["degenerate"]
+
+
+
+def test_las_with_impossible_vlr_count_refused_at_once(tmp_path):
+    data = bytearray(_las(tmp_path / "a.las").read_bytes())
+    data[100:104] = struct.pack("<I", 0xFFFFFFF0)  # number of variable-length records
+    path = tmp_path / "vlrs.las"
+    path.write_bytes(bytes(data))
+    t0 = time.perf_counter()
+    _error(path, "variable-length records")
+    assert time.perf_counter() - t0 < 1.0  # laspy alone loops over them for minutes
+
+
+def test_las_header_version_garbage_is_a_clear_error(tmp_path):
+    data = bytearray(_las(tmp_path / "a.las").read_bytes())
+    data[24:26] = bytes([1, 5])
+    (tmp_path / "v.las").write_bytes(bytes(data[:400]))
+    _error(tmp_path / "v.las")
+
+
+@pytest.mark.parametrize("where, part", [("table", "chunk table"), ("chunk", "chunks of")])
+def test_laz_sizes_that_would_abort_lazrs_refused(tmp_path, where, part):
+    """lazrs aborts the whole process on these (a failed allocation, not an exception)."""
+    pytest.importorskip("lazrs")
+    data = bytearray(_las(tmp_path / "a.laz").read_bytes())
+    header_size, offset = struct.unpack_from("<HI", data, 94)
+    if where == "table":
+        table = struct.unpack_from("<q", data, offset)[0]
+        struct.pack_into("<I", data, table + 4, 0xFFFFFFF0)  # number of chunks
+    else:
+        struct.pack_into("<I", data, header_size + 54 + 12, 0xFFFFFFF0)  # LASzip VLR: chunk size
+    path = tmp_path / "bad.laz"
+    path.write_bytes(bytes(data))
+    _error(path, part)
+
+
+def test_vtk_with_non_utf8_bytes_is_a_clear_error(tmp_path):
+    path = tmp_path / "bad.vtk"
+    path.write_bytes(b"\x80# vtk DataFile Version 5.1\nvtk output\nASCII\nDATASET POLYDATA\nPOINTS 1 double\n0 0 0\n")
+    _error(path, "VTK cannot read it")
