@@ -65,8 +65,7 @@ def choose_k(points, normals, nb, has_normal, ks, degree, report):
         centres = usable[start:start + _CHUNK]
         chunk = Chunk.build(points, normals, idx_all[centres], dist_all[centres, -1], centres)
         out = np.empty(len(centres), dtype=np.int64)
-        kernels.choose_scales(chunk.points, chunk.normals, chunk.idx, chunk.h, chunk.centres,
-                              chunk.t1, chunk.t2, chunk.z, ks_arr, degree, GAMMA, RCOND_DET, out)
+        kernels.choose_scales(chunk.frames(), ks_arr, degree, GAMMA, RCOND_DET, out)
         chosen[centres] = out
         report(min(len(usable), start + _CHUNK) / max(len(usable), 1), "choosing k")
     return chosen

@@ -72,9 +72,7 @@ def fit(chunk, *, weights="uniform", constraint="project", robust=None, degree=1
     rms = np.full(m, np.nan)
     spread = np.full(m, np.nan)
     ok = np.empty(m, dtype=bool)
-    kernels.normal_fit(
-        chunk.points, chunk.normals, chunk.idx, chunk.kc, chunk.h, chunk.centres, chunk.t1, chunk.t2,
-        chunk.z, THETA_REACH, _WEIGHTS.index(weights), _CONSTRAINTS.index(constraint),
-        _ROBUST.index(robust), IRLS_ITERATIONS, degree, RCOND_DET, mu, W, var, rms, spread, ok,
-    )
+    settings = kernels.Settings(THETA_REACH, _WEIGHTS.index(weights), _CONSTRAINTS.index(constraint),
+                                _ROBUST.index(robust), IRLS_ITERATIONS, degree, RCOND_DET)
+    kernels.normal_fit(chunk.frames(), settings, kernels.Fits(mu, W, var, rms, spread, ok))
     return mu, W, ok, {"var": var, "rms": rms, "spread": spread}
