@@ -13,28 +13,11 @@ from .neighbours import Neighbours, build_neighbours
 from .normals import jet_normals, orient_normals, pca_normals
 from .patch import Chunk
 from .result import CurvatureResult
+from .tuning import (AUTO_PASSES, CREASE_NOISE, CREASE_RATIO, CREASE_SPREAD, MAX_PASSES, OUTLIER_FLOOR, OUTLIER_SCORE,
+                     PASS_DECAY, PCA_K)
 
 _CHUNK = 32_768
 _ORIENTATIONS = ("auto", "propagate", "outward", "keep")
-MAX_PASSES = 20
-#: k of the initial PCA normals when k is chosen automatically (the paper's k)
-PCA_K = 15
-#: most NR refinement passes when k is chosen automatically (paper: 1). With the cubic
-#: normal fit the refined normals are nearly unbiased, so a pass averages noise further,
-#: and the change it makes to the normals decays geometrically. Once a pass changes them
-#: by more than PASS_DECAY x the previous one, it is smoothing the shape itself (the
-#: drift that remains noise-free) and is undone.
-AUTO_PASSES = 4
-PASS_DECAY = 0.7
-#: a point whose distance to its neighbours' plane exceeds this many spreads is an outlier
-OUTLIER_SCORE = 4.0
-#: crease: normals spread (RMS, unit normals) above this and a linear fit leaving more
-#: than CREASE_RATIO of that spread unexplained
-CREASE_SPREAD = 0.15
-CREASE_RATIO = 0.25
-#: ... and a residual above this many times the cloud's median residual (the noise)
-CREASE_NOISE = 3.0
-_OUTLIER_FLOOR = 0.05
 
 
 def estimate(
@@ -143,7 +126,7 @@ def estimate(
     nb = _neighbours(pts, k_search, neighbours, report.sub(0.0, 0.3))
     idx_p, dist_p = nb.take(min(PCA_K, k_search) if auto else k_search)
     scores = np.full(n, np.nan)
-    kernels.outlier_scores(pts, np.ascontiguousarray(idx_p), _OUTLIER_FLOOR, scores)
+    kernels.outlier_scores(pts, np.ascontiguousarray(idx_p), OUTLIER_FLOOR, scores)
     outlier = scores > OUTLIER_SCORE
     robust = opts.get("robust") is not None
     noise = k_init = None

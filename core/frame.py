@@ -16,9 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from .linalg import symmetric_eig2
-
-#: |mu|^2 at or above this leaves no upward normal: the fit is rejected.
-MAX_TILT2 = 1.0 - 1e-6
+from .tuning import MAX_TILT2
 
 
 def darboux_frame(t1, t2, z, mu, W):

@@ -10,6 +10,7 @@ from scipy.spatial import cKDTree
 
 from ._progress import Progress
 from ._validate import as_points, check_int
+from .spacing import mean_spacing
 
 _CHUNK = 200_000
 #: rows per step when neighbours are re-ordered (bounds the temporary arrays)
@@ -68,9 +69,7 @@ class Neighbours:
 
     def mean_spacing(self) -> float:
         """Mean distance to the nearest other point (the unit of relative noise)."""
-        if self.k_max < 2:
-            raise ValueError("mean spacing needs k_max >= 2")
-        return float(np.mean(self.distances[:, 1]))
+        return mean_spacing(self.points, neighbours=self)
 
 
 def build_neighbours(points, k_max: int, *, progress=None) -> Neighbours:

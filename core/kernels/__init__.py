@@ -19,9 +19,9 @@ from .nf import Fits, Frames, Settings, normal_fit
 from .orientation import propagate_orientation
 from .outliers import outlier_scores
 from .pca import pca_normals
-from .scale import choose_scales
+from .scale import ScaleRule, choose_scales
 
 __all__ = [
-    "pca_normals", "jet_normals", "normal_fit", "Frames", "Settings", "Fits", "choose_scales",
+    "pca_normals", "jet_normals", "normal_fit", "Frames", "Settings", "Fits", "ScaleRule", "choose_scales",
     "propagate_orientation", "outlier_scores",
 ]

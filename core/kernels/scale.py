@@ -4,6 +4,7 @@ intervals over nested neighbourhoods, stopped where a ring of neighbours folds o
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
@@ -13,24 +14,31 @@ from .lstsq import CX, CY, accumulate, fit_scratch, monomials, reset, slope_vari
 from .nf import gather
 
 
-#: share of a ring of neighbours that may lie off the tangent graph before k stops growing
-FOLD_FRACTION = 0.2
-#: a neighbour whose normal turns more than 70 degrees from the local mean normal is off the graph
-FOLD_COS = 0.34
-#: heights within this many RMS heights of the smallest neighbourhood are noise, not a fold
-FOLD_NOISE = 3.0
-#: fewest off-graph neighbours that make a fold (a few turned normals in a small ring are noise)
-FOLD_MIN_BAD = 3
+class ScaleRule(NamedTuple):
+    """The choice rule's settings (values and reasons in :mod:`core.tuning`): the
+    ``degree`` of the normal fit, the intervals' width ``gamma`` in standard deviations,
+    the singularity threshold ``rcond``, and the fold test: ``fold_fraction`` (share of a
+    ring allowed off the graph), ``fold_cos`` (a normal turned beyond this cosine is off
+    it), ``fold_noise`` (heights within this many noise heights are not a fold) and
+    ``fold_min_bad`` (fewest off-graph neighbours that make a fold)."""
+
+    degree: int
+    gamma: float
+    rcond: float
+    fold_fraction: float
+    fold_cos: float
+    fold_noise: float
+    fold_min_bad: int
 
 
 @njit(**OPTS)
-def _local_reference(points, normals, idx, r, n, z, ref):
+def _local_reference(points, normals, idx, r, n, z, fold_cos, ref):
     """What a fold of centre r is judged against, from its neighbours 0..n-1 (the
     smallest neighbourhood): ``ref`` gets their centroid (0:3) and mean normal (3:6,
     sign-aligned with z), which unlike the centre's own point and normal are not thrown
     far off by noise, the RMS height of the neighbours over that plane (6: the scale of
     the position noise, plus a little curvature) and the share of them whose normals
-    turn more than FOLD_COS from the mean (7: what the normal noise alone does)."""
+    turn more than ``fold_cos`` from the mean (7: what the normal noise alone does)."""
     c0, c1, c2 = z[r, 0], z[r, 1], z[r, 2]
     ref[:] = 0.0
     seen = 0
@@ -64,23 +72,23 @@ def _local_reference(points, normals, idx, r, n, z, ref):
             w += (points[q, a] - ref[a]) * ref[3 + a]
             facing += normals[q, a] * ref[3 + a]
         height2 += w * w
-        if facing < FOLD_COS:
+        if facing < fold_cos:
             turned += 1
     ref[6] = math.sqrt(height2 / seen)
     ref[7] = turned / seen
 
 
 @njit(**OPTS)
-def _folded(points, normals, idx, r, j0, j1, ref):
+def _folded(points, normals, idx, r, j0, j1, rule, ref):
     """Whether the ring of neighbours j0..j1-1 of centre r has left the graph of a
     function over the local plane ``ref`` (see :func:`_local_reference`): more of it
-    than FOLD_FRACTION (plus the share of the smallest neighbourhood) seen more than 45
-    degrees above or below the plane (beyond FOLD_NOISE x the noise height), or with
+    than ``fold_fraction`` (plus the share of the smallest neighbourhood) seen more than 45
+    degrees above or below the plane (beyond ``fold_noise`` x the noise height), or with
     normals turned more than 70 degrees: the far side of a thin part, another sheet, a
     crease. No model of the normal field fits there, and the residual variance such a
     ring adds would hide the bias from the ICI test. Judged against the neighbourhood,
     not the centre alone, so a noisy centre is not taken for a fold."""
-    margin = FOLD_NOISE * ref[6]
+    margin = rule.fold_noise * ref[6]
     bad = 0
     seen = 0
     for j in range(j0, j1):
@@ -97,20 +105,20 @@ def _folded(points, normals, idx, r, j0, j1, ref):
             d2 += d * d
             facing += normals[q, a] * ref[3 + a]
         lift = max(abs(w) - margin, 0.0)
-        if 2.0 * lift * lift > d2 or facing < FOLD_COS:
+        if 2.0 * lift * lift > d2 or facing < rule.fold_cos:
             bad += 1
-    return bad >= FOLD_MIN_BAD and bad > (FOLD_FRACTION + ref[7]) * seen
+    return bad >= rule.fold_min_bad and bad > (rule.fold_fraction + ref[7]) * seen
 
 
 @njit(**OPTS)
-def _fold_limit(points, normals, idx, r, ks, ref):
+def _fold_limit(points, normals, idx, r, ks, rule, ref):
     """How many of the candidate sizes ``ks`` stay on the graph: the first ring that folds
     ends them, if the next ring folds too (a fold persists as the neighbourhood grows;
     a ring that noise alone makes look folded is seldom followed by another). The last
     ring has no ring beyond it and ends them on its own."""
     before = False
     for c in range(1, len(ks)):
-        folded = _folded(points, normals, idx, r, ks[c - 1], ks[c], ref)
+        folded = _folded(points, normals, idx, r, ks[c - 1], ks[c], rule, ref)
         if before and folded:
             return c - 1
         before = folded
@@ -118,24 +126,24 @@ def _fold_limit(points, normals, idx, r, ks, ref):
 
 
 @njit(**OPTS, parallel=True)
-def choose_scales(f, ks, degree, gamma, rcond, chosen):
+def choose_scales(f, ks, rule, chosen):
     """Intersection of confidence intervals over nested neighbourhoods (see core.scale).
 
     One pass over each centre's ks[-1] neighbours (``f`` a
     :class:`~core.kernels.nf.Frames`): the NF sums (polynomial of ``degree``)
     grow neighbour by neighbour and are solved at each candidate size ks[c] (uniform
     weights, no constraint, lengths in units of h = the distance to the largest
-    neighbourhood). ``chosen`` gets the largest k whose interval [W - gamma s, W + gamma s]
+    neighbourhood). ``chosen`` gets the largest k whose interval [W - gamma s, W + gamma s] (gamma = ``rule.gamma``)
     still meets all previous ones.
     """
     m = len(f.centres)
     n_blocks = (m + BLOCK - 1) // BLOCK
     for blk in prange(n_blocks):
-        _choose_block(f, ks, degree, gamma, rcond, chosen, blk * BLOCK, min(m, (blk + 1) * BLOCK))
+        _choose_block(f, ks, rule, chosen, blk * BLOCK, min(m, (blk + 1) * BLOCK))
 
 
 @njit(**OPTS)
-def _choose_block(f, ks, degree, gamma, rcond, chosen, start, stop):
+def _choose_block(f, ks, rule, chosen, start, stop):
     """:func:`choose_scales` for centres start..stop-1, with scratch arrays allocated once
     (a per-point allocation would cost more than the fits)."""
     kmax = ks[-1]
@@ -144,11 +152,11 @@ def _choose_block(f, ks, degree, gamma, rcond, chosen, start, stop):
     ref = np.empty(8)
     for r in range(start, stop):
         gather(f, r, kmax, 0, 1.0, s)
-        monomials(s.u, s.v, kmax, degree, s.R)
-        reset(degree, s.vec, s.G, s.acc)
-        _local_reference(f.points, f.normals, f.idx, r, ks[0], f.z, ref)
-        stop_c = _fold_limit(f.points, f.normals, f.idx, r, ks, ref)
-        chosen[r] = _ici(s, ks, stop_c, degree, gamma, rcond, bounds)
+        monomials(s.u, s.v, kmax, rule.degree, s.R)
+        reset(rule.degree, s.vec, s.G, s.acc)
+        _local_reference(f.points, f.normals, f.idx, r, ks[0], f.z, rule.fold_cos, ref)
+        stop_c = _fold_limit(f.points, f.normals, f.idx, r, ks, rule, ref)
+        chosen[r] = _ici(s, ks, stop_c, rule.degree, rule.gamma, rule.rcond, bounds)
 
 
 @njit(**OPTS)

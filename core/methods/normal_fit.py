@@ -5,10 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import kernels
-from ..normals import THETA_REACH
-
-#: smallest determinant of the equilibrated 3x3 normal matrix (unit diagonal) accepted
-RCOND_DET = 1e-10
+from ..tuning import IRLS_ITERATIONS, RCOND, THETA_REACH
 
 NF_DOC = (
     "Normal fitting (§4.3–4.4): in a frame at p, fit X ≈ μ1 + w11·u + w12·v and "
@@ -33,8 +30,6 @@ NR_DOC = NF_DOC + " NR repeats the fit with the refined normals of all points (�
 #: accurate (k="auto" uses 3).
 DEFAULTS = {"weights": "uniform", "constraint": "project", "robust": None, "degree": 1}
 DEGREES = (1, 2, 3)
-#: reweighting iterations of the robust fits (each one re-solves the least squares)
-IRLS_ITERATIONS = 2
 _WEIGHTS = ("uniform", "theta")
 _CONSTRAINTS = ("none", "project", "exact")  # kernel codes 0, 1, 2
 _ROBUST = (None, "huber", "tukey")
@@ -73,6 +68,6 @@ def fit(chunk, *, weights="uniform", constraint="project", robust=None, degree=1
     spread = np.full(m, np.nan)
     ok = np.empty(m, dtype=bool)
     settings = kernels.Settings(THETA_REACH, _WEIGHTS.index(weights), _CONSTRAINTS.index(constraint),
-                                _ROBUST.index(robust), IRLS_ITERATIONS, degree, RCOND_DET)
+                                _ROBUST.index(robust), IRLS_ITERATIONS, degree, RCOND)
     kernels.normal_fit(chunk.frames(), settings, kernels.Fits(mu, W, var, rms, spread, ok))
     return mu, W, ok, {"var": var, "rms": rms, "spread": spread}
