@@ -61,6 +61,46 @@ def monomials(u, v, n, degree, R):
 
 
 @njit(cache=True, nogil=True, fastmath=True)
+def _accumulate_linear(R, X, Y, wt, j0, j1, vec, G, acc):
+    """:func:`accumulate` for degree 1: all sums in one pass (short neighbourhoods
+    gain nothing from vectors)."""
+    s1 = su = sv = suu = suv = svv = x0 = x1 = x2 = y0 = y1 = y2 = xx = yy = 0.0
+    for j in range(j0, j1):
+        w = wt[j]
+        uj, vj, Xj, Yj = R[1, j], R[2, j], X[j], Y[j]
+        wu, wv = w * uj, w * vj
+        s1 += w
+        su += wu
+        sv += wv
+        suu += wu * uj
+        suv += wu * vj
+        svv += wv * vj
+        x0 += w * Xj
+        x1 += wu * Xj
+        x2 += wv * Xj
+        y0 += w * Yj
+        y1 += wu * Yj
+        y2 += wv * Yj
+        xx += w * Xj * Xj
+        yy += w * Yj * Yj
+    G[0, 0] += s1
+    G[1, 0] += su
+    G[2, 0] += sv
+    G[1, 1] += suu
+    G[2, 1] += suv
+    G[2, 2] += svv
+    vec[BX, 0] += x0
+    vec[BX, 1] += x1
+    vec[BX, 2] += x2
+    vec[BY, 0] += y0
+    vec[BY, 1] += y1
+    vec[BY, 2] += y2
+    acc[0] += s1
+    acc[1] += xx
+    acc[2] += yy
+
+
+@njit(cache=True, nogil=True, fastmath=True)
 def accumulate(R, X, Y, wt, j0, j1, degree, vec, G, acc):
     """Add neighbours j0..j1-1 to the weighted normal equations of X and Y on the
     monomials R (G lower triangle, right-hand sides vec[BX], vec[BY]) and to acc =
@@ -68,40 +108,7 @@ def accumulate(R, X, Y, wt, j0, j1, degree, vec, G, acc):
     all in one pass for degree 1, whose few sums over short neighbourhoods gain nothing
     from vectors."""
     if degree == 1:
-        s1 = su = sv = suu = suv = svv = x0 = x1 = x2 = y0 = y1 = y2 = xx = yy = 0.0
-        for j in range(j0, j1):
-            w = wt[j]
-            uj, vj, Xj, Yj = R[1, j], R[2, j], X[j], Y[j]
-            wu, wv = w * uj, w * vj
-            s1 += w
-            su += wu
-            sv += wv
-            suu += wu * uj
-            suv += wu * vj
-            svv += wv * vj
-            x0 += w * Xj
-            x1 += wu * Xj
-            x2 += wv * Xj
-            y0 += w * Yj
-            y1 += wu * Yj
-            y2 += wv * Yj
-            xx += w * Xj * Xj
-            yy += w * Yj * Yj
-        G[0, 0] += s1
-        G[1, 0] += su
-        G[2, 0] += sv
-        G[1, 1] += suu
-        G[2, 1] += suv
-        G[2, 2] += svv
-        vec[BX, 0] += x0
-        vec[BX, 1] += x1
-        vec[BX, 2] += x2
-        vec[BY, 0] += y0
-        vec[BY, 1] += y1
-        vec[BY, 2] += y2
-        acc[0] += s1
-        acc[1] += xx
-        acc[2] += yy
+        _accumulate_linear(R, X, Y, wt, j0, j1, vec, G, acc)
         return
     p = n_terms(degree)
     for a in range(p):
