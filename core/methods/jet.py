@@ -20,7 +20,7 @@ DEGREES = (2, 3)
 
 def check(*, degree=2):
     """Refuse a degree the jet does not fit (before any fit runs)."""
-    choose("degree", degree, DEGREES)
+    choose("degree", degree, DEGREES, "2 or 3")
 
 
 def fit(chunk, *, degree=2):

@@ -54,7 +54,7 @@ def test_every_normal_fit_option_is_checked(option, value):
 
 @pytest.mark.parametrize("value", [1, 4, 2.0, "2", True])
 def test_jet_degree_is_checked(value):
-    with pytest.raises(ValueError, match=rf"degree {re.escape(repr(value))} is invalid; must be one of \[2, 3\]"):
+    with pytest.raises(ValueError, match=rf"degree {re.escape(repr(value))} is invalid; must be 2 or 3"):
         core.plan(1000, k=20, method="jet", options={"degree": value})
 
 
