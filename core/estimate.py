@@ -125,7 +125,7 @@ def estimate(
     best = refine(pts, init, outlier, nb, kc, plan, report.sub(0.7 if plan.auto else 0.45, 1.0))
     marks = flags(best.fit, scores, plan, reference)
     report(1.0, "done")
-    return _result(pts, kept, plan, init, best, kc, marks, nb, normals is not None)
+    return _result(pts, kept, plan, stages=(init, best, kc, marks), neighbours=nb, normals_given=normals is not None)
 
 
 def _plan(plan, n, asked, normals_given) -> EstimatePlan:
@@ -141,7 +141,10 @@ def _plan(plan, n, asked, normals_given) -> EstimatePlan:
     return plan
 
 
-def _result(pts, kept, plan, init, best, kc, marks, nb, normals_given) -> CurvatureResult:
+def _result(pts, kept, plan, *, stages, neighbours, normals_given) -> CurvatureResult:
+    """The result and its params from the stages' outputs (initial normals, refined fit,
+    k per point, flags)."""
+    init, best, kc, marks = stages
     fit = best.fit
     params = dict(
         method=plan.method.name, k=plan.k, passes=plan.passes, passes_run=best.passes_run, tol=plan.tol,
@@ -153,5 +156,5 @@ def _result(pts, kept, plan, init, best, kc, marks, nb, normals_given) -> Curvat
     return CurvatureResult(
         points=pts, normals=np.where(fit.valid[:, None], fit.normals, best.input_normals), k1=fit.k1, k2=fit.k2,
         e1=fit.e1, e2=fit.e2, valid=fit.valid, k_point=kc, outlier_score=marks.outlier_score, crease=marks.crease,
-        method=plan.method.name, k=plan.k, passes=plan.passes, params=params, neighbours=nb,
+        method=plan.method.name, k=plan.k, passes=plan.passes, params=params, neighbours=neighbours,
     )

@@ -120,7 +120,7 @@ def crease_reference(pts, nrm, has_normal, nb, plan, report) -> Fit:
     idx_p, dist_p = nb.take(plan.k_initial)
     linear = {**plan.options, "degree": 1, "robust": None}
     kc = np.full(len(pts), idx_p.shape[1])
-    return fit_all(pts, nrm, idx_p, kc, dist_p[:, -1], has_normal, plan.method, linear, report)
+    return fit_all(pts, nrm, idx_p, kc, dist_p[:, -1], has_normal, method=plan.method, options=linear, report=report)
 
 
 def choose_scale(pts, nrm, nb, inliers, plan, report) -> np.ndarray:
@@ -132,8 +132,10 @@ def choose_scale(pts, nrm, nb, inliers, plan, report) -> np.ndarray:
     return scale.choose_k(pts, normals, nb, inliers, plan.candidates, plan.options["degree"], report)
 
 
-def fit_all(pts, nrm, idx, kc, h, has_normal, method, opts, report) -> Fit:
-    """One fit of ``method`` over all points in chunks, through the shared frame path."""
+def fit_all(pts, nrm, idx, kc, h, has_normal, *, method, options, report) -> Fit:
+    """One fit of ``method`` with ``options`` over all points in chunks, through the shared
+    frame path: point i uses its first ``kc[i]`` neighbours in ``idx``, lengths in units of
+    ``h[i]``; points without ``has_normal`` (or h = 0) stay invalid."""
     n = len(pts)
     def vectors():
         return np.full((n, 3), np.nan)
@@ -147,7 +149,7 @@ def fit_all(pts, nrm, idx, kc, h, has_normal, method, opts, report) -> Fit:
         centres = np.arange(start, min(n, start + _CHUNK))
         centres = centres[usable[centres]]
         if len(centres):
-            _fit_chunk(Chunk.build(pts, nrm, idx[centres], h[centres], centres, kc[centres]), method, opts, out)
+            _fit_chunk(Chunk.build(pts, nrm, idx[centres], h[centres], centres, kc[centres]), method, options, out)
         report(min(n, start + _CHUNK) / n, method.name)
     return out
 
@@ -178,7 +180,8 @@ def refine(pts, initial: Initial, outlier, nb, kc, plan, report) -> Refined:
     converged = False
     best = None
     for p in range(n_fits):
-        fit = fit_all(pts, nrm, idx, kc, h, has_normal, plan.method, opts, report.sub(p / n_fits, (p + 1) / n_fits))
+        fit = fit_all(pts, nrm, idx, kc, h, has_normal, method=plan.method, options=opts,
+                      report=report.sub(p / n_fits, (p + 1) / n_fits))
         # mean turn of the normals in this fit: what the adaptive stop and tol compare
         change = _mean_angle_deg(fit.normals, nrm, fit.valid) if plan.adaptive or plan.tol is not None else None
         if plan.adaptive and best is not None and change > PASS_DECAY * last_change:

@@ -88,7 +88,7 @@ def _stage_rows(points, k):
     kc = np.full(len(points), k, dtype=np.int64)
 
     def fit(normals):
-        return fit_all(nb.points, normals, idx, kc, dist[:, -1], ok, m, m.options, Progress())
+        return fit_all(nb.points, normals, idx, kc, dist[:, -1], ok, method=m, options=m.options, report=Progress())
 
     out, dt, mem = _timed(lambda: fit(nrm))
     rows.append(("NF fit + frame, pass 1", dt, mem))
