@@ -13,10 +13,11 @@ from ._progress import Cancelled  # noqa: E402
 from .estimate import estimate  # noqa: E402
 from .methods import METHODS, Method, get_method  # noqa: E402
 from .neighbours import Neighbours, build_neighbours  # noqa: E402
-from .result import FIELDS, CurvatureResult  # noqa: E402
+from .planning import EstimatePlan, plan  # noqa: E402
+from .result import SCALAR_FIELDS, CurvatureResult  # noqa: E402
 
 __all__ = [
-    "estimate", "build_neighbours", "Neighbours", "CurvatureResult", "METHODS", "Method",
-    "get_method", "Cancelled", "FIELDS", "shapes", "noise", "metrics", "io",
+    "estimate", "plan", "EstimatePlan", "build_neighbours", "Neighbours", "CurvatureResult", "METHODS", "Method",
+    "get_method", "Cancelled", "SCALAR_FIELDS", "shapes", "noise", "metrics", "io",
 ]
 __version__ = "0.1.0"

@@ -40,13 +40,23 @@ def expand_inputs(patterns) -> list[str]:
 
 def plan_outputs(inputs, output: str, out_format) -> list[tuple[str, str]]:
     """``[(output path or '-', format)]``, one per input, all checked before any estimate."""
-    fmt_of = (lambda p: resolve_format(pathlib.Path(p), out_format, WRITE_FORMATS, "writing"))
     if output == STDIO:
         if len(inputs) > 1:
             raise ValueError("-o - (standard output) takes a single input")
         return [(STDIO, resolve_format(pathlib.Path(STDIO), out_format or "csv", WRITE_FORMATS, "writing"))]
+    paths = _output_paths(inputs, output, out_format)
+    plan = [(path, resolve_format(pathlib.Path(path), out_format, WRITE_FORMATS, "writing")) for path in paths]
+    for src, (dst, _) in zip(inputs, plan):
+        if src != STDIO and os.path.exists(dst) and os.path.samefile(src, dst):
+            raise ValueError(f"output {dst!r} is the input file; choose another name")
+    return plan
+
+
+def _output_paths(inputs, output: str, out_format) -> list[str]:
+    """One output path per input: ``output`` itself, a ``{stem}`` pattern filled in, or
+    names in a directory."""
     if len(inputs) == 1 and not os.path.isdir(output):
-        return [(output, fmt_of(output))]
+        return [output]
     if "{stem}" in output:
         paths = [output.format(stem=_stem(src)) for src in inputs]
     elif os.path.isdir(output):
@@ -57,11 +67,7 @@ def plan_outputs(inputs, output: str, out_format) -> list[tuple[str, str]]:
                          f"got {output!r}")
     if len(set(paths)) != len(paths):
         raise ValueError(f"the outputs {output!r} would collide (inputs with the same name); use a {{stem}} pattern")
-    plan = [(path, fmt_of(path)) for path in paths]
-    for src, (dst, _) in zip(inputs, plan):
-        if src != STDIO and os.path.exists(dst) and os.path.samefile(src, dst):
-            raise ValueError(f"output {dst!r} is the input file; choose another name")
-    return plan
+    return paths
 
 
 def _stem(src: str) -> str:

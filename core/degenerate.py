@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._validate import as_normals, check_int
+from .methods import check_options, get_method
 from .result import CurvatureResult
 
 #: largest |coordinate|: the fits sum squared distances over up to 226 neighbours and cubic
@@ -53,3 +54,21 @@ def invalid_result(points, normals, *, method: str, k, passes, why: str, params:
         params={**params, "method": method, "k": k, "passes": passes, "n_points": n, "degenerate": why},
         k_point=np.full(n, -1), outlier_score=np.full(n, np.nan), crease=np.zeros(n, dtype=bool),
     )
+
+
+def invalid_if_degenerate(points, kept, normals, asked: dict, plan=None) -> CurvatureResult | None:
+    """For :func:`core.estimate`: the all-invalid result when no fit can be made on
+    ``points`` (validated, after dropping the rows not ``kept``), else None. ``asked``
+    holds estimate's k, method, passes and options; a given ``plan`` overrides them."""
+    if plan is not None:
+        method, options, k, passes = plan.method, dict(plan.options), plan.k, plan.passes
+    else:
+        method = get_method(asked["method"])
+        options = check_options(method, asked["options"])
+        k, passes = asked["k"], asked["passes"]
+    why = reason(points, method.min_k_for(options))
+    if why is None:
+        return None
+    given = None if normals is None else np.asarray(normals)[kept]
+    return invalid_result(points, given, method=method.name, k=k, passes=passes, why=why,
+                          params={"dropped": int(np.count_nonzero(~kept))})

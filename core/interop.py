@@ -73,23 +73,23 @@ def unwrap(points: Any, normals: Any = None) -> tuple[Any, Any]:
     return kind.points(points), (None if own is None else np.asarray(own))
 
 
-def point_fields(result) -> dict:
-    """Every per-point array of a :class:`core.CurvatureResult`, by name."""
-    from .result import FIELDS
-
-    fields = {name: getattr(result, attr) for name, attr in FIELDS.items()}
+def point_fields(result, scalars: dict) -> dict:
+    """Every per-point array of a :class:`core.CurvatureResult`, by name; ``scalars`` maps
+    the scalar fields' names to attributes (:data:`core.result.SCALAR_FIELDS`)."""
+    fields = {name: getattr(result, attr) for name, attr in scalars.items()}
     for name in ("k1", "k2", "e1", "e2", "valid", "crease", "outlier"):
         fields[name] = getattr(result, name)
     return fields
 
 
-def to_pyvista(result) -> "pyvista.PolyData":  # noqa: F821 - imported lazily
+def to_pyvista(result, scalars: dict) -> "pyvista.PolyData":  # noqa: F821 - imported lazily
     """A ``pyvista.PolyData`` of the result's points with its normals (active normals
-    "Normals") and every per-point field as point data; the active scalars are "mean"."""
+    "Normals") and every per-point field as point data (see :func:`point_fields`); the
+    active scalars are "mean"."""
     import pyvista as pv
 
     cloud = pv.PolyData(np.asarray(result.points, dtype=np.float64))
-    for name, values in point_fields(result).items():
+    for name, values in point_fields(result, scalars).items():
         cloud.point_data[name] = np.asarray(values)
     cloud.point_data["Normals"] = np.asarray(result.normals)
     cloud.point_data.active_normals_name = "Normals"

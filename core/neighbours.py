@@ -12,6 +12,7 @@ from scipy.spatial import cKDTree
 
 from ._progress import Progress
 from ._validate import as_points, check_int
+from .spacing import mean_spacing
 
 #: ``progress(fraction, stage)``; returning False cancels
 ProgressCallback = Callable[[float, str], Union[bool, None]]
@@ -75,9 +76,7 @@ class Neighbours:
 
     def mean_spacing(self) -> float:
         """Mean distance to the nearest other point (the unit of relative noise)."""
-        if self.k_max < 2:
-            raise ValueError("mean spacing needs k_max >= 2")
-        return float(np.mean(self.distances[:, 1]))
+        return mean_spacing(self.points, neighbours=self)
 
 
 def build_neighbours(points: ArrayLike, k_max: int, *, progress: ProgressCallback | None = None) -> Neighbours:
@@ -92,12 +91,19 @@ def build_neighbours(points: ArrayLike, k_max: int, *, progress: ProgressCallbac
     Examples
     --------
     >>> import numpy as np
-from numpy.typing import ArrayLike
     >>> nb = build_neighbours(np.random.default_rng(0).random((100, 3)), 8)
     >>> nb.indices.shape, bool((nb.indices[:, 0] == np.arange(100)).all())
     ((100, 8), True)
     """
     pts, _ = as_points(points)
+    nb = search_neighbours(pts, k_max, progress=progress)
+    pts.setflags(write=False)
+    return nb
+
+
+def search_neighbours(pts: np.ndarray, k_max: int, *, progress=None) -> Neighbours:
+    """:func:`build_neighbours` on points already validated (a C-contiguous (N, 3)
+    float64 array, e.g. from :func:`core.estimate`), which are kept, not copied."""
     k_max = check_int(k_max, name="k_max", low=1, high=len(pts))
     report = Progress(progress)
     report(0.0, "neighbours")
@@ -109,7 +115,6 @@ from numpy.typing import ArrayLike
         _query_distinct(pts, idx, dist, report)
     else:
         _query_with_duplicates(pts, groups, idx, dist, report)
-    pts.setflags(write=False)
     idx.setflags(write=False)
     dist.setflags(write=False)
     return Neighbours(points=pts, indices=idx, distances=dist)

@@ -17,34 +17,7 @@ from .cloud import CloudFileError, RawCloud, find_normals, split_components
 
 def read_las(path) -> RawCloud:
     """Points, normals (from extra bytes, if any) and all other point dimensions."""
-    import laspy
-
-    _check_record_counts(path)
-    try:
-        with laspy.open(path) as reader:
-            header = reader.header
-            compressed = header.are_points_compressed
-            if compressed and not laspy.LazBackend.detect_available():
-                raise CloudFileError(
-                    path, "is LAZ-compressed but no LAZ backend is installed; run `pip install lazrs` "
-                    "(or `pip install laspy[lazrs]`)"
-                )
-            _check_scales(header, path)
-            need = header.offset_to_point_data + header.point_count * header.point_format.size
-            if not compressed and os.path.getsize(path) < need:
-                raise CloudFileError(
-                    path, f"truncated: the header declares {header.point_count} points ({need} bytes) but the file "
-                    f"has {os.path.getsize(path)} bytes"
-                )
-            las = reader.read()
-    except CloudFileError:
-        raise
-    except (laspy.errors.LaspyException, ValueError, EOFError, struct.error) as exc:
-        raise CloudFileError(path, f"not a readable LAS/LAZ file: {exc}") from None
-    except RuntimeError as exc:  # lazrs.LazrsError: corrupt or truncated LAZ chunks
-        if type(exc).__module__.split(".")[0] != "lazrs":
-            raise
-        raise CloudFileError(path, f"corrupt or truncated LAZ data: {exc}") from None
+    las = _read_las_data(path)
     points = np.column_stack([np.asarray(las.x), np.asarray(las.y), np.asarray(las.z)])
     names = [n for n in las.point_format.dimension_names if n not in ("X", "Y", "Z")]
     nrm = find_normals(names)
@@ -54,6 +27,42 @@ def read_las(path) -> RawCloud:
         if name not in (nrm or ()):
             fields.update(split_components(name, np.array(las[name])))
     return RawCloud(points, normals, fields)
+
+
+def _read_las_data(path):
+    """The ``laspy.LasData``, every problem a :class:`CloudFileError`."""
+    import laspy
+
+    _check_record_counts(path)
+    try:
+        with laspy.open(path) as reader:
+            _check_header(reader.header, path, laspy)
+            return reader.read()
+    except CloudFileError:
+        raise
+    except (laspy.errors.LaspyException, ValueError, EOFError, struct.error) as exc:
+        raise CloudFileError(path, f"not a readable LAS/LAZ file: {exc}") from None
+    except RuntimeError as exc:  # lazrs.LazrsError: corrupt or truncated LAZ chunks
+        if type(exc).__module__.split(".")[0] != "lazrs":
+            raise
+        raise CloudFileError(path, f"corrupt or truncated LAZ data: {exc}") from None
+
+
+def _check_header(header, path, laspy) -> None:
+    """A LAZ backend for compressed points, usable scales, and enough bytes for the points."""
+    compressed = header.are_points_compressed
+    if compressed and not laspy.LazBackend.detect_available():
+        raise CloudFileError(
+            path, "is LAZ-compressed but no LAZ backend is installed; run `pip install lazrs` "
+            "(or `pip install 'darboux[las]'`)"
+        )
+    _check_scales(header, path)
+    need = header.offset_to_point_data + header.point_count * header.point_format.size
+    if not compressed and os.path.getsize(path) < need:
+        raise CloudFileError(
+            path, f"truncated: the header declares {header.point_count} points ({need} bytes) but the file "
+            f"has {os.path.getsize(path)} bytes"
+        )
 
 
 def _check_scales(header, path) -> None:

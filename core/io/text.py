@@ -80,6 +80,17 @@ def _is_number(token: str) -> bool:
     return True
 
 
+def _header_line(path, lineno: int, text: str) -> tuple[bool, str]:
+    """A non-numeric line before the data, as a header entry; numbers with decimal commas
+    are not a header but a number style the reader does not take: refused by name."""
+    if _decimal_comma(text):
+        raise CloudFileError(
+            path, f"line {lineno}: {text[:40]!r} uses decimal commas; write numbers with a decimal "
+            "point (1.5, not 1,5), separated by commas, semicolons or spaces",
+        )
+    return (False, text)
+
+
 def _scan_head(path, encoding) -> dict:
     """Find the first data line, the separator, the column count, names and a count line."""
     count = count_line = None
@@ -98,12 +109,7 @@ def _scan_head(path, encoding) -> dict:
             delimiter = _guess_delimiter(text)
             tokens = _split(text, delimiter)
             if not all(_is_number(t) for t in tokens):
-                if _decimal_comma(text):
-                    raise CloudFileError(
-                        path, f"line {lineno}: {text[:40]!r} uses decimal commas; write numbers with a decimal "
-                        "point (1.5, not 1,5), separated by commas, semicolons or spaces",
-                    )
-                header.append((False, text))
+                header.append(_header_line(path, lineno, text))
                 continue
             if len(tokens) == 1 and count is None and tokens[0].isdigit() and all(c for c, _ in header):
                 count, count_line = int(tokens[0]), lineno
