@@ -180,17 +180,23 @@ def _raw_from_table(table, names, fmt) -> RawCloud:
         nrm = find_normals(lower)
         nrm_idx = [lower.index(n) for n in nrm] if nrm else []
     else:
-        xyz = [0, 1, 2]
-        nrm_idx = [3, 4, 5] if ncols >= 6 and not (fmt == "pts" and ncols == 7) else []
-        if names is None:
-            names = [f"col{i}" for i in range(ncols)]
-            if fmt == "pts" and ncols in (4, 7):
-                names[3:] = ["intensity", "red", "green", "blue"][: ncols - 3]
+        xyz, nrm_idx, names = _by_position(ncols, names, fmt)
     points = table[:, xyz]
     normals = table[:, nrm_idx] if nrm_idx else None
     used = set(xyz) | set(nrm_idx)
     fields = {names[i]: table[:, i] for i in range(ncols) if i not in used}
     return RawCloud(points, normals, fields)
+
+
+def _by_position(ncols: int, names, fmt: str):
+    """Without x/y/z names: x y z first, then nx ny nz if there are 6 or more columns (not
+    in a 7-column .pts: x y z intensity red green blue); column names col0, col1..."""
+    nrm_idx = [3, 4, 5] if ncols >= 6 and not (fmt == "pts" and ncols == 7) else []
+    if names is None:
+        names = [f"col{i}" for i in range(ncols)]
+        if fmt == "pts" and ncols in (4, 7):
+            names[3:] = ["intensity", "red", "green", "blue"][: ncols - 3]
+    return [0, 1, 2], nrm_idx, names
 
 
 def _row_format(values: np.ndarray) -> tuple[str, str]:

@@ -34,7 +34,22 @@ def read_vtp(path) -> RawCloud:
 
 
 def _read(reader, path) -> RawCloud:
+    _update_quietly(reader, path)
+    data = reader.GetOutputDataObject(0)
+    if data is None or not hasattr(data, "GetPoints"):
+        kind = "nothing" if data is None else data.GetClassName()
+        raise CloudFileError(path, f"contains {kind}, not a point set")
+    if data.GetPoints() is None or data.GetNumberOfPoints() == 0:
+        return RawCloud(np.empty((0, 3)), None, {})
     from vtkmodules.util.numpy_support import vtk_to_numpy
+
+    points = vtk_to_numpy(data.GetPoints().GetData())
+    normals, fields = _point_data(data.GetPointData())
+    return RawCloud(np.array(points), None if normals is None else np.array(normals), fields)
+
+
+def _update_quietly(reader, path) -> None:
+    """Run the reader with VTK's messages captured; an error message is a CloudFileError."""
     from vtkmodules.vtkCommonCore import vtkLogger, vtkOutputWindow, vtkStringOutputWindow
 
     reader.SetFileName(str(path))
@@ -52,14 +67,13 @@ def _read(reader, path) -> RawCloud:
         messages = messages.decode("utf-8", "replace")
     if "error" in messages.lower():
         raise CloudFileError(path, f"VTK cannot read it: {_first_message(messages)}")
-    data = reader.GetOutputDataObject(0)
-    if data is None or not hasattr(data, "GetPoints"):
-        kind = "nothing" if data is None else data.GetClassName()
-        raise CloudFileError(path, f"contains {kind}, not a point set")
-    if data.GetPoints() is None or data.GetNumberOfPoints() == 0:
-        return RawCloud(np.empty((0, 3)), None, {})
-    points = vtk_to_numpy(data.GetPoints().GetData())
-    point_data = data.GetPointData()
+
+
+def _point_data(point_data):
+    """``(normals or None, fields)``: the normals array (or a 3-component array called
+    normals) and every other numeric point-data array."""
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+
     normals_array = point_data.GetNormals()
     normals = None if normals_array is None else vtk_to_numpy(normals_array)
     fields = {}
@@ -73,7 +87,7 @@ def _read(reader, path) -> RawCloud:
             normals = values
             continue
         fields.update(split_components(name, values))
-    return RawCloud(np.array(points), None if normals is None else np.array(normals), fields)
+    return normals, fields
 
 
 def _first_message(text: str) -> str:

@@ -115,23 +115,32 @@ def _columns(points, normals, fields) -> list:
             raise ValueError(f"normals must have shape ({n}, 3) to match points, got shape {nrm.shape}")
         nrm = nrm.astype(np.float64)
         columns += [(c, nrm[:, i]) for i, c in enumerate(("nx", "ny", "nz"))]
+    return columns + _field_columns(fields, n)
+
+
+def _field_columns(fields, n: int) -> list:
+    """The columns of the extra per-point ``fields`` (name -> (N,) or (N, 3) array)."""
     if fields is not None and not isinstance(fields, Mapping):
         raise ValueError(f"fields must be a dict of name -> array, got {type(fields).__name__}")
     extra = []
     for name, values in (fields or {}).items():
-        if not isinstance(name, str) or not _NAME.match(name):
-            raise ValueError(f"field name {name!r} is invalid; use a non-empty name without whitespace or ,;\"#")
-        arr = _numeric(values, f"field {name!r}", f"({n},) or ({n}, 3)")
-        if arr.dtype == np.float16:
-            arr = arr.astype(np.float32)
-        if arr.shape == (n,):
-            extra.append((name, arr.copy()))
-        elif arr.shape == (n, 3):
-            extra += [(f"{name}_{c}", arr[:, i].copy()) for i, c in enumerate("xyz")]
-        else:
-            raise ValueError(f"field {name!r} must have shape ({n},) or ({n}, 3), got shape {arr.shape}")
+        extra += _field_column(name, values, n)
     names = [name for name, _ in extra]
     bad = sorted({name for name in names if names.count(name) > 1 or name in _RESERVED})
     if bad:
         raise ValueError(f"field names {', '.join(bad)} clash with x y z nx ny nz or with each other")
-    return columns + extra
+    return extra
+
+
+def _field_column(name, values, n: int) -> list:
+    """One field as one column, or three (name_x, name_y, name_z) for an (N, 3) array."""
+    if not isinstance(name, str) or not _NAME.match(name):
+        raise ValueError(f"field name {name!r} is invalid; use a non-empty name without whitespace or ,;\"#")
+    arr = _numeric(values, f"field {name!r}", f"({n},) or ({n}, 3)")
+    if arr.dtype == np.float16:
+        arr = arr.astype(np.float32)
+    if arr.shape == (n,):
+        return [(name, arr.copy())]
+    if arr.shape == (n, 3):
+        return [(f"{name}_{c}", arr[:, i].copy()) for i, c in enumerate("xyz")]
+    raise ValueError(f"field {name!r} must have shape ({n},) or ({n}, 3), got shape {arr.shape}")
