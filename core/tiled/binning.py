@@ -1,0 +1,67 @@
+"""The spatial pre-pass: plan the tiles from a sample, then bin every point into its
+tile's file on disk, so that each task reads only its own tile and its neighbours'."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .plan import SAMPLE, TilePlan, make_plan
+from .store import BIN_DTYPE, TileStore
+
+
+def plan_tiles(source, store: TileStore, tile_points: int, progress) -> TilePlan:
+    """Load the saved plan, or sample every n-th point of ``source`` and make one."""
+    if store.plan_path.exists():
+        return TilePlan.load(store.plan_path)
+    stride = max(1, source.count // SAMPLE)
+    parts, lo, hi = [], np.full(3, np.inf), np.full(3, -np.inf)
+    for start, pts, _ in source.chunks():
+        first = (-start) % stride
+        parts.append(pts[first::stride])
+        _check_finite(source, start, pts)
+        progress((start + len(pts)) / source.count, "sampling")
+    sample = np.concatenate(parts)
+    plan = make_plan(sample, source.count, tile_points)
+    tmp = store.plan_path.with_name("plan.tmp.npz")
+    plan.save(tmp)
+    tmp.replace(store.plan_path)
+    return plan
+
+
+def bin_points(source, store: TileStore, plan: TilePlan, progress) -> list:
+    """Write each tile's own points (in input order) to its bin file; returns the counts.
+
+    Redone from scratch unless a previous run completed it (``bins/done.json``).
+    """
+    if store.binned():
+        return store.bin_counts()
+    counts = np.zeros(plan.n_tiles, dtype=np.int64)
+    files = [open(store.bin_path(t), "wb") for t in range(plan.n_tiles)]
+    try:
+        for start, pts, nrm in source.chunks():
+            rec = np.empty(len(pts), dtype=BIN_DTYPE)
+            rec["xyz"] = pts
+            rec["n"] = np.nan if nrm is None else nrm
+            rec["index"] = np.arange(start, start + len(pts))
+            tile = plan.assign(pts)
+            order = np.argsort(tile, kind="stable")
+            cuts = np.searchsorted(tile[order], np.arange(plan.n_tiles + 1))
+            for t in np.flatnonzero(np.diff(cuts)):
+                rec[order[cuts[t]:cuts[t + 1]]].tofile(files[t])
+            counts += np.diff(cuts)
+            progress((start + len(pts)) / source.count, "binning")
+    finally:
+        for f in files:
+            f.close()
+    if counts.sum() != source.count:
+        raise ValueError(f"{source.name}: {counts.sum()} points were binned but the input has {source.count}")
+    store.mark_binned(counts)
+    return counts.tolist()
+
+
+def _check_finite(source, start, pts) -> None:
+    bad = ~np.isfinite(pts).all(axis=1)
+    if bad.any():
+        row = start + int(np.flatnonzero(bad)[0])
+        raise ValueError(f"{source.name}: point {row} has a non-finite coordinate {pts[row - start].tolist()}; "
+                         "tiled estimation needs finite coordinates")
