@@ -65,7 +65,10 @@ def _viewpoint(text):
 
 def _cmd_estimate(args) -> int:
     import core
+    from core.tiled import cli as tiled
 
+    if tiled.wanted(args):  # tiles on Dask (large scans), or a LAS/LAZ output
+        return tiled.run(args)
     cloud = core.io.read_cloud(args.input, drop_nonfinite=args.drop_nonfinite)
     normals = None if args.ignore_normals else cloud.normals
     orientation = args.viewpoint if args.viewpoint is not None else args.orientation
@@ -114,6 +117,7 @@ def _cmd_bench(args) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     from core.methods import METHODS
+    from core.tiled import cli as tiled_cli
 
     p = argparse.ArgumentParser(
         prog="darboux-cli",
@@ -123,7 +127,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     e = sub.add_parser("estimate", help="estimate the Darboux frame of every point and write PLY/CSV")
     e.add_argument("input", help="point cloud file (PLY, XYZ/PTS/TXT/CSV, PCD, OBJ, STL, VTK/VTP, LAS/LAZ)")
-    e.add_argument("-o", "--output", required=True, help="output file (.ply or .csv)")
+    e.add_argument("-o", "--output", required=True, help="output file (.ply, .csv, .las or .laz)")
     e.add_argument("--k", type=_k, default="auto",
                    help="neighbours per point, itself included, or auto (default; chosen per point, NF/NR)")
     e.add_argument("--method", default="nr", choices=list(METHODS), help="estimator (default nr)")
@@ -135,6 +139,7 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--drop-nonfinite", action="store_true", help="drop points with NaN/inf coordinates")
     e.add_argument("--progress", action="store_true", help="show the progress bar even when not a terminal")
     e.add_argument("-q", "--quiet", action="store_true")
+    tiled_cli.add_arguments(e)
     e.set_defaults(func=_cmd_estimate)
 
     i = sub.add_parser("info", help="describe point cloud files")

@@ -95,6 +95,14 @@ def iter_las(path, *, chunk: int = CHUNK):
         raise CloudFileError(path, f"truncated: the header declares {info.count} points but only {start} could be read")
 
 
+def quantisation(lo, hi):
+    """LAS scales and offsets for points within [lo, hi] from a non-LAS source: the finest
+    power of ten with the extent within 1e9 steps (int32 holds 2.1e9), offsets on it."""
+    extent = float(np.max(np.asarray(hi, float) - np.asarray(lo, float)))
+    scale = 10.0 ** np.ceil(np.log10((extent if extent > 0 else 1.0) * 1e-9))
+    return np.full(3, scale), np.floor(np.asarray(lo, float) / scale) * scale
+
+
 class LasResultWriter:
     """Write points and result columns to a LAS/LAZ file chunk by chunk.
 

@@ -17,7 +17,7 @@ import numpy as np
 from ..io import write_result
 from ..io.atomic import atomic_write
 from ..io.cloud import CloudFileError
-from ..io.las_stream import CHUNK, LasResultWriter
+from ..io.las_stream import CHUNK, LasResultWriter, quantisation
 
 _LAS = (".las", ".laz")
 #: largest result assembled in memory for PLY/text output (~250 bytes a point)
@@ -98,7 +98,7 @@ def _row_signs(store, tile, node_signs, comp) -> np.ndarray:
 
 
 def _quantisation(store, n_tiles, source):
-    """The input's LAS scales/offsets, or 1e-9 of the extent (a power of ten) for other inputs."""
+    """The input's LAS scales/offsets, or :func:`quantisation` of the result's bounds."""
     if source.scales is not None:
         return source.scales, source.offsets
     lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
@@ -106,6 +106,4 @@ def _quantisation(store, n_tiles, source):
         rows = store.load_result(t)
         if len(rows):
             lo, hi = np.minimum(lo, rows["xyz"].min(axis=0)), np.maximum(hi, rows["xyz"].max(axis=0))
-    extent = float(np.max(hi - lo)) or 1.0
-    scale = 10.0 ** np.floor(np.log10(extent * 1e-9))
-    return np.full(3, scale), np.floor(lo / scale) * scale
+    return quantisation(lo, hi)

@@ -24,6 +24,9 @@ from .task import TileSpec
 BASE_BYTES, BYTES_PER_NEIGHBOUR = 250, 24
 #: what a halo adds to a tile of ~1M points at k = 15 (measured 5-15 %), with room to spare
 HALO_ALLOWANCE = 1.5
+#: what a worker process holds before any tile: Python, numpy, scipy, numba's compiled
+#: kernels, Dask (measured 210 MB after a first estimate), with room to spare
+RUNTIME_BYTES = 300_000_000
 DEFAULT_MEMORY = "1.5GB"
 _VERSION = 1
 
@@ -53,14 +56,18 @@ def parse_memory(memory) -> int:
         value = int(memory) if isinstance(memory, (int, np.integer)) else parse_bytes(str(memory))
     except (ValueError, TypeError):
         raise ValueError(f"memory {memory!r} is invalid; give bytes or a size such as '2GB' or '1.5GiB'") from None
-    if value < 50_000_000:
-        raise ValueError(f"memory {memory!r} is too small; tiles need at least 50MB per worker")
+    if value <= 0:
+        raise ValueError(f"memory {memory!r} is invalid; it must be positive")
     return value
 
 
 def default_tile_points(k: int, memory) -> int:
-    """Points per tile so that a tile, its halo and the estimate fit in ``memory`` bytes."""
-    return max(10_000, int(parse_memory(memory) / (bytes_per_point(k) * HALO_ALLOWANCE)))
+    """Points per tile so that a worker, a tile, its halo and the estimate fit in ``memory``."""
+    budget = parse_memory(memory)
+    if budget < 2 * RUNTIME_BYTES:
+        raise ValueError(f"memory {memory!r} is too small for a tile worker; give at least "
+                         f"{2 * RUNTIME_BYTES // 1_000_000}MB (a worker alone holds about {RUNTIME_BYTES // 1_000_000}MB)")
+    return max(10_000, int((budget - RUNTIME_BYTES) / (bytes_per_point(k) * HALO_ALLOWANCE)))
 
 
 def estimate_tiled(source, output, *, normals=None, k=15, method="nr", passes=None, orientation="auto",
