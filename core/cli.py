@@ -8,7 +8,7 @@ import time
 
 import numpy as np
 
-BENCHES = ("paper", "perf", "accuracy")
+BENCHES = ("paper", "perf", "accuracy", "tiled")
 
 
 class _Bar:
