@@ -22,6 +22,10 @@ from .task import TileSpec
 #: plus the cached neighbours (int32 index + float64 distance = 12 bytes per neighbour,
 #: twice while they are sorted); 3M points at k = 15 measured 1.75 GB (580 B/point)
 BASE_BYTES, BYTES_PER_NEIGHBOUR = 250, 24
+#: at least this many tiles per worker (when tiles keep MIN_TILE_POINTS): every core
+#: busy, and a slow tile does not leave the others idle at the end
+TILES_PER_WORKER = 3
+MIN_TILE_POINTS = 50_000
 #: what a halo adds to a tile of ~1M points at k = 15 (measured 5-15 %), with room to spare
 HALO_ALLOWANCE = 1.5
 #: what a worker process holds before any tile: Python, numpy, scipy, numba's compiled
@@ -70,6 +74,13 @@ def default_tile_points(k: int, memory) -> int:
     return max(10_000, int((budget - RUNTIME_BYTES) / (bytes_per_point(k) * HALO_ALLOWANCE)))
 
 
+def _tile_points(k, budget, count, workers) -> int:
+    """Tiles that fit the budget and keep every worker busy (TILES_PER_WORKER each)."""
+    n_workers = workers or os.cpu_count() or 1
+    busy = max(MIN_TILE_POINTS, -(-count // (TILES_PER_WORKER * n_workers)))
+    return min(default_tile_points(k, budget), busy)
+
+
 def estimate_tiled(source, output, *, normals=None, k=15, method="nr", passes=None, orientation="auto",
                    options=None, tile_points=None, workers=None, memory=DEFAULT_MEMORY, client=None,
                    scheduler=None, workdir=None, keep_workdir=False, progress=None) -> TiledRun:
@@ -108,12 +119,13 @@ def estimate_tiled(source, output, *, normals=None, k=15, method="nr", passes=No
         raise ValueError(f'k must be an integer for a tiled estimate, got {k!r} (k="auto" needs the whole '
                          "cloud's noise level and is not available in tiles yet)")
     budget = parse_memory(memory)
-    tile_points = default_tile_points(k, budget) if tile_points is None else check_int(
-        tile_points, name="tile_points", low=100, high=10**10)
+    if tile_points is not None:
+        tile_points = check_int(tile_points, name="tile_points", low=100, high=10**10)
     if workers is not None:
         check_int(workers, name="workers", low=0, high=4096)
     src = open_source(source, normals)
     spec, rule = _spec(k, method, passes, orientation, options, src.has_normals, in_process=workers == 0)
+    tile_points = tile_points or _tile_points(spec.k, budget, src.count, workers)
     output = pathlib.Path(os.fspath(output))
     if src.identity[0] == os.path.abspath(output):
         raise ValueError(f"output {output} is the input; the input is never overwritten")

@@ -45,13 +45,25 @@ def _compare(path, mem):
     return diff, float(same[v].mean())
 
 
+def _terrain_at_cm(n, seed=0):
+    """An aerial scan quantised like a LAS at cm scale: many equal neighbour distances."""
+    rng = np.random.default_rng(seed)
+    x, y = rng.uniform(0, np.sqrt(n) * 0.1, (2, n))
+    z = 2.0 * np.sin(x / 7.0) * np.cos(y / 11.0) + 0.5 * np.sin(x / 2.3 + y / 3.1)
+    return np.round(np.column_stack([x, y, z]) / 0.01) * 0.01
+
+
 @pytest.mark.parametrize("shape, kwargs", [
     ("torus", dict(k=15)),                                     # the paper's pipeline, NR with 1 pass
     ("sphere", dict(k=12, passes=2, orientation="propagate")),  # one more ring per pass
     ("saddle", dict(k=10, method="ct")),                       # another method, open surface
+    ("terrain", dict(k=15)),                                   # ties at the k-th neighbour
 ])
 def test_every_point_equals_the_in_memory_estimate(tmp_path, shape, kwargs):
-    pts = noise.add_noise(getattr(shapes, shape)(16_000, seed=3).points, 0.1, seed=1)
+    if shape == "terrain":
+        pts = _terrain_at_cm(16_000)
+    else:
+        pts = noise.add_noise(getattr(shapes, shape)(16_000, seed=3).points, 0.1, seed=1)
     mem = core.estimate(pts, **kwargs)
     run = estimate_tiled(pts, tmp_path / "out.ply", tile_points=900, workers=0, **kwargs)
     assert run.n_tiles >= 16
@@ -194,3 +206,14 @@ def test_halo_check_measures_the_shortfall():
     assert halo.check_halo(xyz, np.array([0.5, 0.05]), np.array([True, True]), lo, hi) < 0
     assert halo.check_halo(xyz, np.array([0.5, 0.3]), np.array([True, True]), lo, hi) == pytest.approx(0.2)
     assert halo.check_halo(xyz, np.array([0.5, 0.3]), np.array([True, False]), lo, hi) < 0
+
+
+def test_neighbours_break_ties_by_index_whatever_else_is_in_the_tree():
+    pts = _terrain_at_cm(6000, seed=1)
+    whole = core.build_neighbours(pts, 15)
+    tied = whole.distances[:, 14] == np.sqrt(((pts[whole.indices[:, 14]] - pts) ** 2).sum(axis=1))
+    assert tied.all()
+    keep = np.sort(np.random.default_rng(0).permutation(len(pts))[:5000])  # a subset, same order
+    part = core.build_neighbours(pts[keep], 15)
+    inside = np.isin(whole.indices, keep).all(axis=1)[keep]  # rows whose neighbours all survived
+    np.testing.assert_array_equal(keep[part.indices[inside]], whole.indices[keep][inside])
