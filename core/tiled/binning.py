@@ -15,13 +15,15 @@ def plan_tiles(source, store: TileStore, tile_points: int, progress) -> TilePlan
         return TilePlan.load(store.plan_path)
     stride = max(1, source.count // SAMPLE)
     parts, lo, hi = [], np.full(3, np.inf), np.full(3, -np.inf)
-    for start, pts, _ in source.chunks():
+    seen = 0
+    for start, pts, *_ in source.chunks():
         first = (-start) % stride
         parts.append(pts[first::stride])
         _check_finite(source, start, pts)
-        progress((start + len(pts)) / source.count, "sampling")
+        seen = start + len(pts)
+        progress(seen / max(source.count, seen), "sampling")
     sample = np.concatenate(parts)
-    plan = make_plan(sample, source.count, tile_points)
+    plan = make_plan(sample, seen, tile_points)  # E57 invalid points are only known once read
     tmp = store.plan_path.with_name("plan.tmp.npz")
     plan.save(tmp)
     tmp.replace(store.plan_path)
@@ -38,10 +40,11 @@ def bin_points(source, store: TileStore, plan: TilePlan, progress) -> list:
     counts = np.zeros(plan.n_tiles, dtype=np.int64)
     files = [open(store.bin_path(t), "wb") for t in range(plan.n_tiles)]
     try:
-        for start, pts, nrm in source.chunks():
+        for start, pts, nrm, view in source.chunks():
             rec = np.empty(len(pts), dtype=BIN_DTYPE)
             rec["xyz"] = pts
             rec["n"] = np.nan if nrm is None else nrm
+            rec["view"] = np.nan if view is None else view
             rec["index"] = np.arange(start, start + len(pts))
             tile = plan.assign(pts)
             order = np.argsort(tile, kind="stable")
@@ -49,12 +52,13 @@ def bin_points(source, store: TileStore, plan: TilePlan, progress) -> list:
             for t in np.flatnonzero(np.diff(cuts)):
                 rec[order[cuts[t]:cuts[t + 1]]].tofile(files[t])
             counts += np.diff(cuts)
-            progress((start + len(pts)) / source.count, "binning")
+            progress((start + len(pts)) / plan.n_points, "binning")
     finally:
         for f in files:
             f.close()
-    if counts.sum() != source.count:
-        raise ValueError(f"{source.name}: {counts.sum()} points were binned but the input has {source.count}")
+    if counts.sum() != plan.n_points:
+        raise ValueError(f"{source.name}: {counts.sum()} points were binned but {plan.n_points} were sampled; "
+                         "the file changed during the run")
     store.mark_binned(counts)
     return counts.tolist()
 

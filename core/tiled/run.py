@@ -124,7 +124,8 @@ def estimate_tiled(source, output, *, normals=None, k=15, method="nr", passes=No
     if workers is not None:
         check_int(workers, name="workers", low=0, high=4096)
     src = open_source(source, normals)
-    spec, rule = _spec(k, method, passes, orientation, options, src.has_normals, in_process=workers == 0)
+    spec, rule = _spec(k, method, passes, orientation, options, src.has_normals, in_process=workers == 0,
+                       views=src.has_views)
     tile_points = tile_points or _tile_points(spec.k, budget, src.count, workers)
     output = pathlib.Path(os.fspath(output))
     if src.identity[0] == os.path.abspath(output):
@@ -140,15 +141,15 @@ def estimate_tiled(source, output, *, normals=None, k=15, method="nr", passes=No
     report(0.9, "orientation across tiles")
     tile_signs, agreement = signs.tile_signs(store, plan.n_tiles, rule)
     report(0.93, "writing")
-    out = assemble.assemble(store, plan.n_tiles, src.count, tile_signs, output, src)
+    out = assemble.assemble(store, plan.n_tiles, plan.n_points, tile_signs, output, src)
     if not keep_workdir:
         store.remove()
     report(1.0, "done")
     skipped = plan.n_tiles - len(todo) if resumed else 0
-    return TiledRun(out, src.count, plan.n_tiles, skipped, agreement, time.perf_counter() - t0)
+    return TiledRun(out, plan.n_points, plan.n_tiles, skipped, agreement, time.perf_counter() - t0)
 
 
-def _spec(k, method, passes, orientation, options, normals_given, in_process):
+def _spec(k, method, passes, orientation, options, normals_given, in_process, views=False):
     """The tile parameters (validated as :func:`core.estimate` does) and the sign rule."""
     m = get_method(method)
     opts = check_options(m, options)
@@ -160,6 +161,8 @@ def _spec(k, method, passes, orientation, options, normals_given, in_process):
                              "'outward', 'keep'] or a (3,) viewpoint")
         if orientation == "keep" or (orientation == "auto" and normals_given):
             tile_orient, rule = "keep", "none"
+        elif orientation == "auto" and views:  # each normal faces the scanner that saw its point
+            tile_orient, rule = "scanner", "none"
         else:
             tile_orient, rule = "propagate", "outward" if orientation in ("auto", "outward") else "propagate"
     else:

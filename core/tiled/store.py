@@ -25,8 +25,8 @@ import numpy as np
 
 from ..io.atomic import atomic_write
 
-#: a binned point: coordinates, normals (NaN when the input has none) and input row
-BIN_DTYPE = np.dtype([("xyz", "<f8", 3), ("n", "<f8", 3), ("index", "<i8")])
+#: a binned point: coordinates, normals and viewpoint (NaN when the input has none), input row
+BIN_DTYPE = np.dtype([("xyz", "<f8", 3), ("n", "<f8", 3), ("view", "<f8", 3), ("index", "<i8")])
 
 
 class TileStore:
@@ -102,10 +102,6 @@ class TileStore:
     def _write_bytes(path, data: bytes) -> None:
         with atomic_write(path) as f:
             f.write(data)
-
-
-def bin_dtype_size() -> int:
-    return BIN_DTYPE.itemsize
 
 
 def directory_for(output) -> pathlib.Path:

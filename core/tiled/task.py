@@ -14,7 +14,7 @@ from scipy.sparse.csgraph import connected_components
 
 from ..estimate import estimate
 from ..neighbours import build_neighbours
-from ..normals import ORIENT_K
+from ..normals import ORIENT_K, pca_normals
 from .halo import chain_rings, check_halo, first_margin, gather, grown, rings_from
 from .plan import TilePlan
 from .store import TileStore
@@ -38,7 +38,7 @@ class TileSpec:
     k: int
     method: str
     passes: int
-    orientation: object  # "propagate", "keep" or a (3,) viewpoint tuple
+    orientation: object  # "propagate", "keep", "scanner" (each point's viewpoint) or a (3,) viewpoint tuple
     options: dict = field(default_factory=dict)
     normals_given: bool = False
     threads: int = 1
@@ -58,12 +58,19 @@ def run_tile(root, tile: int, spec: TileSpec) -> dict:
     rec, owner, nb, needed = _load_with_halo(store, plan, tile, spec)
     pts = np.ascontiguousarray(rec["xyz"])
     normals = np.ascontiguousarray(rec["n"]) if spec.normals_given else None
-    orientation = np.asarray(spec.orientation) if isinstance(spec.orientation, tuple) else spec.orientation
+    orientation = spec.orientation
+    if isinstance(orientation, tuple):
+        orientation = np.asarray(orientation)
+    elif orientation == "scanner":  # faced after the fit, each point towards its own viewpoint
+        orientation = "keep"
     res = estimate(pts, normals, k=spec.k, method=spec.method, passes=spec.passes, orientation=orientation,
                    options=dict(spec.options) or None, neighbours=nb)
     own = owner == tile
     comp = _components(nb.indices, np.isfinite(res.normals).all(axis=1), needed)
     rows = _rows(rec, res, comp, own)
+    if spec.orientation == "scanner":
+        initial, _ = pca_normals(nb.points, *nb.take(spec.k))  # as estimate() computed them
+        _face_viewpoints(rows, initial[own], rec["view"][own])
     halo = needed & ~own & (comp >= 0)
     links = np.empty(int(halo.sum()), LINK_DTYPE)
     links["index"], links["owner"] = rec["index"][halo], owner[halo]
@@ -114,6 +121,20 @@ def _rows(rec, res, comp, own) -> np.ndarray:
     rows["k1"], rows["k2"], rows["e1"], rows["e2"] = res.k1[own], res.k2[own], res.e1[own], res.e2[own]
     rows["valid"], rows["k"], rows["comp"] = res.valid[own], res.k_point[own], comp[own]
     return rows
+
+
+def _face_viewpoints(rows, initial, views) -> None:
+    """Orient each row as if its initial normal had been turned towards its own viewpoint
+    (what ``orientation=(x, y, z)`` does for one). The fits follow the sign of the initial
+    normal (each fit's normal stays in the hemisphere of the one it refines), so flipping
+    the result (n -> -n, k1, k2 -> -k2, -k1, e1 <-> e2) where the initial normal faced away
+    is the same."""
+    flip = np.einsum("ij,ij->i", initial, views - rows["xyz"]) < 0
+    r = rows[flip]
+    r["n"] *= -1
+    r["k1"], r["k2"] = -rows["k2"][flip], -rows["k1"][flip]
+    r["e1"], r["e2"] = rows["e2"][flip], rows["e1"][flip]
+    rows[flip] = r
 
 
 def _nodes(rows) -> np.ndarray:
