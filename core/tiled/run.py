@@ -74,6 +74,23 @@ def default_tile_points(k: int, memory) -> int:
     return max(10_000, int((budget - RUNTIME_BYTES) / (bytes_per_point(k) * HALO_ALLOWANCE)))
 
 
+def _prepare(source, normals, k, method, passes, orientation, options, tile_points, workers, memory):
+    """Validate the arguments (cheap checks before the file is opened) and resolve defaults."""
+    if isinstance(k, str):
+        raise ValueError(f'k must be an integer for a tiled estimate, got {k!r} (k="auto" needs the whole '
+                         "cloud's noise level and is not available in tiles yet)")
+    budget = parse_memory(memory)
+    if tile_points is not None:
+        tile_points = check_int(tile_points, name="tile_points", low=100, high=10**10)
+    if workers is not None:
+        check_int(workers, name="workers", low=0, high=4096)
+    src = open_source(source, normals)
+    spec, rule = _spec(k, method, passes, orientation, options, src.has_normals, in_process=workers == 0,
+                       views=src.has_views)
+    tile_points = tile_points or _tile_points(spec.k, budget, src.count, workers)
+    return src, spec, rule, budget, tile_points
+
+
 def _tile_points(k, budget, count, workers) -> int:
     """Tiles that fit the budget and keep every worker busy (TILES_PER_WORKER each)."""
     n_workers = workers or os.cpu_count() or 1
@@ -94,8 +111,8 @@ def estimate_tiled(source, output, *, normals=None, k=15, method="nr", passes=No
 
     Parameters
     ----------
-    source : path of a point-cloud file (LAS/LAZ read in chunks; other formats are read
-        whole) or an (N, 3) array.
+    source : path of a point-cloud file (LAS/LAZ read in chunks; E57 scan by scan, the
+        scanner poses orienting the normals; other formats are read whole) or an (N, 3) array.
     output : path of the result: .laz/.las (any size, written in chunks, extra-bytes
         dimensions nx ny nz k1 k2 e1_* e2_* gaussian mean valid k) or .ply/.csv (in memory).
     normals : (N, 3) array, optional, with an array ``source``.
@@ -115,23 +132,14 @@ def estimate_tiled(source, output, *, normals=None, k=15, method="nr", passes=No
     """
     t0 = time.perf_counter()
     report = Progress(progress)
-    if isinstance(k, str):
-        raise ValueError(f'k must be an integer for a tiled estimate, got {k!r} (k="auto" needs the whole '
-                         "cloud's noise level and is not available in tiles yet)")
-    budget = parse_memory(memory)
-    if tile_points is not None:
-        tile_points = check_int(tile_points, name="tile_points", low=100, high=10**10)
-    if workers is not None:
-        check_int(workers, name="workers", low=0, high=4096)
-    src = open_source(source, normals)
-    spec, rule = _spec(k, method, passes, orientation, options, src.has_normals, in_process=workers == 0,
-                       views=src.has_views)
-    tile_points = tile_points or _tile_points(spec.k, budget, src.count, workers)
+    src, spec, rule, budget, tile_points = _prepare(source, normals, k, method, passes, orientation, options,
+                                                    tile_points, workers, memory)
     output = pathlib.Path(os.fspath(output))
     if src.identity[0] == os.path.abspath(output):
         raise ValueError(f"output {output} is the input; the input is never overwritten")
     store = TileStore(workdir or directory_for(output))
-    resumed = store.open({"input": list(map(str, src.identity)), "spec": repr(spec), "rule": rule,
+    same_run = {**spec.__dict__, "threads": None}  # any number of workers may resume a run
+    resumed = store.open({"input": list(map(str, src.identity)), "spec": repr(same_run), "rule": rule,
                           "tile_points": tile_points, "version": _VERSION})
     plan = binning.plan_tiles(src, store, tile_points, report.sub(0.0, 0.05))
     sizes = binning.bin_points(src, store, plan, report.sub(0.05, 0.15))
