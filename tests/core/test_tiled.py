@@ -58,10 +58,13 @@ def _terrain_at_cm(n, seed=0):
     ("sphere", dict(k=12, passes=2, orientation="propagate")),  # one more ring per pass
     ("saddle", dict(k=10, method="ct")),                       # another method, open surface
     ("terrain", dict(k=15)),                                   # ties at the k-th neighbour
+    ("outliers", dict(k=15)),                                  # far points: the halo must grow
 ])
 def test_every_point_equals_the_in_memory_estimate(tmp_path, shape, kwargs):
     if shape == "terrain":
         pts = _terrain_at_cm(16_000)
+    elif shape == "outliers":
+        pts = np.concatenate([shapes.torus(16_000, seed=3).points, [[0, 0, 6.0], [9, 1, 0], [-2, 3, 2.5]]])
     else:
         pts = noise.add_noise(getattr(shapes, shape)(16_000, seed=3).points, 0.1, seed=1)
     mem = core.estimate(pts, **kwargs)
