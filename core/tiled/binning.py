@@ -38,24 +38,22 @@ def bin_points(source, store: TileStore, plan: TilePlan, progress) -> list:
     if store.binned():
         return store.bin_counts()
     counts = np.zeros(plan.n_tiles, dtype=np.int64)
-    files = [open(store.bin_path(t), "wb") for t in range(plan.n_tiles)]
-    try:
-        for start, pts, nrm, view in source.chunks():
-            rec = np.empty(len(pts), dtype=BIN_DTYPE)
-            rec["xyz"] = pts
-            rec["n"] = np.nan if nrm is None else nrm
-            rec["view"] = np.nan if view is None else view
-            rec["index"] = np.arange(start, start + len(pts))
-            tile = plan.assign(pts)
-            order = np.argsort(tile, kind="stable")
-            cuts = np.searchsorted(tile[order], np.arange(plan.n_tiles + 1))
-            for t in np.flatnonzero(np.diff(cuts)):
-                rec[order[cuts[t]:cuts[t + 1]]].tofile(files[t])
-            counts += np.diff(cuts)
-            progress((start + len(pts)) / plan.n_points, "binning")
-    finally:
-        for f in files:
-            f.close()
+    for t in range(plan.n_tiles):  # start empty (a previous, interrupted binning may have left some)
+        store.bin_path(t).write_bytes(b"")
+    for start, pts, nrm, view in source.chunks():
+        rec = np.empty(len(pts), dtype=BIN_DTYPE)
+        rec["xyz"] = pts
+        rec["n"] = np.nan if nrm is None else nrm
+        rec["view"] = np.nan if view is None else view
+        rec["index"] = np.arange(start, start + len(pts))
+        tile = plan.assign(pts)
+        order = np.argsort(tile, kind="stable")
+        cuts = np.searchsorted(tile[order], np.arange(plan.n_tiles + 1))
+        for t in np.flatnonzero(np.diff(cuts)):  # appended chunk by chunk: any number of tiles
+            with open(store.bin_path(t), "ab") as f:
+                rec[order[cuts[t]:cuts[t + 1]]].tofile(f)
+        counts += np.diff(cuts)
+        progress((start + len(pts)) / plan.n_points, "binning")
     if counts.sum() != plan.n_points:
         raise ValueError(f"{source.name}: {counts.sum()} points were binned but {plan.n_points} were sampled; "
                          "the file changed during the run")
