@@ -119,7 +119,9 @@ class _Bar:
         self.enabled = enabled
 
     def __call__(self, fraction, stage):
-        if self.enabled:
+        if self.enabled and stage.startswith("dask dashboard"):
+            sys.stderr.write(f"\r{stage}\n")  # a link to keep: its own line
+        elif self.enabled:
             pct = int(fraction * 100)
             sys.stderr.write(f"\r[{'#' * (pct // 4):<25}] {pct:3d}% {stage:<40}")
             sys.stderr.flush()
