@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from .plan import SAMPLE, TilePlan, make_plan
-from .store import BIN_DTYPE, TileStore
+from .store import TileStore, bin_dtype
 
 
 def plan_tiles(source, store: TileStore, tile_points: int, progress) -> TilePlan:
@@ -38,13 +38,17 @@ def bin_points(source, store: TileStore, plan: TilePlan, progress) -> list:
     if store.binned():
         return store.bin_counts()
     counts = np.zeros(plan.n_tiles, dtype=np.int64)
+    dtype = bin_dtype(source.has_normals, source.has_views)
+    store.set_bin_dtype(dtype)
     for t in range(plan.n_tiles):  # start empty (a previous, interrupted binning may have left some)
         store.bin_path(t).write_bytes(b"")
     for start, pts, nrm, view in source.chunks():
-        rec = np.empty(len(pts), dtype=BIN_DTYPE)
+        rec = np.empty(len(pts), dtype=dtype)
         rec["xyz"] = pts
-        rec["n"] = np.nan if nrm is None else nrm
-        rec["view"] = np.nan if view is None else view
+        if source.has_normals:
+            rec["n"] = nrm
+        if source.has_views:
+            rec["view"] = view
         rec["index"] = np.arange(start, start + len(pts))
         tile = plan.assign(pts)
         order = np.argsort(tile, kind="stable")

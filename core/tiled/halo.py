@@ -19,8 +19,6 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .store import BIN_DTYPE
-
 #: own points whose k-th neighbour distance sets the first margin (a subsample suffices)
 _PROBE = 20_000
 #: the first margin is this many times (rings x the 99th percentile of the k-th distance)
@@ -46,7 +44,7 @@ def first_margin(own_xyz: np.ndarray, k: int, rings: int) -> float:
 def gather(store, plan, tile: int, margin: float):
     """The points in the tile's box grown by ``margin``, sorted by input row.
 
-    Returns ``(records of BIN_DTYPE, owner tile of each, lo, hi)`` with lo/hi the grown box.
+    Returns ``(binned records, owner tile of each, lo, hi)`` with lo/hi the grown box.
     """
     lo, hi = plan.lo[tile] - margin, plan.hi[tile] + margin
     parts, owners = [], []
@@ -57,7 +55,7 @@ def gather(store, plan, tile: int, margin: float):
             rec = rec[((xyz >= lo) & (xyz <= hi)).all(axis=1)]
         parts.append(np.asarray(rec))
         owners.append(np.full(len(rec), t, dtype=np.int32))
-    rec = np.concatenate(parts) if parts else np.zeros(0, BIN_DTYPE)
+    rec = np.concatenate(parts) if parts else np.zeros(0, store.bin_dtype)
     owner = np.concatenate(owners) if owners else np.zeros(0, np.int32)
     order = np.argsort(rec["index"], kind="stable")
     return rec[order], owner[order], lo, hi

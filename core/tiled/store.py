@@ -4,7 +4,8 @@ Layout of the work directory (``.<output name>.tiles`` next to the output by def
 
     manifest.json          the input and parameters this directory belongs to
     plan.npz               the tiles (:class:`core.tiled.plan.TilePlan`)
-    bins/tile_000007.bin   the tile's own points (input order), raw records of BIN_DTYPE
+    bins/fields.json       which of BIN_FIELDS the records hold (normals, viewpoints if any)
+    bins/tile_000007.bin   the tile's own points (input order), raw records of those fields
     bins/done.json         written last: the binning pass is complete
     results/tile_000007.npy, .links.npy, .nodes.npy, .done   one finished tile
 
@@ -25,8 +26,14 @@ import numpy as np
 
 from ..io.atomic import atomic_write
 
-#: a binned point: coordinates, normals and viewpoint (NaN when the input has none), input row
-BIN_DTYPE = np.dtype([("xyz", "<f8", 3), ("n", "<f8", 3), ("view", "<f8", 3), ("index", "<i8")])
+#: what a binned point can hold: coordinates, normals, viewpoint, input row
+BIN_FIELDS = {"xyz": ("<f8", 3), "n": ("<f8", 3), "view": ("<f8", 3), "index": ("<i8",)}
+
+
+def bin_dtype(normals: bool, views: bool) -> np.dtype:
+    """Records of a binned point: 32 bytes, plus 24 with normals, 24 with viewpoints."""
+    names = ["xyz"] + (["n"] if normals else []) + (["view"] if views else []) + ["index"]
+    return np.dtype([(name, *BIN_FIELDS[name]) for name in names])
 
 
 class TileStore:
@@ -64,6 +71,17 @@ class TileStore:
     def bin_path(self, tile: int) -> pathlib.Path:
         return self.root / "bins" / f"tile_{tile:06d}.bin"
 
+    def set_bin_dtype(self, dtype: np.dtype) -> None:
+        self._write_bytes(self.root / "bins" / "fields.json", json.dumps(list(dtype.names)).encode())
+        self._dtype = dtype
+
+    @property
+    def bin_dtype(self) -> np.dtype:
+        if getattr(self, "_dtype", None) is None:
+            names = json.loads((self.root / "bins" / "fields.json").read_text())
+            self._dtype = np.dtype([(name, *BIN_FIELDS[name]) for name in names])
+        return self._dtype
+
     def binned(self) -> bool:
         return (self.root / "bins" / "done.json").exists()
 
@@ -74,11 +92,11 @@ class TileStore:
         return json.loads((self.root / "bins" / "done.json").read_text())
 
     def read_bin(self, tile: int) -> np.ndarray:
-        """The tile's own points (a read-only memory map of BIN_DTYPE records)."""
+        """The tile's own points (a read-only memory map of :attr:`bin_dtype` records)."""
         path = self.bin_path(tile)
         if path.stat().st_size == 0:
-            return np.zeros(0, dtype=BIN_DTYPE)
-        return np.memmap(path, dtype=BIN_DTYPE, mode="r")
+            return np.zeros(0, dtype=self.bin_dtype)
+        return np.memmap(path, dtype=self.bin_dtype, mode="r")
 
     # -- per-tile results -----------------------------------------------------------------
     def result_path(self, tile: int, part: str = "") -> pathlib.Path:
