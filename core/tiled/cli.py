@@ -73,7 +73,8 @@ def run(args) -> int:
         res = estimate_tiled(
             args.input, args.output, k=args.k, method=args.method, passes=args.passes, orientation=orientation,
             options=dict(args.option or []) or None, tile_points=args.tile_points, workers=args.workers,
-            memory=args.memory or "1.5GB", scheduler=args.scheduler, workdir=args.work_dir, progress=bar,
+            memory=args.memory or "1.5GB", scheduler=args.scheduler, workdir=args.work_dir,
+            ignore_normals=args.ignore_normals, progress=bar,
         )
     finally:
         bar.close()

@@ -74,7 +74,8 @@ def default_tile_points(k: int, memory) -> int:
     return max(10_000, int((budget - RUNTIME_BYTES) / (bytes_per_point(k) * HALO_ALLOWANCE)))
 
 
-def _prepare(source, normals, k, method, passes, orientation, options, tile_points, workers, memory):
+def _prepare(source, normals, k, method, passes, orientation, options, tile_points, workers, memory,
+             ignore_normals):
     """Validate the arguments (cheap checks before the file is opened) and resolve defaults."""
     if isinstance(k, str):
         raise ValueError(f'k must be an integer for a tiled estimate, got {k!r} (k="auto" needs the whole '
@@ -84,7 +85,7 @@ def _prepare(source, normals, k, method, passes, orientation, options, tile_poin
         tile_points = check_int(tile_points, name="tile_points", low=100, high=10**10)
     if workers is not None:
         check_int(workers, name="workers", low=0, high=4096)
-    src = open_source(source, normals)
+    src = open_source(source, normals, use_normals=not ignore_normals)
     spec, rule = _spec(k, method, passes, orientation, options, src.has_normals, in_process=workers == 0,
                        views=src.has_views)
     tile_points = tile_points or _tile_points(spec.k, budget, src.count, workers)
@@ -100,7 +101,8 @@ def _tile_points(k, budget, count, workers) -> int:
 
 def estimate_tiled(source, output, *, normals=None, k=15, method="nr", passes=None, orientation="auto",
                    options=None, tile_points=None, workers=None, memory=DEFAULT_MEMORY, client=None,
-                   scheduler=None, workdir=None, keep_workdir=False, progress=None) -> TiledRun:
+                   scheduler=None, workdir=None, keep_workdir=False, ignore_normals=False,
+                   progress=None) -> TiledRun:
     """Estimate a cloud of any size in spatial tiles with halos, on Dask, into a file.
 
     Every point gets the answer of :func:`core.estimate` on the whole cloud (the same
@@ -124,6 +126,8 @@ def estimate_tiled(source, output, *, normals=None, k=15, method="nr", passes=No
         the tiles in this process.
     memory : budget per worker, e.g. "1.5GB" (Dask's limit for the local cluster).
     client, scheduler : an existing ``distributed.Client``, or a scheduler address.
+    workdir, keep_workdir : where the tiles are kept, and whether to keep them afterwards.
+    ignore_normals : estimate normals even where the file has some.
     progress : callable(fraction, stage), optional.
 
     Returns
@@ -133,7 +137,7 @@ def estimate_tiled(source, output, *, normals=None, k=15, method="nr", passes=No
     t0 = time.perf_counter()
     report = Progress(progress)
     src, spec, rule, budget, tile_points = _prepare(source, normals, k, method, passes, orientation, options,
-                                                    tile_points, workers, memory)
+                                                    tile_points, workers, memory, ignore_normals)
     output = pathlib.Path(os.fspath(output))
     if src.identity[0] == os.path.abspath(output):
         raise ValueError(f"output {output} is the input; the input is never overwritten")

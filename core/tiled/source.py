@@ -61,20 +61,21 @@ class Source:
             yield start, self._points[start:stop], nrm, None
 
 
-def open_source(source, normals=None) -> Source:
-    """A :class:`Source` from a path (LAS/LAZ streamed) or an (N, 3) array (+ normals)."""
+def open_source(source, normals=None, *, use_normals: bool = True) -> Source:
+    """A :class:`Source` from a path (LAS/LAZ streamed) or an (N, 3) array (+ normals);
+    ``use_normals=False`` ignores normals stored in the file."""
     if isinstance(source, (str, os.PathLike)):
         path = os.fspath(source)
         stat = os.stat(path)
         identity = (os.path.abspath(path), stat.st_size, stat.st_mtime_ns)
         if path.lower().endswith(_STREAMED):
             info = open_las(path)
-            return Source(path, info.count, info.normals is not None, identity, scales=info.scales,
+            return Source(path, info.count, use_normals and info.normals is not None, identity, scales=info.scales,
                           offsets=info.offsets, _path=path)
         if path.lower().endswith(_E57):
             return Source(path, _e57_count(path), False, identity, has_views=True, _path=path)
         cloud = read_cloud(path)
-        return _from_arrays(path, cloud.points, cloud.normals, identity)
+        return _from_arrays(path, cloud.points, cloud.normals if use_normals else None, identity)
     pts, _ = as_points(source)
     nrm = None if normals is None else as_normals(normals, len(pts))
     digest = hashlib.blake2b(pts.tobytes(), digest_size=16).hexdigest()

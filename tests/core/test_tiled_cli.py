@@ -50,3 +50,20 @@ def test_auto_k_within_memory_writes_laz(scan, tmp_path):
     assert main(["estimate", str(scan), "-o", str(out), "-q"]) == 0
     las = laspy.read(out)
     assert np.asarray(las.k).min() >= 20 and len(las.points) == 8000
+
+
+def test_normals_in_the_file_are_kept_unless_ignored(tmp_path, capsys):
+    t = core.shapes.torus(6000, seed=4)
+    header = laspy.LasHeader(point_format=3, version="1.4")
+    header.scales, header.offsets = np.full(3, 1e-5), np.floor(t.points.min(axis=0))
+    header.add_extra_dims([laspy.ExtraBytesParams(name=n, type=np.float64) for n in ("nx", "ny", "nz")])
+    las = laspy.LasData(header)
+    las.x, las.y, las.z = t.points.T
+    las.nx, las.ny, las.nz = (-t.normals).T  # inward
+    las.write(str(tmp_path / "n.laz"))
+    common = ["--k", "15", "--tile-points", "400", "--workers", "0", "-q"]
+    assert main(["estimate", str(tmp_path / "n.laz"), "-o", str(tmp_path / "kept.laz"), *common]) == 0
+    assert main(["estimate", str(tmp_path / "n.laz"), "-o", str(tmp_path / "own.laz"), "--ignore-normals",
+                 *common]) == 0
+    assert np.median(laspy.read(tmp_path / "kept.laz").k2) == pytest.approx(-1.0, abs=0.05)  # inward tube
+    assert np.median(laspy.read(tmp_path / "own.laz").k1) == pytest.approx(1.0, abs=0.05)  # outward tube
