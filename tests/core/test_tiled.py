@@ -62,13 +62,13 @@ def _terrain_at_cm(n, seed=0):
 ])
 def test_every_point_equals_the_in_memory_estimate(tmp_path, shape, kwargs):
     if shape == "terrain":
-        pts = _terrain_at_cm(16_000)
+        pts = _terrain_at_cm(10_000)
     elif shape == "outliers":
-        pts = np.concatenate([shapes.torus(16_000, seed=3).points, [[0, 0, 6.0], [9, 1, 0], [-2, 3, 2.5]]])
+        pts = np.concatenate([shapes.torus(10_000, seed=3).points, [[0, 0, 6.0], [9, 1, 0], [-2, 3, 2.5]]])
     else:
-        pts = noise.add_noise(getattr(shapes, shape)(16_000, seed=3).points, 0.1, seed=1)
+        pts = noise.add_noise(getattr(shapes, shape)(10_000, seed=3).points, 0.1, seed=1)
     mem = core.estimate(pts, **kwargs)
-    run = estimate_tiled(pts, tmp_path / "out.ply", tile_points=900, workers=0, **kwargs)
+    run = estimate_tiled(pts, tmp_path / "out.ply", tile_points=560, workers=0, **kwargs)
     assert run.n_tiles >= 16
     diff, agree = _compare(tmp_path / "out.ply", mem)
     assert diff < 1e-9
@@ -80,18 +80,18 @@ def test_every_point_equals_the_in_memory_estimate(tmp_path, shape, kwargs):
 def test_the_halo_check_alone_gives_exact_answers_with_the_derived_rings(tmp_path, monkeypatch, rings, exact):
     """With no head start (a zero first margin) the halo is only what the check demands:
     passes + 1 = 2 rings for NR reproduce memory exactly, one ring too few does not."""
-    pts = noise.add_noise(shapes.torus(12_000, seed=0).points, 0.2, seed=2)
+    pts = noise.add_noise(shapes.torus(8000, seed=0).points, 0.2, seed=2)
     mem = core.estimate(pts, k=15)
     monkeypatch.setattr(task, "first_margin", lambda *args: 0.0)
     monkeypatch.setattr(task, "chain_rings", lambda passes: rings)
-    estimate_tiled(pts, tmp_path / "out.ply", k=15, tile_points=700, workers=0)
+    estimate_tiled(pts, tmp_path / "out.ply", k=15, tile_points=450, workers=0)
     diff, _ = _compare(tmp_path / "out.ply", mem)
     assert (diff < 1e-9) if exact else (diff > 1e-6)
 
 
 def test_signs_agree_on_a_closed_surface_in_many_tiles(tmp_path):
-    s = shapes.ellipsoid(30_000, seed=4)
-    run = estimate_tiled(s.points, tmp_path / "out.ply", k=15, tile_points=500, workers=0)
+    s = shapes.ellipsoid(16_000, seed=4)
+    run = estimate_tiled(s.points, tmp_path / "out.ply", k=15, tile_points=260, workers=0)
     assert run.n_tiles >= 50
     _, n, k1, *_ = _fields(tmp_path / "out.ply")
     outward = np.einsum("ij,ij->i", n, s.normals) > 0
@@ -126,10 +126,10 @@ def _write_las(path, pts, *, scale=1e-4):
 
 def test_laz_in_laz_out_on_a_local_dask_cluster(tmp_path):
     src = tmp_path / "scan.laz"
-    pts = _write_las(src, noise.add_noise(shapes.torus(12_000, seed=6).points, 0.05, seed=3))
+    pts = _write_las(src, noise.add_noise(shapes.torus(8000, seed=6).points, 0.05, seed=3))
     before = src.read_bytes()
     mem = core.estimate(pts, k=15)
-    run = estimate_tiled(src, tmp_path / "out.laz", k=15, tile_points=700, workers=2, memory="1GB")
+    run = estimate_tiled(src, tmp_path / "out.laz", k=15, tile_points=450, workers=2, memory="1GB")
     assert run.n_tiles >= 16 and src.read_bytes() == before  # the input is never modified
     las = laspy.read(tmp_path / "out.laz")
     assert list(las.point_format.extra_dimension_names) == [
@@ -143,8 +143,8 @@ def test_laz_in_laz_out_on_a_local_dask_cluster(tmp_path):
 
 
 def test_a_failing_tile_is_named_and_a_rerun_resumes_to_the_same_file(tmp_path, monkeypatch):
-    pts = shapes.torus(10_000, seed=7).points
-    estimate_tiled(pts, tmp_path / "ref.ply", k=15, tile_points=600, workers=0)
+    pts = shapes.torus(6000, seed=7).points
+    estimate_tiled(pts, tmp_path / "ref.ply", k=15, tile_points=360, workers=0)
     real = task.run_tile
     calls = []
 
@@ -157,10 +157,10 @@ def test_a_failing_tile_is_named_and_a_rerun_resumes_to_the_same_file(tmp_path, 
     monkeypatch.setattr("core.tiled.engine.run_tile", crash_at_tile_9)
     out = tmp_path / "out.ply"
     with pytest.raises(ValueError, match=r"array: tile 9 failed: MemoryError: worker killed"):
-        estimate_tiled(pts, out, k=15, tile_points=600, workers=0)
+        estimate_tiled(pts, out, k=15, tile_points=360, workers=0)
     assert not out.exists()  # no partial output
     monkeypatch.setattr("core.tiled.engine.run_tile", real)
-    run = estimate_tiled(pts, out, k=15, tile_points=600, workers=0)
+    run = estimate_tiled(pts, out, k=15, tile_points=360, workers=0)
     assert run.tiles_skipped == 9  # tiles 0..8 were finished before the crash
     assert out.read_bytes() == (tmp_path / "ref.ply").read_bytes()
 
