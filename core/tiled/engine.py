@@ -35,7 +35,8 @@ def run_tasks(root, tiles, sizes, spec, *, client=None, scheduler=None, workers=
             out.append(_guarded(root, t, spec, label))
             clock.done(sizes[t])
         return out
-    return _on_dask(root, tiles, sizes, spec, clock, client, scheduler, workers, memory, label)
+    return _on_dask(root, tiles, sizes, spec, clock, client=client, scheduler=scheduler, workers=workers,
+                    memory=memory, label=label)
 
 
 def _guarded(root, tile, spec, label):
@@ -45,7 +46,7 @@ def _guarded(root, tile, spec, label):
         raise ValueError(f"{label}: tile {tile} failed: {type(exc).__name__}: {exc}") from exc
 
 
-def _on_dask(root, tiles, sizes, spec, clock, client, scheduler, workers, memory, label):
+def _on_dask(root, tiles, sizes, spec, clock, *, client, scheduler, workers, memory, label):
     from distributed import Client, LocalCluster, as_completed
 
     own_cluster = own_client = None

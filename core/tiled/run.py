@@ -74,7 +74,7 @@ def default_tile_points(k: int, memory) -> int:
     return max(10_000, int((budget - RUNTIME_BYTES) / (bytes_per_point(k) * HALO_ALLOWANCE)))
 
 
-def _prepare(source, normals, k, method, passes, orientation, options, tile_points, workers, memory,
+def _prepare(source, normals, k, *, method, passes, orientation, options, tile_points, workers, memory,
              ignore_normals):
     """Validate the arguments (cheap checks before the file is opened) and resolve defaults."""
     if isinstance(k, str):
@@ -136,8 +136,9 @@ def estimate_tiled(source, output, *, normals=None, k=15, method="nr", passes=No
     """
     t0 = time.perf_counter()
     report = Progress(progress)
-    src, spec, rule, budget, tile_points = _prepare(source, normals, k, method, passes, orientation, options,
-                                                    tile_points, workers, memory, ignore_normals)
+    src, spec, rule, budget, tile_points = _prepare(
+        source, normals, k, method=method, passes=passes, orientation=orientation, options=options,
+        tile_points=tile_points, workers=workers, memory=memory, ignore_normals=ignore_normals)
     output = pathlib.Path(os.fspath(output))
     if src.identity[0] == os.path.abspath(output):
         raise ValueError(f"output {output} is the input; the input is never overwritten")
