@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import glob
 import json
 import os
@@ -15,6 +16,7 @@ import numpy as np
 
 from . import io as cio
 from .io.formats import READ_FORMATS, WRITE_FORMATS, resolve_format
+from .tiled import cli as tiled_cli
 
 STDIO = "-"
 #: output name in a directory, when several inputs share one -o directory
@@ -111,6 +113,10 @@ class ProgressBar:
 
 def cmd_estimate(args) -> int:
     inputs = expand_inputs(args.inputs)
+    if len(inputs) == 1 and inputs[0] != STDIO:
+        one = argparse.Namespace(**vars(args), input=inputs[0])
+        if tiled_cli.wanted(one):  # tiles on Dask (large scans), or a LAS/LAZ output
+            return tiled_cli.run(one)
     plan = plan_outputs(inputs, args.output, args.out_format)  # refuse bad outputs before any work
     options = dict(args.option or [])
     failed = 0

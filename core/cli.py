@@ -11,8 +11,9 @@ import argparse
 import sys
 
 from . import __version__, _cli_commands
+from .tiled import cli as tiled_cli
 
-BENCHES = ("paper", "perf", "accuracy")
+BENCHES = ("paper", "perf", "accuracy", "tiled")
 PROG = "darboux-cli"
 _NONE = ("none", "null")
 _BOOLS = {"true": True, "false": False}
@@ -92,6 +93,7 @@ def add_execution_arguments(e) -> argparse._ArgumentGroup:
     g = e.add_argument_group("execution")
     g.add_argument("--progress", action="store_true", help="show the progress bar even when not a terminal")
     g.add_argument("-q", "--quiet", action="store_true", help="no summary and no progress bar")
+    tiled_cli.add_arguments(e)
     return g
 
 

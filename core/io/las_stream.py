@@ -1,0 +1,140 @@
+"""LAS / LAZ in bounded memory: read points in chunks, write results chunk by chunk.
+
+For scans larger than memory (:mod:`core.tiled`): :func:`open_las` checks the header
+(point count, a zero scale, a missing LAZ backend, a truncated LAS) before any work is
+done; :func:`iter_las` yields the scaled coordinates (and normals stored as extra bytes)
+``chunk`` points at a time; :class:`LasResultWriter` writes a curvature result as LAZ/LAS
+with one extra-bytes dimension per result property, named as in the PLY output
+(``nx ny nz k1 k2 e1_x .. e2_z gaussian mean valid k``), readable by laspy, PDAL and
+CloudCompare.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from .cloud import CloudFileError, find_normals
+
+#: points per chunk read or written (about 30 MB of float64 coordinates)
+CHUNK = 1_000_000
+#: result dimensions in file order; all float64 except ``valid`` (uint8) and ``k`` (int32)
+RESULT_DIMS = ("nx", "ny", "nz", "k1", "k2", "e1_x", "e1_y", "e1_z", "e2_x", "e2_y", "e2_z",
+               "gaussian", "mean", "valid", "k")
+_TYPES = {"valid": np.uint8, "k": np.int32}
+
+
+@dataclass(frozen=True)
+class LasInfo:
+    """What the header of a LAS/LAZ file says: point count, bounds, scales, normals."""
+
+    path: str
+    count: int
+    mins: np.ndarray
+    maxs: np.ndarray
+    scales: np.ndarray
+    offsets: np.ndarray
+    normals: tuple | None  # the three dimension names holding normals, if any
+    version: str
+
+
+def open_las(path) -> LasInfo:
+    """Read and check the header of a LAS/LAZ file (nothing else is read)."""
+    import laspy
+
+    try:
+        with laspy.open(path) as reader:
+            h = reader.header
+            if h.are_points_compressed and not laspy.LazBackend.detect_available():
+                raise CloudFileError(path, "is LAZ-compressed but no LAZ backend is installed; run `pip install lazrs`")
+            need = h.offset_to_point_data + h.point_count * h.point_format.size
+            if not h.are_points_compressed and os.path.getsize(path) < need:
+                raise CloudFileError(path, f"truncated: the header declares {h.point_count} points ({need} bytes) "
+                                           f"but the file has {os.path.getsize(path)} bytes")
+            scales = np.asarray(h.scales, dtype=float)
+            if not (np.isfinite(scales).all() and (scales != 0).all()):
+                raise CloudFileError(path, f"has an invalid coordinate scale {scales.tolist()} in its header "
+                                           "(every scale must be finite and non-zero)")
+            names = [n for n in h.point_format.dimension_names if n not in ("X", "Y", "Z")]
+            return LasInfo(str(path), int(h.point_count), np.asarray(h.mins, float), np.asarray(h.maxs, float),
+                           scales, np.asarray(h.offsets, float), find_normals(names), str(h.version))
+    except CloudFileError:
+        raise
+    except (laspy.errors.LaspyException, ValueError, EOFError, OSError) as exc:
+        raise CloudFileError(path, f"not a readable LAS/LAZ file: {exc}") from None
+
+
+def iter_las(path, *, chunk: int = CHUNK):
+    """Yield ``(start, points, normals)`` chunks of a LAS/LAZ file in file order.
+
+    ``points`` is an (m, 3) float64 array of scaled coordinates, ``normals`` (m, 3) or
+    None. A file that ends early (a truncated LAZ) raises :class:`CloudFileError`
+    naming the file and the point where it ended.
+    """
+    import laspy
+
+    info = open_las(path)
+    start = 0
+    try:
+        with laspy.open(path) as reader:
+            for pts in reader.chunk_iterator(chunk):
+                xyz = np.column_stack([np.asarray(pts.x, float), np.asarray(pts.y, float), np.asarray(pts.z, float)])
+                nrm = None
+                if info.normals:
+                    nrm = np.column_stack([np.asarray(pts[n], dtype=np.float64) for n in info.normals])
+                yield start, xyz, nrm
+                start += len(xyz)
+    except CloudFileError:
+        raise
+    except (laspy.errors.LaspyException, ValueError, EOFError, OSError, RuntimeError) as exc:
+        raise CloudFileError(path, f"unreadable after point {start} of {info.count} (truncated or corrupt "
+                                   f"LAS/LAZ): {exc}") from None
+    if start != info.count:
+        raise CloudFileError(path, f"truncated: the header declares {info.count} points but only {start} could be read")
+
+
+def quantisation(lo, hi):
+    """LAS scales and offsets for points within [lo, hi] from a non-LAS source: the finest
+    power of ten with the extent within 1e9 steps (int32 holds 2.1e9), offsets on it."""
+    extent = float(np.max(np.asarray(hi, float) - np.asarray(lo, float)))
+    scale = 10.0 ** np.ceil(np.log10((extent if extent > 0 else 1.0) * 1e-9))
+    return np.full(3, scale), np.floor(np.asarray(lo, float) / scale) * scale
+
+
+class LasResultWriter:
+    """Write points and result columns to a LAS/LAZ file chunk by chunk.
+
+    Coordinates keep ``scales``/``offsets`` (those of the input, so the points are the
+    input's); LAZ when the path ends in ``.laz``. Use as a context manager on an open
+    binary file object (e.g. from :func:`core.io.atomic.atomic_write`).
+    """
+
+    def __init__(self, fileobj, *, scales, offsets, laz: bool):
+        import laspy
+
+        header = laspy.LasHeader(point_format=6, version="1.4")
+        header.scales = np.asarray(scales, float)
+        header.offsets = np.asarray(offsets, float)
+        header.add_extra_dims([laspy.ExtraBytesParams(name=n, type=_TYPES.get(n, np.float64))
+                               for n in RESULT_DIMS])
+        self._header = header
+        self._writer = laspy.open(fileobj, mode="w", header=header, do_compress=laz, closefd=False)
+
+    def write(self, points: np.ndarray, columns: dict) -> None:
+        """Append points (m, 3) and ``columns``: name -> (m,) array for every RESULT_DIMS name."""
+        import laspy
+
+        rec = laspy.ScaleAwarePointRecord.zeros(len(points), header=self._header)
+        rec.x, rec.y, rec.z = points[:, 0], points[:, 1], points[:, 2]
+        for name in RESULT_DIMS:
+            rec[name] = np.asarray(columns[name]).astype(_TYPES.get(name, np.float64))
+        self._writer.write_points(rec)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self._writer.close()
+        return False

@@ -1,0 +1,13 @@
+"""Estimate clouds of any size: spatial tiles with halos, on Dask, resumable.
+
+:func:`estimate_tiled` gives every point the answer of :func:`core.estimate` on the whole
+cloud while holding only a tile and its halo in memory: a pre-pass bins the points into
+tiles sized by point count (:mod:`.plan`, :mod:`.binning`), each Dask task reads its own
+tile and a halo proven wide enough for every neighbourhood its answers depend on
+(:mod:`.halo`, :mod:`.task`), tiles agree on normal signs through their overlaps
+(:mod:`.signs`), and the result is assembled atomically in input order (:mod:`.assemble`).
+"""
+
+from .run import DEFAULT_MEMORY, TiledRun, bytes_per_point, default_tile_points, estimate_tiled, parse_memory
+
+__all__ = ["estimate_tiled", "TiledRun", "bytes_per_point", "default_tile_points", "parse_memory", "DEFAULT_MEMORY"]

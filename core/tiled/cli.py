@@ -1,0 +1,138 @@
+"""The tiled half of ``darboux-cli estimate``: its options, when to use tiles, the run.
+
+``core.cli`` asks :func:`wanted` and hands over to :func:`run`. Tiles are used when asked
+(``--tile-points``, ``--workers``, ``--scheduler``), when a LAS/LAZ input's points would
+need more memory than the budget (``--memory``, default half the available memory), or
+when the output is LAS/LAZ (written in chunks, with extra-bytes dimensions).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+from ..io.las_stream import open_las
+from .run import bytes_per_point, estimate_tiled, parse_memory
+
+_LAS = (".las", ".laz")
+#: bytes per point of an in-memory k="auto" estimate (1M points measured 1.3-1.6 GB)
+AUTO_BYTES_PER_POINT = 1600
+
+
+def add_arguments(parser) -> None:
+    """The tiled options of ``estimate``."""
+    g = parser.add_argument_group("scans larger than memory (tiles on Dask)")
+    g.add_argument("--tile-points", type=int, default=None, metavar="N",
+                   help="estimate in tiles of about N points (default: by memory, when needed)")
+    g.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="Dask worker processes (default: one per core; 0: in this process)")
+    g.add_argument("--memory", default=None, metavar="SIZE",
+                   help="memory budget per worker, e.g. 2GB (default 1.5GB for tiles; above half the "
+                        "available memory for the whole cloud, tiles are used)")
+    g.add_argument("--scheduler", default=None, metavar="ADDRESS", help="use an existing Dask scheduler")
+    g.add_argument("--work-dir", default=None, help="where tiles are kept (default: .OUTPUT.tiles next to it)")
+
+
+def wanted(args) -> bool:
+    """Whether this estimate runs here (tiles, or a LAS/LAZ output) rather than in memory."""
+    if args.tile_points is not None or args.workers is not None or args.scheduler is not None:
+        return True
+    if str(args.output).lower().endswith(_LAS):
+        return True
+    return _too_big(args)
+
+
+def _too_big(args) -> bool:
+    if not str(args.input).lower().endswith(_LAS):
+        return False
+    count = open_las(args.input).count
+    return count * _bytes(args.k) > _in_memory_budget(args.memory)
+
+
+def _bytes(k) -> int:
+    return AUTO_BYTES_PER_POINT if k == "auto" else bytes_per_point(k)
+
+
+def _in_memory_budget(memory) -> int:
+    if memory is not None:
+        return parse_memory(memory)
+    try:
+        import psutil  # comes with dask.distributed (the [big] extra)
+
+        available = psutil.virtual_memory().available
+    except ImportError:
+        available = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    return available // 2
+
+
+def run(args) -> int:
+    """Run the estimate of ``args`` in tiles (or, for k="auto" within memory, whole, into LAS/LAZ)."""
+    orientation = args.viewpoint if args.viewpoint is not None else args.orientation
+    if args.k == "auto":
+        if _too_big(args) or args.tile_points is not None:
+            raise ValueError(f'{args.input}: too large for memory with k="auto", which is not available in '
+                             "tiles yet; pass an integer k (e.g. --k 15) to estimate it in tiles")
+        return _whole_to_las(args, orientation)
+    bar = _Bar(not args.quiet and (sys.stderr.isatty() or args.progress))
+    try:
+        res = estimate_tiled(
+            args.input, args.output, k=args.k, method=args.method, passes=args.passes, orientation=orientation,
+            options=dict(args.option or []) or None, tile_points=args.tile_points, workers=args.workers,
+            memory=args.memory or "1.5GB", scheduler=args.scheduler, workdir=args.work_dir,
+            ignore_normals=args.ignore_normals, progress=bar,
+        )
+    finally:
+        bar.close()
+    if not args.quiet:
+        print(f"{args.input}: {res.n_points} points in {res.n_tiles} tiles ({res.tiles_skipped} finished "
+              f"before), method {args.method}, k {args.k}, {res.seconds:.2f} s")
+        print(f"orientation agreement over tile overlaps: {100 * res.agreement:.2f} %")
+        print(f"wrote {res.output}")
+    return 0
+
+
+def _whole_to_las(args, orientation) -> int:
+    """k="auto" on a cloud that fits in memory, written as LAS/LAZ."""
+    import core
+    from ..io.atomic import atomic_write
+    from ..io.las_stream import LasResultWriter, quantisation
+
+    cloud = core.io.read_cloud(args.input, drop_nonfinite=args.drop_nonfinite)
+    normals = None if args.ignore_normals else cloud.normals
+    res = core.estimate(cloud.points, normals, k=args.k, method=args.method, passes=args.passes,
+                        orientation=orientation, options=dict(args.option or []))
+    if str(args.input).lower().endswith(_LAS):  # keep the input's quantisation: the same points
+        info = open_las(args.input)
+        scales, offsets = info.scales, info.offsets
+    else:
+        scales, offsets = quantisation(res.points.min(axis=0), res.points.max(axis=0))
+    cols = {"k1": res.k1, "k2": res.k2, "gaussian": res.gaussian, "mean": res.mean, "valid": res.valid,
+            "k": res.k_point}
+    for name, arr in (("n", res.normals), ("e1_", res.e1), ("e2_", res.e2)):
+        cols.update({f"{name}{c}": arr[:, j] for j, c in enumerate("xyz")})
+    with atomic_write(args.output) as f, LasResultWriter(f, scales=scales, offsets=offsets,
+                                                         laz=str(args.output).lower().endswith(".laz")) as w:
+        w.write(res.points, cols)
+    if not args.quiet:
+        print(f"{args.input}: {len(res)} points, method {res.method}, k {res.k}\nwrote {args.output}")
+    return 0
+
+
+class _Bar:
+    """One progress line on stderr with the stage (which carries the ETA)."""
+
+    def __init__(self, enabled: bool):
+        self.enabled = enabled
+
+    def __call__(self, fraction, stage):
+        if self.enabled and stage.startswith("dask dashboard"):
+            sys.stderr.write(f"\r{stage}\n")  # a link to keep: its own line
+        elif self.enabled:
+            pct = int(fraction * 100)
+            sys.stderr.write(f"\r[{'#' * (pct // 4):<25}] {pct:3d}% {stage:<40}")
+            sys.stderr.flush()
+
+    def close(self):
+        if self.enabled:
+            sys.stderr.write("\n")
+

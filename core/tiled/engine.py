@@ -1,0 +1,102 @@
+"""Run the tile tasks on Dask (``dask.distributed``), or in this process.
+
+By default a :class:`distributed.LocalCluster` sized to the machine: one single-threaded
+worker process per core (numba and the kd-tree each use their worker's core), each with
+the memory budget as its limit; ``client=`` or ``scheduler=ADDRESS`` use an existing
+cluster (dask-jobqueue, Kubernetes, ...) unchanged. Only a tile id and a few parameters
+go to the workers: each task reads its tile from the shared work directory. The
+dashboard link and a progress line with an ETA (from the points done per second) are
+reported through ``progress``.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+
+from .task import run_tile
+
+
+def run_tasks(root, tiles, sizes, spec, *, client=None, scheduler=None, workers=None, memory=None,
+              label="input", progress=None) -> list:
+    """Run :func:`run_tile` for every tile id in ``tiles``; returns their summaries.
+
+    ``sizes`` (points per tile) weighs the progress and the ETA. ``workers=0`` runs the
+    tiles one by one in this process (no cluster). A failing tile raises ValueError naming
+    ``label`` (the input file) and the tile.
+    """
+    tiles = list(tiles)
+    if not tiles:
+        return []
+    clock = _Clock(sum(sizes[t] for t in tiles), progress)
+    if client is None and scheduler is None and workers == 0:
+        out = []
+        for t in tiles:
+            out.append(_guarded(root, t, spec, label))
+            clock.done(sizes[t])
+        return out
+    return _on_dask(root, tiles, sizes, spec, clock, client=client, scheduler=scheduler, workers=workers,
+                    memory=memory, label=label)
+
+
+def _guarded(root, tile, spec, label):
+    try:
+        return run_tile(root, tile, spec)
+    except Exception as exc:
+        raise ValueError(f"{label}: tile {tile} failed: {type(exc).__name__}: {exc}") from exc
+
+
+def _on_dask(root, tiles, sizes, spec, clock, *, client, scheduler, workers, memory, label):
+    from distributed import Client, LocalCluster, as_completed
+
+    own_cluster = own_client = None
+    if client is None:
+        if scheduler is not None:
+            client = own_client = Client(scheduler)
+        else:
+            n = workers or max(1, os.cpu_count() or 1)
+            own_cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, memory_limit=memory,
+                                       dashboard_address=":0", silence_logs=40)
+            client = own_client = Client(own_cluster)
+    clock.note(f"dask dashboard {client.dashboard_link}")
+    futures = {client.submit(run_tile, str(root), t, spec, key=f"darboux-tile-{t}-{time.time_ns()}",
+                             pure=False): t for t in tiles}
+    out = []
+    try:
+        for fut in as_completed(futures):
+            t = futures[fut]
+            if fut.status == "error":
+                exc = fut.exception()
+                raise ValueError(f"{label}: tile {t} failed: {type(exc).__name__}: {exc}")
+            out.append(fut.result())
+            clock.done(sizes[t])
+    finally:
+        for fut in futures:
+            fut.cancel()
+        if own_client is not None:
+            own_client.close()
+        if own_cluster is not None:
+            own_cluster.close()
+    return out
+
+
+class _Clock:
+    """Progress over points done, with an ETA from the rate so far."""
+
+    def __init__(self, total, progress):
+        self.total = max(int(total), 1)
+        self.progress = progress
+        self.count = 0
+        self.t0 = time.perf_counter()
+
+    def note(self, text):
+        if self.progress is not None:
+            self.progress(self.count / self.total, text)
+
+    def done(self, points):
+        self.count += int(points)
+        if self.progress is None:
+            return
+        elapsed = time.perf_counter() - self.t0
+        eta = elapsed * (self.total - self.count) / max(self.count, 1)
+        self.progress(self.count / self.total, f"tiles, ETA {eta:5.0f} s")

@@ -1,0 +1,92 @@
+"""The halo of a tile: every point its own points' answers depend on, proven complete.
+
+With an integer k the answer at p depends on a chain of neighbourhoods (paper §4.2-4.4):
+the fit at p uses the normals of its k neighbours; in an NR pass those are themselves
+fits over *their* neighbours; the first fit uses the PCA normals (eqs. 13-14) of points
+one ring further, and each PCA normal needs that point's own k nearest neighbours. So
+with ``passes`` refinement passes the points up to ``passes + 1`` kNN rings away from the
+tile must see exactly their global k nearest neighbours (:func:`chain_rings`).
+
+A point's neighbours within the loaded box are its global ones when its k-th neighbour
+is closer than the box's boundary (every point beyond the boundary is farther). The box
+is the tile grown by a margin; :func:`check_halo` says by how much the margin falls
+short, and the task grows it until nothing does, so the halo is derived from the data
+(a sparse region or an outlier grows it) rather than guessed.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+#: own points whose k-th neighbour distance sets the first margin (a subsample suffices)
+_PROBE = 20_000
+#: the first margin is this many times (rings x the 99th percentile of the k-th distance)
+_MARGIN_SAFETY = 1.25
+_GROWTH = 1.5
+
+
+def chain_rings(passes: int) -> int:
+    """kNN rings beyond a tile whose neighbourhoods must be exact: one per fit (passes + 1)."""
+    return passes + 1
+
+
+def first_margin(own_xyz: np.ndarray, k: int, rings: int) -> float:
+    """A margin that usually suffices: (rings + 1) k-th neighbour distances, plus a safety."""
+    tree = cKDTree(own_xyz)
+    probe = own_xyz[:: max(1, len(own_xyz) // _PROBE)]
+    kk = min(k, len(own_xyz))
+    d, _ = tree.query(probe, k=kk)
+    r = float(np.quantile(np.reshape(d, (len(probe), kk))[:, -1], 0.99))
+    return _MARGIN_SAFETY * (rings + 1) * r
+
+
+def gather(store, plan, tile: int, margin: float):
+    """The points in the tile's box grown by ``margin``, sorted by input row.
+
+    Returns ``(binned records, owner tile of each, lo, hi)`` with lo/hi the grown box.
+    """
+    lo, hi = plan.lo[tile] - margin, plan.hi[tile] + margin
+    parts, owners = [], []
+    for t in plan.touching(lo, hi):
+        rec = store.read_bin(int(t))
+        if t != tile:
+            xyz = rec["xyz"]
+            rec = rec[((xyz >= lo) & (xyz <= hi)).all(axis=1)]
+        parts.append(np.asarray(rec))
+        owners.append(np.full(len(rec), t, dtype=np.int32))
+    rec = np.concatenate(parts) if parts else np.zeros(0, store.bin_dtype)
+    owner = np.concatenate(owners) if owners else np.zeros(0, np.int32)
+    order = np.argsort(rec["index"], kind="stable")
+    return rec[order], owner[order], lo, hi
+
+
+def rings_from(start: np.ndarray, idx: np.ndarray, rings: int) -> np.ndarray:
+    """Points within ``rings`` hops of ``start`` (bool mask) along kNN rows ``idx``."""
+    reached = start.copy()
+    frontier = np.flatnonzero(start)
+    for _ in range(rings):
+        nxt = np.unique(idx[frontier])
+        nxt = nxt[~reached[nxt]]
+        reached[nxt] = True
+        frontier = nxt
+    return reached
+
+
+def check_halo(xyz, dist_k, needed, lo, hi) -> float:
+    """How far the box falls short of holding every needed point's k-neighbour ball.
+
+    Negative when every point in ``needed`` has its k-th neighbour (at ``dist_k``)
+    strictly closer than every finite face of the box [lo, hi] (the halo is complete);
+    otherwise the largest shortfall (>= 0).
+    """
+    q, r = xyz[needed], dist_k[needed]
+    with np.errstate(invalid="ignore"):  # inf - inf on the infinite faces
+        room = np.minimum(np.where(np.isfinite(lo), q - lo, np.inf), np.where(np.isfinite(hi), hi - q, np.inf))
+    short = r - room.min(axis=1)
+    return float(short.max()) if len(short) else -np.inf
+
+
+def grown(margin: float, shortfall: float, scale: float) -> float:
+    """The next margin after a shortfall (grow by more than needed: new points bring new needs)."""
+    return margin + _GROWTH * shortfall + 1e-9 * max(scale, 1.0)

@@ -1,0 +1,189 @@
+"""``estimate_tiled``: the whole-cloud estimate, computed tile by tile in bounded memory."""
+
+from __future__ import annotations
+
+import os
+import pathlib
+import time
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+
+from .._progress import Progress
+from .._validate import check_int
+from ..methods import check_options, get_method
+from . import assemble, binning, engine, signs
+from .source import open_source
+from .store import TileStore, directory_for
+from .task import TileSpec
+
+#: memory of an in-memory estimate per point at integer k: ~250 bytes of arrays per point
+#: plus the cached neighbours (int32 index + float64 distance = 12 bytes per neighbour,
+#: twice while they are sorted); 3M points at k = 15 measured 1.75 GB (580 B/point)
+BASE_BYTES, BYTES_PER_NEIGHBOUR = 250, 24
+#: at least this many tiles per worker (when tiles keep MIN_TILE_POINTS): every core
+#: busy, and a slow tile does not leave the others idle at the end
+TILES_PER_WORKER = 3
+MIN_TILE_POINTS = 50_000
+#: what a halo adds to a tile of ~1M points at k = 15 (measured 5-15 %), with room to spare
+HALO_ALLOWANCE = 1.5
+#: what a worker process holds before any tile: Python, numpy, scipy, numba's compiled
+#: kernels, Dask (measured 210 MB after a first estimate), with room to spare
+RUNTIME_BYTES = 300_000_000
+DEFAULT_MEMORY = "1.5GB"
+_VERSION = 2  # bumped when the work directory's layout changes: old ones are cleared
+
+
+@dataclass(frozen=True)
+class TiledRun:
+    """What a tiled run did: the output, its size, and how the tiles went."""
+
+    output: pathlib.Path
+    n_points: int
+    n_tiles: int
+    tiles_skipped: int
+    agreement: float  # share of halo points whose orientations agree across tiles
+    seconds: float
+
+
+def bytes_per_point(k: int) -> int:
+    """Estimated peak memory of an in-memory estimate per point at integer ``k``."""
+    return BASE_BYTES + BYTES_PER_NEIGHBOUR * int(k)
+
+
+def parse_memory(memory) -> int:
+    """Bytes from 2_000_000_000, "2GB", "1.5 GiB", "500MB"."""
+    from dask.utils import parse_bytes
+
+    try:
+        value = int(memory) if isinstance(memory, (int, np.integer)) else parse_bytes(str(memory))
+    except (ValueError, TypeError):
+        raise ValueError(f"memory {memory!r} is invalid; give bytes or a size such as '2GB' or '1.5GiB'") from None
+    if value <= 0:
+        raise ValueError(f"memory {memory!r} is invalid; it must be positive")
+    return value
+
+
+def default_tile_points(k: int, memory) -> int:
+    """Points per tile so that a worker, a tile, its halo and the estimate fit in ``memory``."""
+    budget = parse_memory(memory)
+    if budget < 2 * RUNTIME_BYTES:
+        raise ValueError(f"memory {memory!r} is too small for a tile worker; give at least "
+                         f"{2 * RUNTIME_BYTES // 1_000_000}MB (a worker alone holds about {RUNTIME_BYTES // 1_000_000}MB)")
+    return max(10_000, int((budget - RUNTIME_BYTES) / (bytes_per_point(k) * HALO_ALLOWANCE)))
+
+
+def _prepare(source, normals, k, *, method, passes, orientation, options, tile_points, workers, memory,
+             ignore_normals):
+    """Validate the arguments (cheap checks before the file is opened) and resolve defaults."""
+    if isinstance(k, str):
+        raise ValueError(f'k must be an integer for a tiled estimate, got {k!r} (k="auto" needs the whole '
+                         "cloud's noise level and is not available in tiles yet)")
+    budget = parse_memory(memory)
+    if tile_points is not None:
+        tile_points = check_int(tile_points, name="tile_points", low=100, high=10**10)
+    if workers is not None:
+        check_int(workers, name="workers", low=0, high=4096)
+    src = open_source(source, normals, use_normals=not ignore_normals)
+    spec, rule = _spec(k, method, passes, orientation, options, src.has_normals, in_process=workers == 0,
+                       views=src.has_views)
+    tile_points = tile_points or _tile_points(spec.k, budget, src.count, workers)
+    return src, spec, rule, budget, tile_points
+
+
+def _tile_points(k, budget, count, workers) -> int:
+    """Tiles that fit the budget and keep every worker busy (TILES_PER_WORKER each)."""
+    n_workers = workers or os.cpu_count() or 1
+    busy = max(MIN_TILE_POINTS, -(-count // (TILES_PER_WORKER * n_workers)))
+    return min(default_tile_points(k, budget), busy)
+
+
+def estimate_tiled(source, output, *, normals=None, k=15, method="nr", passes=None, orientation="auto",
+                   options=None, tile_points=None, workers=None, memory=DEFAULT_MEMORY, client=None,
+                   scheduler=None, workdir=None, keep_workdir=False, ignore_normals=False,
+                   progress=None) -> TiledRun:
+    """Estimate a cloud of any size in spatial tiles with halos, on Dask, into a file.
+
+    Every point gets the answer of :func:`core.estimate` on the whole cloud (the same
+    neighbours and fits; the halo holds the whole dependency chain, see
+    :mod:`core.tiled.halo`); normal signs agree across tiles by their overlaps
+    (:mod:`core.tiled.signs`). Resumable: finished tiles are kept in ``workdir`` (by
+    default ``.<output name>.tiles`` next to the output) until the output is written.
+
+    Parameters
+    ----------
+    source : path of a point-cloud file (LAS/LAZ read in chunks; E57 scan by scan, the
+        scanner poses orienting the normals; other formats are read whole) or an (N, 3) array.
+    output : path of the result: .laz/.las (any size, written in chunks, extra-bytes
+        dimensions nx ny nz k1 k2 e1_* e2_* gaussian mean valid k) or .ply/.csv (in memory).
+    normals : (N, 3) array, optional, with an array ``source``.
+    k, method, passes, options : as for :func:`core.estimate`; k must be an integer.
+    orientation : as for :func:`core.estimate`: "auto", "outward", "propagate", "keep" or a
+        (3,) viewpoint (scanner position).
+    tile_points : points per tile; default from ``memory`` and k.
+    workers : Dask worker processes of the local cluster (default: one per core); 0 runs
+        the tiles in this process.
+    memory : budget per worker, e.g. "1.5GB" (Dask's limit for the local cluster).
+    client, scheduler : an existing ``distributed.Client``, or a scheduler address.
+    workdir, keep_workdir : where the tiles are kept, and whether to keep them afterwards.
+    ignore_normals : estimate normals even where the file has some.
+    progress : callable(fraction, stage), optional.
+
+    Returns
+    -------
+    TiledRun
+    """
+    t0 = time.perf_counter()
+    report = Progress(progress)
+    src, spec, rule, budget, tile_points = _prepare(
+        source, normals, k, method=method, passes=passes, orientation=orientation, options=options,
+        tile_points=tile_points, workers=workers, memory=memory, ignore_normals=ignore_normals)
+    output = pathlib.Path(os.fspath(output))
+    if src.identity[0] == os.path.abspath(output):
+        raise ValueError(f"output {output} is the input; the input is never overwritten")
+    store = TileStore(workdir or directory_for(output))
+    same_run = {**spec.__dict__, "threads": None}  # any number of workers may resume a run
+    resumed = store.open({"input": list(map(str, src.identity)), "spec": repr(same_run), "rule": rule,
+                          "tile_points": tile_points, "version": _VERSION})
+    plan = binning.plan_tiles(src, store, tile_points, report.sub(0.0, 0.05))
+    sizes = binning.bin_points(src, store, plan, report.sub(0.05, 0.15))
+    todo = [t for t in range(plan.n_tiles) if not store.finished(t)]
+    engine.run_tasks(store.root, todo, sizes, spec, client=client, scheduler=scheduler, workers=workers,
+                     memory=budget, label=src.name, progress=report.sub(0.15, 0.9))
+    report(0.9, "orientation across tiles")
+    tile_signs, agreement = signs.tile_signs(store, plan.n_tiles, rule)
+    report(0.93, "writing")
+    out = assemble.assemble(store, plan.n_tiles, plan.n_points, tile_signs, output, src)
+    if not keep_workdir:
+        store.remove()
+    report(1.0, "done")
+    skipped = plan.n_tiles - len(todo) if resumed else 0
+    return TiledRun(out, plan.n_points, plan.n_tiles, skipped, agreement, time.perf_counter() - t0)
+
+
+def _spec(k, method, passes, orientation, options, normals_given, in_process, views=False):
+    """The tile parameters (validated as :func:`core.estimate` does) and the sign rule."""
+    m = get_method(method)
+    opts = check_options(m, options)
+    k = check_int(k, name="k", low=m.min_k_for(opts), high=10**6)
+    passes = m.default_passes if passes is None else check_int(passes, name="passes", low=0, high=20)
+    if isinstance(orientation, str):
+        if orientation not in ("auto", "propagate", "outward", "keep"):
+            raise ValueError(f"orientation {orientation!r} is invalid; must be one of ['auto', 'propagate', "
+                             "'outward', 'keep'] or a (3,) viewpoint")
+        if orientation == "keep" or (orientation == "auto" and normals_given):
+            tile_orient, rule = "keep", "none"
+        elif orientation == "auto" and views:  # each normal faces the scanner that saw its point
+            tile_orient, rule = "scanner", "none"
+        else:
+            tile_orient, rule = "propagate", "outward" if orientation in ("auto", "outward") else "propagate"
+    else:
+        view = np.asarray(orientation, dtype=float)
+        if view.shape != (3,) or not np.isfinite(view).all():
+            raise ValueError(f"orientation as a viewpoint must be 3 finite numbers, got {orientation!r}")
+        tile_orient, rule = tuple(float(v) for v in view), "none"
+    spec = TileSpec(k=k, method=m.name, passes=passes, orientation=tile_orient, options=options or {},
+                    normals_given=normals_given,
+                    threads=numba.config.NUMBA_NUM_THREADS if in_process else 1)
+    return spec, rule

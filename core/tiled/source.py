@@ -1,0 +1,127 @@
+"""Where the points of a tiled run come from: a LAS/LAZ file read in chunks, an E57 file
+read scan by scan (each scan's pose gives its points' viewpoint, the scanner position),
+any other cloud file read once, or an array; all seen as a stream of
+``(start, points, normals, viewpoints)``."""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._validate import as_normals, as_points
+from ..io import read_cloud
+from ..io.cloud import CloudFileError
+from ..io.las_stream import CHUNK, iter_las, open_las
+
+_STREAMED = (".las", ".laz")
+_E57 = (".e57",)
+
+
+@dataclass(frozen=True)
+class Source:
+    """A cloud to estimate in tiles.
+
+    Attributes
+    ----------
+    name : the file (or "array"), for messages.
+    count : number of points.
+    has_normals : the source carries normals (they are then kept, as in memory).
+    has_views : the source carries a viewpoint per point (E57 scanner poses).
+    identity : what makes two runs on this source the same (path, size, mtime).
+    scales, offsets : LAS coordinate quantisation to reuse when writing LAS/LAZ, or None.
+    """
+
+    name: str
+    count: int
+    has_normals: bool
+    identity: tuple
+    has_views: bool = False
+    scales: object = None
+    offsets: object = None
+    _path: object = None
+    _points: object = None
+    _normals: object = None
+
+    def chunks(self, chunk: int = CHUNK):
+        """Yield ``(start, points (m, 3), normals (m, 3) or None, viewpoints (m, 3) or None)``
+        in input order."""
+        if self._path is not None and self.has_views:
+            yield from _iter_e57(self._path, chunk)
+            return
+        if self._path is not None:
+            for start, pts, nrm in iter_las(self._path, chunk=chunk):
+                yield start, pts, nrm, None
+            return
+        for start in range(0, self.count, chunk):
+            stop = min(self.count, start + chunk)
+            nrm = None if self._normals is None else self._normals[start:stop]
+            yield start, self._points[start:stop], nrm, None
+
+
+def open_source(source, normals=None, *, use_normals: bool = True) -> Source:
+    """A :class:`Source` from a path (LAS/LAZ streamed) or an (N, 3) array (+ normals);
+    ``use_normals=False`` ignores normals stored in the file."""
+    if isinstance(source, (str, os.PathLike)):
+        path = os.fspath(source)
+        stat = os.stat(path)
+        identity = (os.path.abspath(path), stat.st_size, stat.st_mtime_ns)
+        if path.lower().endswith(_STREAMED):
+            info = open_las(path)
+            return Source(path, info.count, use_normals and info.normals is not None, identity, scales=info.scales,
+                          offsets=info.offsets, _path=path)
+        if path.lower().endswith(_E57):
+            return Source(path, _e57_count(path), False, identity, has_views=True, _path=path)
+        cloud = read_cloud(path)
+        return _from_arrays(path, cloud.points, cloud.normals if use_normals else None, identity)
+    pts, _ = as_points(source)
+    nrm = None if normals is None else as_normals(normals, len(pts))
+    digest = hashlib.blake2b(pts.tobytes(), digest_size=16).hexdigest()
+    return _from_arrays("array", pts, nrm, ("array", len(pts), digest))
+
+
+def _from_arrays(name, points, normals, identity) -> Source:
+    if len(points) < 3:
+        raise ValueError(f"{name}: points must hold at least 3 points, got {len(points)}")
+    return Source(name, len(points), normals is not None, identity, _points=points,
+                  _normals=None if normals is None else np.asarray(normals, dtype=np.float64))
+
+
+def _e57(path):
+    try:
+        import pye57
+    except ImportError:
+        raise CloudFileError(path, "is E57, which needs pye57: run `pip install pye57`") from None
+    try:
+        return pye57.E57(str(path))
+    except Exception as exc:  # libE57 raises its own exception types  # noqa: BLE001
+        raise CloudFileError(path, f"not a readable E57 file: {exc}") from None
+
+
+def _e57_count(path) -> int:
+    """Points declared by the scans' headers (invalid points, if any, are left out later)."""
+    e57 = _e57(path)
+    return sum(int(e57.get_header(i).point_count) for i in range(e57.scan_count))
+
+
+def _iter_e57(path, chunk):
+    """Each scan in world coordinates, its valid points in chunks, the scanner position
+    (the pose's translation) as their viewpoint."""
+    e57 = _e57(path)
+    start = 0
+    for scan in range(e57.scan_count):
+        try:
+            data = e57.read_scan(scan, ignore_missing_fields=True, transform=True)
+            header = e57.get_header(scan)
+        except Exception as exc:  # noqa: BLE001
+            raise CloudFileError(path, f"scan {scan} is unreadable: {exc}") from None
+        pts = np.column_stack([data["cartesianX"], data["cartesianY"], data["cartesianZ"]]).astype(np.float64)
+        if "cartesianInvalidState" in data:
+            pts = pts[np.asarray(data["cartesianInvalidState"]) == 0]
+        view = np.asarray(header.translation, dtype=np.float64)
+        for first in range(0, len(pts), chunk):
+            part = pts[first:first + chunk]
+            yield start, part, None, np.broadcast_to(view, part.shape)
+            start += len(part)

@@ -1,0 +1,159 @@
+"""One tile: read it with its halo from the bins, estimate, keep its own points.
+
+This is the function a Dask worker runs; it reads and writes only its work directory,
+so nothing but the tile id and a few parameters travel through the scheduler.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from ..estimate import estimate
+from ..neighbours import build_neighbours
+from ..normals import ORIENT_K, pca_normals
+from .halo import chain_rings, check_halo, first_margin, gather, grown, rings_from
+from .plan import TilePlan
+from .store import TileStore
+
+#: margin growths before a tile gives up (each grows by 1.5x the measured shortfall)
+MAX_GROWTHS = 12
+
+ROW_DTYPE = np.dtype([("index", "<i8"), ("xyz", "<f8", 3), ("n", "<f8", 3), ("k1", "<f8"), ("k2", "<f8"),
+                      ("e1", "<f8", 3), ("e2", "<f8", 3), ("valid", "u1"), ("k", "<i4"), ("comp", "<i4")])
+#: a halo point near the tile: how this tile orients it (for sign agreement with its owner)
+LINK_DTYPE = np.dtype([("index", "<i8"), ("owner", "<i4"), ("comp", "<i4"), ("n", "<f8", 3)])
+#: one connected part of the tile's own points: what the final orientation needs
+NODE_DTYPE = np.dtype([("comp", "<i4"), ("count", "<i8"), ("sum", "<f8", 3), ("top_z", "<f8"),
+                       ("top_index", "<i8"), ("top_nz", "<f8")])
+
+
+@dataclass(frozen=True)
+class TileSpec:
+    """What every tile runs: the estimate's parameters and the in-tile orientation."""
+
+    k: int
+    method: str
+    passes: int
+    orientation: object  # "propagate", "keep", "scanner" (each point's viewpoint) or a (3,) viewpoint tuple
+    options: dict = field(default_factory=dict)
+    normals_given: bool = False
+    threads: int = 1
+
+
+def run_tile(root, tile: int, spec: TileSpec) -> dict:
+    """Estimate tile ``tile`` of the run in ``root`` unless already done; returns a summary."""
+    store = TileStore(root)
+    if store.finished(tile):
+        return {"tile": tile, "skipped": True, "points": len(store.load_result(tile))}
+    _set_threads(spec.threads)
+    plan = TilePlan.load(store.plan_path)
+    own_n = len(store.read_bin(tile))
+    if own_n == 0:
+        store.save_result(tile, np.zeros(0, ROW_DTYPE), np.zeros(0, LINK_DTYPE), np.zeros(0, NODE_DTYPE))
+        return {"tile": tile, "skipped": False, "points": 0, "loaded": 0}
+    rec, owner, nb, needed = _load_with_halo(store, plan, tile, spec)
+    pts = np.ascontiguousarray(rec["xyz"])
+    normals = np.ascontiguousarray(rec["n"]) if spec.normals_given else None
+    orientation = spec.orientation
+    if isinstance(orientation, tuple):
+        orientation = np.asarray(orientation)
+    elif orientation == "scanner":  # faced after the fit, each point towards its own viewpoint
+        orientation = "keep"
+    res = estimate(pts, normals, k=spec.k, method=spec.method, passes=spec.passes, orientation=orientation,
+                   options=dict(spec.options) or None, neighbours=nb)
+    own = owner == tile
+    comp = _components(nb.indices, np.isfinite(res.normals).all(axis=1), needed)
+    rows = _rows(rec, res, comp, own)
+    if spec.orientation == "scanner":
+        initial, _ = pca_normals(nb.points, *nb.take(spec.k))  # as estimate() computed them
+        _face_viewpoints(rows, initial[own], rec["view"][own])
+    halo = needed & ~own & (comp >= 0)
+    links = np.empty(int(halo.sum()), LINK_DTYPE)
+    links["index"], links["owner"] = rec["index"][halo], owner[halo]
+    links["comp"], links["n"] = comp[halo], res.normals[halo]
+    store.save_result(tile, rows, links, _nodes(rows))
+    return {"tile": tile, "skipped": False, "points": int(own.sum()), "loaded": len(pts)}
+
+
+def _load_with_halo(store, plan, tile, spec):
+    """Grow the halo until every point of the dependency chain has its true neighbours."""
+    own_xyz = np.asarray(store.read_bin(tile)["xyz"])
+    rings = chain_rings(spec.passes)
+    margin = first_margin(own_xyz, spec.k, rings)
+    scale = float(np.abs(plan.bounds).max())
+    for _ in range(MAX_GROWTHS):
+        rec, owner, lo, hi = gather(store, plan, tile, margin)
+        if len(rec) < spec.k:
+            raise ValueError(f"tile {tile}: only {len(rec)} points within reach, fewer than k={spec.k}")
+        nb = build_neighbours(rec["xyz"], spec.k)
+        needed = rings_from(owner == tile, nb.indices, rings)
+        shortfall = check_halo(nb.points, nb.distances[:, -1], needed, lo, hi)
+        if shortfall < 0:
+            return rec, owner, nb, needed
+        margin = grown(margin, shortfall, scale)
+    raise ValueError(f"tile {tile}: the halo did not cover the neighbourhoods after {MAX_GROWTHS} growths "
+                     f"(margin {margin:.4g})")
+
+
+def _components(idx, ok, exact) -> np.ndarray:
+    """Connected parts of the orientation graph (ORIENT_K nearest, as :func:`orient_normals`),
+    using only edges from points whose neighbours are exact; -1 where a point has no normal."""
+    n = len(idx)
+    src = np.flatnonzero(ok & exact)
+    nbr = idx[src, 1:ORIENT_K]
+    rows = np.repeat(src, nbr.shape[1])
+    cols = nbr.ravel().astype(np.int64)
+    keep = ok[cols] & (cols != rows)
+    graph = coo_matrix((np.ones(int(keep.sum()), np.int8), (rows[keep], cols[keep])), shape=(n, n))
+    _, labels = connected_components(graph, directed=False)
+    labels = labels.astype(np.int32)
+    labels[~ok] = -1
+    return labels
+
+
+def _rows(rec, res, comp, own) -> np.ndarray:
+    rows = np.empty(int(own.sum()), ROW_DTYPE)
+    rows["index"], rows["xyz"], rows["n"] = rec["index"][own], rec["xyz"][own], res.normals[own]
+    rows["k1"], rows["k2"], rows["e1"], rows["e2"] = res.k1[own], res.k2[own], res.e1[own], res.e2[own]
+    rows["valid"], rows["k"], rows["comp"] = res.valid[own], res.k_point[own], comp[own]
+    return rows
+
+
+def _face_viewpoints(rows, initial, views) -> None:
+    """Orient each row as if its initial normal had been turned towards its own viewpoint
+    (what ``orientation=(x, y, z)`` does for one). The fits follow the sign of the initial
+    normal (each fit's normal stays in the hemisphere of the one it refines), so flipping
+    the result (n -> -n, k1, k2 -> -k2, -k1, e1 <-> e2) where the initial normal faced away
+    is the same."""
+    flip = np.einsum("ij,ij->i", initial, views - rows["xyz"]) < 0
+    r = rows[flip]
+    r["n"] *= -1
+    r["k1"], r["k2"] = -rows["k2"][flip], -rows["k1"][flip]
+    r["e1"], r["e2"] = rows["e2"][flip], rows["e1"][flip]
+    rows[flip] = r
+
+
+def _nodes(rows) -> np.ndarray:
+    """Per connected part of the own points: count, coordinate sum and highest point."""
+    have = rows[rows["comp"] >= 0]
+    labels, inverse = np.unique(have["comp"], return_inverse=True)
+    nodes = np.zeros(len(labels), NODE_DTYPE)
+    nodes["comp"] = labels
+    nodes["count"] = np.bincount(inverse, minlength=len(labels))
+    for j in range(3):
+        nodes["sum"][:, j] = np.bincount(inverse, have["xyz"][:, j], len(labels))
+    # the highest point of each part (lowest input row among equals, as the in-memory seed)
+    order = np.lexsort((have["index"], -have["xyz"][:, 2], inverse))
+    first = order[np.searchsorted(inverse[order], np.arange(len(labels)))]
+    nodes["top_z"], nodes["top_index"], nodes["top_nz"] = have["xyz"][first, 2], have["index"][first], have["n"][first, 2]
+    return nodes
+
+
+def _set_threads(threads: int) -> None:
+    import numba
+
+    numba.set_num_threads(max(1, min(int(threads), numba.config.NUMBA_NUM_THREADS)))
