@@ -11,7 +11,6 @@ of one tile of a large cloud must.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from types import MappingProxyType
 from typing import Mapping
 
 import numpy as np
@@ -23,6 +22,19 @@ from .tuning import AUTO_PASSES, MAX_PASSES, PCA_K
 
 _ORIENTATIONS = ("auto", "propagate", "outward", "keep")
 _INITIAL = ("auto", "pca", "jet")
+
+
+class _Options(dict):
+    """The plan's method options: a dict that refuses changes (and pickles, unlike a
+    mappingproxy, so a plan can travel to worker processes)."""
+
+    def _refuse(self, *args, **kwargs):
+        raise TypeError("the options of an EstimatePlan are read-only; make a new plan")
+
+    __setitem__ = __delitem__ = clear = pop = popitem = setdefault = update = _refuse
+
+    def __reduce__(self):
+        return _Options, (dict(self),)
 
 
 @dataclass(frozen=True)
@@ -96,7 +108,7 @@ class EstimatePlan:
         passes = m.default_passes if passes is None else check_int(passes, name="passes", low=0, high=MAX_PASSES)
         view, label = _orientation(orientation, normals_given)
         return cls(
-            n_points=n, method=m, options=MappingProxyType(opts), auto=auto, k="auto" if auto else k,
+            n_points=n, method=m, options=_Options(opts), auto=auto, k="auto" if auto else k,
             candidates=ks, k_search=ks[-1], k_initial=k_initial, passes=passes, adaptive=auto,
             tol=_tol(tol), initial=_initial(initial, auto), orientation=view, orientation_label=label,
             noise=_measure("noise", noise), crease_typical=_measure("crease_typical", crease_typical),
