@@ -17,7 +17,7 @@ import numpy as np
 
 from . import scale
 from ._validate import check_int
-from .methods import Method, check_options, get_method
+from .methods import METHODS, Method, check_options, get_method
 from .tuning import AUTO_PASSES, MAX_PASSES, PCA_K
 
 _ORIENTATIONS = ("auto", "propagate", "outward", "keep")
@@ -127,8 +127,9 @@ def plan(n_points, **kwargs) -> EstimatePlan:
 def _auto_defaults(m, n, opts, given, passes):
     """k="auto" (NF/NR only): the candidates, and a robust cubic normal field with
     adaptive passes unless the user set them."""
-    if m.name not in ("nf", "nr"):
-        raise ValueError(f'k="auto" is available for methods nf and nr, not {m.name!r}; pass an integer k')
+    if not m.auto_k:
+        able = " and ".join(sorted(name for name, method in METHODS.items() if method.auto_k))
+        raise ValueError(f'k="auto" is available for methods {able}, not {m.name!r}; pass an integer k')
     ks = scale.candidates(n)
     if "robust" not in given:
         opts["robust"] = "tukey"  # free on clean data, keeps 3 % outliers from spoiling their neighbours
