@@ -142,6 +142,9 @@ def _plan(plan, n, asked, normals_given) -> EstimatePlan:
         raise ValueError(f"plan must be a core.EstimatePlan (from core.plan) or None, got {type(plan).__name__}")
     if plan.n_points != n:
         raise ValueError(f"plan was made for {plan.n_points} points, these are {n}; make a new plan")
+    if plan.orientation_label == "auto" and (plan.orientation == "keep") != normals_given:
+        raise ValueError(f"plan was made with normals_given={not normals_given} (orientation 'auto' resolved to "
+                         f"{plan.orientation!r}); make it with normals_given={normals_given}")
     changed = sorted(name for name, value in asked.items() if value is not _PLANNED[name] and value != _PLANNED[name])
     if changed:
         raise ValueError(f"pass either plan or {', '.join(changed)}, not both")

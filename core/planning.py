@@ -11,18 +11,30 @@ of one tile of a large cloud must.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from types import MappingProxyType
 from typing import Mapping
 
 import numpy as np
 
 from . import scale
 from ._validate import check_int
-from .methods import Method, check_options, get_method
+from .methods import METHODS, Method, check_options, get_method
 from .tuning import AUTO_PASSES, MAX_PASSES, PCA_K
 
 _ORIENTATIONS = ("auto", "propagate", "outward", "keep")
 _INITIAL = ("auto", "pca", "jet")
+
+
+class _Options(dict):
+    """The plan's method options: a dict that refuses changes (and pickles, unlike a
+    mappingproxy, so a plan can travel to worker processes)."""
+
+    def _refuse(self, *args, **kwargs):
+        raise TypeError("the options of an EstimatePlan are read-only; make a new plan")
+
+    __setitem__ = __delitem__ = clear = pop = popitem = setdefault = update = _refuse
+
+    def __reduce__(self):
+        return _Options, (dict(self),)
 
 
 @dataclass(frozen=True)
@@ -96,7 +108,7 @@ class EstimatePlan:
         passes = m.default_passes if passes is None else check_int(passes, name="passes", low=0, high=MAX_PASSES)
         view, label = _orientation(orientation, normals_given)
         return cls(
-            n_points=n, method=m, options=MappingProxyType(opts), auto=auto, k="auto" if auto else k,
+            n_points=n, method=m, options=_Options(opts), auto=auto, k="auto" if auto else k,
             candidates=ks, k_search=ks[-1], k_initial=k_initial, passes=passes, adaptive=auto,
             tol=_tol(tol), initial=_initial(initial, auto), orientation=view, orientation_label=label,
             noise=_measure("noise", noise), crease_typical=_measure("crease_typical", crease_typical),
@@ -115,8 +127,9 @@ def plan(n_points, **kwargs) -> EstimatePlan:
 def _auto_defaults(m, n, opts, given, passes):
     """k="auto" (NF/NR only): the candidates, and a robust cubic normal field with
     adaptive passes unless the user set them."""
-    if m.name not in ("nf", "nr"):
-        raise ValueError(f'k="auto" is available for methods nf and nr, not {m.name!r}; pass an integer k')
+    if not m.auto_k:
+        able = " and ".join(sorted(name for name, method in METHODS.items() if method.auto_k))
+        raise ValueError(f'k="auto" is available for methods {able}, not {m.name!r}; pass an integer k')
     ks = scale.candidates(n)
     if "robust" not in given:
         opts["robust"] = "tukey"  # free on clean data, keeps 3 % outliers from spoiling their neighbours

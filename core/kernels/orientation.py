@@ -8,17 +8,24 @@ from numba import njit
 from ._base import OPTS
 
 
+@njit(**OPTS, inline="always")
+def _edge(idx, ok, i, j):
+    """The end of the kNN edge from i to its j-th neighbour, or -1 where it is no edge of
+    the graph (a self loop, or an end without a normal)."""
+    q = idx[i, j]
+    return q if ok[i] and ok[q] and q != i else -1
+
+
 @njit(**OPTS)
 def _sym_adjacency(idx, ok):
-    """CSR of the symmetrised kNN graph over points with a normal (self loops dropped)."""
+    """CSR of the symmetrised kNN graph over points with a normal (self loops dropped):
+    one pass counts the degrees, a second fills the rows."""
     n, k = idx.shape
     deg = np.zeros(n + 1, dtype=np.int64)
     for i in range(n):
-        if not ok[i]:
-            continue
         for j in range(1, k):
-            q = idx[i, j]
-            if q != i and ok[q]:
+            q = _edge(idx, ok, i, j)
+            if q >= 0:
                 deg[i + 1] += 1
                 deg[q + 1] += 1
     for i in range(n):
@@ -26,11 +33,9 @@ def _sym_adjacency(idx, ok):
     adj = np.empty(deg[n], dtype=np.int64)
     fill = deg[:-1].copy()
     for i in range(n):
-        if not ok[i]:
-            continue
         for j in range(1, k):
-            q = idx[i, j]
-            if q != i and ok[q]:
+            q = _edge(idx, ok, i, j)
+            if q >= 0:
                 adj[fill[i]] = q
                 fill[i] += 1
                 adj[fill[q]] = i

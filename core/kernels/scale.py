@@ -130,11 +130,11 @@ def choose_scales(f, ks, rule, chosen):
     """Intersection of confidence intervals over nested neighbourhoods (see core.scale).
 
     One pass over each centre's ks[-1] neighbours (``f`` a
-    :class:`~core.kernels.nf.Frames`): the NF sums (polynomial of ``degree``)
-    grow neighbour by neighbour and are solved at each candidate size ks[c] (uniform
-    weights, no constraint, lengths in units of h = the distance to the largest
-    neighbourhood). ``chosen`` gets the largest k whose interval [W - gamma s, W + gamma s] (gamma = ``rule.gamma``)
-    still meets all previous ones.
+    :class:`~core.kernels.nf.Frames`, ``rule`` a :class:`ScaleRule`): the NF sums
+    (polynomial of ``rule.degree``) grow neighbour by neighbour and are solved at each
+    candidate size ks[c] (uniform weights, no constraint, lengths in units of h = the
+    distance to the largest neighbourhood). ``chosen`` gets the largest k whose interval
+    [W - gamma s, W + gamma s] (gamma = ``rule.gamma``) still meets all previous ones.
     """
     m = len(f.centres)
     n_blocks = (m + BLOCK - 1) // BLOCK

@@ -31,6 +31,8 @@ class Method:
     min_k : smallest neighbourhood that determines the fit.
     min_k_of : optional ``min_k_of(**options) -> int`` where the options change it.
     check : optional ``check(**options)`` raising ValueError on a value the fit refuses.
+    auto_k : whether k="auto" (a per-point k, :mod:`core.scale`) applies: the ICI rule
+        reads the confidence intervals of the normal fit, so NF and NR only.
     """
 
     name: str
@@ -42,6 +44,7 @@ class Method:
     min_k: int = 3
     min_k_of: Callable | None = None
     check: Callable | None = None
+    auto_k: bool = False
 
     def min_k_for(self, options: dict) -> int:
         """Smallest neighbourhood that determines the fit with these options."""
@@ -57,9 +60,9 @@ def _registry():
     nf_opts = dict(normal_fit.DEFAULTS)
     entries = [
         Method("nr", "NR – normal fitting + refinement", normal_fit.NR_DOC, normal_fit.fit, 1, nf_opts, 4, normal_fit.min_k,
-               normal_fit.check),
+               normal_fit.check, auto_k=True),
         Method("nf", "NF – normal fitting", normal_fit.NF_DOC, normal_fit.fit, 0, nf_opts, 4, normal_fit.min_k,
-               normal_fit.check),
+               normal_fit.check, auto_k=True),
         Method("ct", "CT – curvature tensor", tensor.DOC, tensor.fit, 0, {}, 3),
         Method("qp", "QP – quadric fit to points", quadric.QP_DOC, quadric.fit_points, 0, {}, 4),
         Method("qn", "QN – quadric fit to normals", quadric.QN_DOC, quadric.fit_normals, 0, {}, 3),

@@ -4,6 +4,7 @@ compiled kernel runs, and the whole-cloud quantities a tiled run must fix."""
 from __future__ import annotations
 
 import dataclasses
+import pickle
 import re
 
 import numpy as np
@@ -33,6 +34,10 @@ def test_plan_resolves_the_automatic_and_the_paper_pipelines():
         paper.k_search = 30
     with pytest.raises(TypeError):
         paper.options["degree"] = 2
+    again = pickle.loads(pickle.dumps(auto))  # a plan can travel to a worker process
+    assert again == auto and again.options == auto.options
+    with pytest.raises(TypeError):
+        again.options.update(degree=1)
 
 
 @pytest.mark.parametrize("k", ["auto", 30])
@@ -88,6 +93,11 @@ def test_a_plan_runs_the_same_estimate(sample):
         core.estimate(sample.points, k=20, plan=p)
     with pytest.raises(ValueError, match="plan was made for"):
         core.estimate(sample.points[:-1], plan=p)
+    with pytest.raises(ValueError, match="plan was made with normals_given=False"):
+        core.estimate(sample.points, sample.normals, plan=p)
+    given = core.plan(len(sample.points), k=15, normals_given=True)
+    r = core.estimate(sample.points, sample.normals, plan=given)
+    np.testing.assert_array_equal(r.k1, core.estimate(sample.points, sample.normals, k=15).k1)
 
 
 def test_fixing_the_measured_quantities_reproduces_the_run(sample):

@@ -5,16 +5,9 @@ from __future__ import annotations
 import numpy as np
 
 from ... import shapes
+from .._common import NOISE_UNIT, QUANTITIES, QUANTITY_TITLES, seed_of
 from .._table import style
 
-#: (key of metrics.summary, short name, axis label)
-QUANTITIES = (
-    ("gaussian", "K", "mean |K − K_true|  (1/length²)"),
-    ("mean", "H", "mean |H − H_true|  (1/length)"),
-    ("direction_deg", "e1", "mean angle(e1, e1_true)  (degrees)"),
-)
-QUANTITY_TITLES = {"gaussian": "Gaussian curvature K", "mean": "mean curvature H = (k1 + k2)/2",
-                   "direction_deg": "principal direction e1"}
 SHAPES = {
     "torus": ("torus (R = 2, r = 1)", lambda n, seed: shapes.torus(n, R=2.0, r=1.0, seed=seed)),
     "saddle": ("saddle surface", lambda n, seed: shapes.saddle(n, seed=seed)),
@@ -38,7 +31,6 @@ OPTIONS_SHAPES = ("torus", "saddle")
 OPTIONS_LEVELS = (0.1, 0.2)
 QUICK = dict(points=1000, levels=(0.1,), seeds=1, k_grid=(15, 30, 60), apss_scales=(6.0, 8.0),
              apss_pca_k=(15,), evaluate=1000, options_levels=(0.1,), options_passes=(1, 2))
-NOISE_UNIT = "σ of isotropic Gaussian noise, as a fraction of the mean point spacing"
 
 # column keys, labels and plot styles
 NR15, AUTO, NRBEST, JET2, JET3, APSS = "nr15", "auto", "nr_best", "jet2", "jet3", "apss"
@@ -65,8 +57,7 @@ def _styles():
     return s
 
 
-def _seed(*parts) -> int:
-    return int(np.random.SeedSequence([int(p) for p in parts]).generate_state(1)[0])
+_seed = seed_of
 
 
 def _nanmean(x) -> float:

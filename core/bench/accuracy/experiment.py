@@ -11,6 +11,7 @@ from ...estimate import estimate
 from ...neighbours import build_neighbours
 from ...normals import orient_normals, pca_normals
 from .. import apss as _apss
+from .._common import check_run
 from .cases import AccuracyRun, ShapeTable, _errors, _make_cases, _mean_over, _oracle, _sweep
 from .config import (APSS, APSS_PCA_K, APSS_SCALES, APSSE, AUTO, COUPLING_LEVEL, DEFAULT_LEVELS, EVALUATE, JET2,
                      JET3, K_GRID, METHODSMIN_JET3, NFE, NR15, NRBEST, OPTIONS_LEVELS, OPTIONS_SHAPES,
@@ -23,14 +24,7 @@ def run(points=5000, levels=DEFAULT_LEVELS, seeds=2, seed=0, shapes_=tuple(SHAPE
         robust_levels=ROBUST_LEVELS, options_shapes=OPTIONS_SHAPES, options_levels=OPTIONS_LEVELS,
         options_passes=(1, 2, 3), progress=None) -> AccuracyRun:
     """Run the race, the robustness table and the options table; return the numbers."""
-    levels = tuple(float(x) for x in levels)
-    if not levels or any(not np.isfinite(x) or x < 0 for x in levels):
-        raise ValueError(f"levels must be finite numbers >= 0, got {levels}")
-    if seeds < 1:
-        raise ValueError(f"seeds must be >= 1, got {seeds}")
-    unknown = [s for s in shapes_ if s not in SHAPES]
-    if unknown:
-        raise ValueError(f"unknown shape(s) {unknown}; valid: {list(SHAPES)}")
+    levels = check_run(levels, seeds, "seeds", shapes_, SHAPES, "shape")
     say = progress or (lambda msg: None)
     t_all = time.perf_counter()
     notes, conventions, use_apss = _apss_setup(use_apss)

@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ... import build_neighbours, estimate, metrics, noise
+from .._common import check_run
 from .config import DEFAULT_LEVELS, METHODS, QUANTITIES, SURFACES, _seed
 
 
@@ -83,15 +84,8 @@ def run(points=5000, k=15, levels=DEFAULT_LEVELS, repeats=3, seed=0, surfaces=("
         the exact normals on the noise-free sample.
     progress : callable(message: str), optional.
     """
-    levels = tuple(float(x) for x in levels)
     methods = tuple(methods)
-    if not levels or any(not np.isfinite(x) or x < 0 for x in levels):
-        raise ValueError(f"levels must be finite numbers >= 0, got {levels}")
-    if repeats < 1:
-        raise ValueError(f"repeats must be >= 1, got {repeats}")
-    unknown = [s for s in surfaces if s not in SURFACES]
-    if unknown:
-        raise ValueError(f"unknown surface(s) {unknown}; valid: {list(SURFACES)}")
+    levels = check_run(levels, repeats, "repeats", surfaces, SURFACES, "surface")
     t_all = time.perf_counter()
     tables = {}
     nq, nl, nm = len(QUANTITIES), len(levels), len(methods)
