@@ -121,3 +121,25 @@ def kruskal_signs(order, rows, cols, evidence, n, flip):
         roots[x] = r
         flip[x] = p
     return roots
+
+
+@njit(**_OPTS)
+def strongest_first(evidence, levels):
+    """Indices of the non-zero entries of ``evidence`` by decreasing |evidence|, to within
+    1 / ``levels`` (a counting sort: linear time, where a comparison sort of 10^7 edges
+    costs more than the whole spanning forest)."""
+    count = np.zeros(levels + 1, dtype=np.int64)
+    for e in range(len(evidence)):
+        if evidence[e] != 0.0:
+            b = levels - min(levels - 1, int(abs(evidence[e]) * levels))
+            count[b] += 1
+    start = np.zeros(levels + 1, dtype=np.int64)
+    for b in range(1, levels + 1):
+        start[b] = start[b - 1] + count[b - 1]
+    order = np.empty(start[levels] + count[levels], dtype=np.int64)
+    for e in range(len(evidence)):
+        if evidence[e] != 0.0:
+            b = levels - min(levels - 1, int(abs(evidence[e]) * levels))
+            order[start[b]] = e
+            start[b] += 1
+    return order

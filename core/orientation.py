@@ -31,6 +31,9 @@ FAR_SHARE = 0.05
 #: an offset along a normal counts in the chord test only beyond this many times the
 #: pair's spread (RMS offset of their neighbours from their planes): below it, it is noise
 GATE = 2.0
+#: edges are taken strongest first to within 1/SORT_LEVELS of evidence (ties below that
+#: make no measurable difference; a counting sort is 5x faster than argsort at 10^7 edges)
+SORT_LEVELS = 4096
 MODES = ("outward", "propagate", "keep")
 
 
@@ -69,23 +72,20 @@ def orient(points, normals, idx, mode="outward", *, ok=None) -> Orientation:
     graph = np.ascontiguousarray(idx[:, :ORIENT_K], dtype=np.int64)
     n = len(pts)
     labels = np.where(ok, 0, -1)
-    if isinstance(mode, str) and mode == "keep":
-        pass
-    elif not isinstance(mode, str):
-        facing = np.einsum("ij,ij->i", nrm, np.asarray(mode, dtype=float) - pts) < 0
-        nrm[facing] *= -1
-    else:
-        ev = _evidence(pts, nrm, graph, ok)
-        rows = np.repeat(np.arange(n), graph.shape[1])
+    ev = _evidence(pts, nrm, graph, ok)
+    sign = np.ones(n)
+    if not isinstance(mode, str):
+        sign[np.einsum("ij,ij->i", nrm, np.asarray(mode, dtype=float) - pts) < 0] = -1.0
+    elif mode != "keep":
         flat = ev.ravel()
-        use = np.flatnonzero(flat != 0.0)
-        order = use[np.argsort(-np.abs(flat[use]), kind="stable")]
+        order = kern.strongest_first(flat, SORT_LEVELS)
         flip = np.zeros(n, dtype=np.int8)
-        roots = kern.kruskal_signs(order, rows, graph.ravel(), flat, n, flip)
-        nrm[flip == 1] *= -1
+        roots = kern.kruskal_signs(order, np.repeat(np.arange(n), graph.shape[1]), graph.ravel(), flat, n, flip)
+        sign[flip == 1] = -1.0
         labels = np.where(ok, np.unique(roots, return_inverse=True)[1], -1)
-        _global_signs(pts, nrm, labels, mode)
-    return Orientation(nrm, _confidence(pts, nrm, graph, ok), labels)
+        _global_signs(pts, nrm * sign[:, None], labels, mode, sign)
+    # the evidence is bilinear in the two normals: flipping either flips its sign
+    return Orientation(nrm * sign[:, None], _confidence(ev * sign[:, None] * sign[graph], ok), labels)
 
 
 def orient_normals(points, normals, idx, mode, *, ok=None):
@@ -93,8 +93,8 @@ def orient_normals(points, normals, idx, mode, *, ok=None):
     return orient(points, normals, idx, mode, ok=ok).normals
 
 
-def _global_signs(points, normals, labels, mode):
-    """Flip whole components: "outward" by a vote of each component's points farthest from
+def _global_signs(points, normals, labels, mode, sign):
+    """Flip whole components (in ``sign``): "outward" by a vote of each component's points farthest from
     the cloud's centre (weighted by how squarely they face away), "propagate" by the sign
     of its highest point's normal z."""
     have = np.flatnonzero(labels >= 0)
@@ -119,14 +119,12 @@ def _global_signs(points, normals, labels, mode):
         with np.errstate(invalid="ignore", divide="ignore"):
             facing = np.einsum("ij,ij->i", normals[have[far]], rel[far]) / dist[far]
         vote = np.bincount(lab[far], np.nan_to_num(facing), n_comp)
-    flip = vote[lab] < 0
-    normals[have[flip]] *= -1
+    sign[have[vote[lab] < 0]] *= -1.0
 
 
-def _confidence(points, normals, graph, ok):
+def _confidence(ev, ok):
     """Evidence-weighted share of each point's neighbours whose sign agrees with its own
     (1: all agree, 0.5: undecided, 0: all disagree); 0 where there is no normal."""
-    ev = _evidence(points, normals, graph, ok)
     total = np.abs(ev).sum(axis=1)
     agree = np.clip(ev, 0.0, None).sum(axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
