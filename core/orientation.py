@@ -26,8 +26,9 @@ from . import _orient_kernels as kern
 #: test needs the graph to reach across a thin part's edges; measured on the thin shapes
 #: (tests/test_orientation.py) at noise 0.2 spacing.
 ORIENT_K = 10
-#: share of a component's points, farthest from the cloud's centre, that vote on its sign
-FAR_SHARE = 0.05
+#: the points of a component that vote on its sign: those at least this share of its
+#: largest distance from the cloud's centre (where the surface faces away from it)
+FAR_SHARE = 0.9
 #: an offset along a normal counts in the chord test only beyond this many times the
 #: pair's spread (RMS offset of their neighbours from their planes): below it, it is noise
 GATE = 2.0
@@ -72,20 +73,21 @@ def orient(points, normals, idx, mode="outward", *, ok=None) -> Orientation:
     graph = np.ascontiguousarray(idx[:, :ORIENT_K], dtype=np.int64)
     n = len(pts)
     labels = np.where(ok, 0, -1)
-    ev = _evidence(pts, nrm, graph, ok)
+    ev, first = _evidence(pts, nrm, graph, ok)
     sign = np.ones(n)
     if not isinstance(mode, str):
         sign[np.einsum("ij,ij->i", nrm, np.asarray(mode, dtype=float) - pts) < 0] = -1.0
     elif mode != "keep":
         flat = ev.ravel()
-        order = kern.strongest_first(flat, SORT_LEVELS)
+        order = kern.strongest_first(flat, first.ravel(), SORT_LEVELS)
         flip = np.zeros(n, dtype=np.int8)
         roots = kern.kruskal_signs(order, np.repeat(np.arange(n), graph.shape[1]), graph.ravel(), flat, n, flip)
         sign[flip == 1] = -1.0
         labels = np.where(ok, np.unique(roots, return_inverse=True)[1], -1)
         _global_signs(pts, nrm * sign[:, None], labels, mode, sign)
-    # the evidence is bilinear in the two normals: flipping either flips its sign
-    return Orientation(nrm * sign[:, None], _confidence(ev * sign[:, None] * sign[graph], ok), labels)
+    confidence = np.empty(n)
+    kern.agreement(ev, graph, (sign < 0).astype(np.int8), ok, confidence)
+    return Orientation(nrm * sign[:, None], confidence, labels)
 
 
 def orient_normals(points, normals, idx, mode, *, ok=None):
@@ -95,7 +97,7 @@ def orient_normals(points, normals, idx, mode, *, ok=None):
 
 def _global_signs(points, normals, labels, mode, sign):
     """Flip whole components (in ``sign``): "outward" by a vote of each component's points farthest from
-    the cloud's centre (weighted by how squarely they face away), "propagate" by the sign
+    the cloud's centre (within 10 % of the farthest) (weighted by how squarely they face away), "propagate" by the sign
     of its highest point's normal z."""
     have = np.flatnonzero(labels >= 0)
     if not len(have):
@@ -111,30 +113,23 @@ def _global_signs(points, normals, labels, mode, sign):
     else:
         rel = points[have] - points[have].mean(axis=0)
         dist = np.linalg.norm(rel, axis=1)
-        order = np.lexsort((-dist, lab))
-        sizes = np.bincount(lab, minlength=n_comp)
-        starts = np.r_[0, np.cumsum(sizes)[:-1]]
-        rank = np.arange(len(order)) - starts[lab[order]]
-        far = order[rank < np.maximum(1, np.ceil(FAR_SHARE * sizes[lab[order]]))]
+        reach = np.zeros(n_comp)
+        np.maximum.at(reach, lab, dist)
+        far = np.flatnonzero(dist >= FAR_SHARE * reach[lab])
         with np.errstate(invalid="ignore", divide="ignore"):
             facing = np.einsum("ij,ij->i", normals[have[far]], rel[far]) / dist[far]
         vote = np.bincount(lab[far], np.nan_to_num(facing), n_comp)
     sign[have[vote[lab] < 0]] *= -1.0
 
 
-def _confidence(ev, ok):
-    """Evidence-weighted share of each point's neighbours whose sign agrees with its own
-    (1: all agree, 0.5: undecided, 0: all disagree); 0 where there is no normal."""
-    total = np.abs(ev).sum(axis=1)
-    agree = np.clip(ev, 0.0, None).sum(axis=1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        conf = np.where(total > 0, agree / total, 0.5)
-    return np.where(ok, conf, 0.0)
-
-
 def _evidence(points, normals, graph, ok):
-    spread = np.empty(len(points))
-    kern.plane_spread(points, normals, graph, ok, spread)
+    """The signed evidence of every graph edge, and which entries are an edge's first copy."""
+    n = len(points)
+    packed = np.zeros((n, 8))  # one cache line per point for the random reads
+    packed[:, :3] = points
+    packed[:, 3:6] = normals
+    kern.plane_spread(points, normals, graph, ok, packed[:, 6])
     ev = np.empty(graph.shape)
-    kern.sign_evidence(points, normals, graph, ok, spread, GATE, ev)
-    return ev
+    first = np.empty(graph.shape, dtype=np.bool_)
+    kern.sign_evidence(packed, graph, ok, GATE, ev, first)
+    return ev, first
