@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import _border_kernels as kern
+from .neighbours import build_neighbours
 
 #: neighbours per point for the test (the point itself included). With 30 the disc of
 #: neighbours reaches ~3.1 spacings, so that a point 1 spacing from a rim has a clear
@@ -61,3 +62,14 @@ def border_flags(points, normals, idx):
     with np.errstate(invalid="ignore"):
         border = (gap > GAP) | (reach < REACH)
     return border, gap, reach
+
+
+def border_of(points, normals, nb):
+    """:func:`border_flags` with :data:`BORDER_K` neighbours from ``nb`` (a
+    :class:`core.Neighbours`), or from a search of their own when ``nb`` holds fewer."""
+    k = min(BORDER_K, len(points))
+    if nb.k_max >= k:
+        idx = nb.take(k)[0]
+    else:  # e.g. an integer k < 30: one more search, the test is meaningless on fewer
+        idx = build_neighbours(points, k).take(k)[0]
+    return border_flags(points, normals, idx)[0]

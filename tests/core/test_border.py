@@ -67,3 +67,14 @@ def test_range_scan_no_wild_curvature_unless_flagged(sigma):
     wild = r.valid & (h > 10 * p99) & ~flag & ~r.crease & ~r.outlier
     assert not wild.any()
     assert flag[s.normals[:, 2] < 0.05].all()  # the outermost ring, seen edge-on
+
+
+def test_border_of_searches_more_neighbours_when_needed():
+    s = shapes.plane(3000, seed=5)
+    few = build_neighbours(s.points, 15)
+    many = build_neighbours(s.points, 40)
+    a = border.border_of(s.points, s.normals, few)
+    b = border.border_of(s.points, s.normals, many)
+    np.testing.assert_array_equal(a, b)
+    tiny = shapes.plane(12, seed=1)
+    assert border.border_of(tiny.points, tiny.normals, build_neighbours(tiny.points, 5)).shape == (12,)
