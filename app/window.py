@@ -30,6 +30,8 @@ from PySide6.QtWidgets import (
 )
 from pyvistaqt import QtInteractor
 
+from core.spacing import mean_spacing
+
 from . import DEFAULT_CLOUD, ICON, _refguard
 from .errors import Notifier
 from .presenter import ResultPresenter, status_line, summary_line
@@ -535,11 +537,6 @@ class MainWindow(QMainWindow):
 
 def _rough_spacing(points: np.ndarray) -> float:
     """Mean nearest-neighbour distance from a sample (until the worker's exact value arrives)."""
-    from scipy.spatial import cKDTree
-
-    pts = np.asarray(points, dtype=float)
-    if len(pts) < 2:
+    if len(points) < 2:
         return 1.0
-    sample = pts[np.random.default_rng(0).choice(len(pts), size=min(len(pts), 500), replace=False)]
-    d, _ = cKDTree(pts).query(sample, k=2)
-    return float(np.mean(d[:, 1])) or 1.0
+    return mean_spacing(points, sample=500) or 1.0

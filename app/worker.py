@@ -24,6 +24,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from PySide6.QtCore import QObject, QThread, Signal, Slot
 
+from core.spacing import mean_spacing
+
 from .fields import compute_fields
 from .source import CloudSource
 
@@ -199,8 +201,7 @@ class EstimateWorker(QObject):
                 import core.metrics
 
                 summaries = [core.metrics.summary(r, sample) for r in results]
-            d = np.asarray(self._nb.distances)
-            spacing = float(np.nanmean(d[:, 1])) if d.shape[1] > 1 else 1.0
+            spacing = mean_spacing(points, neighbours=self._nb) if self._nb.k_max > 1 else 1.0
             out = EstimateOutput(
                 gen=req.gen,
                 request=req,
