@@ -78,3 +78,16 @@ def test_border_of_searches_more_neighbours_when_needed():
     np.testing.assert_array_equal(a, b)
     tiny = shapes.plane(12, seed=1)
     assert border.border_of(tiny.points, tiny.normals, build_neighbours(tiny.points, 5)).shape == (12,)
+
+
+@pytest.mark.parametrize("k", ["auto", 15])
+def test_estimate_result_carries_the_border_flag(k):
+    """The result's ``border``: rims of an open patch flagged, a closed surface not."""
+    pts, spacing, dist = _plane_with_hole(6)
+    r = core.estimate(pts, k=k)
+    assert r.border.dtype == bool and r.border.shape == (len(pts),)
+    assert r.border[dist <= 1.0].mean() >= 0.95
+    assert r.border[dist > 3.0].mean() <= 0.01
+    assert not r.border[~r.valid].any()
+    closed = core.estimate(shapes.sphere(3000, seed=2).points, k=k)
+    assert closed.border.mean() <= 0.01

@@ -107,3 +107,12 @@ def test_thin_shapes_are_what_they_say():
     for s in (tube, plate, shell, shapes_thin.two_sheets(20000)):
         np.testing.assert_allclose(np.linalg.norm(s.normals, axis=1), 1.0)
         assert np.all(s.k1 >= s.k2)
+
+
+def test_result_carries_orientation_confidence():
+    s = shapes_thin.thin_plate(20000, seed=0)
+    r = core.estimate(_noisy(s, 0.2), k=15, method="nf")
+    c = r.orientation_confidence
+    assert c.shape == (len(s.points),) and np.all((c >= 0) & (c <= 1))
+    wrong = np.einsum("ij,ij->i", r.normals, s.normals) < 0
+    assert np.median(c[~wrong]) > 0.99 and np.median(c[wrong]) < np.median(c[~wrong])
