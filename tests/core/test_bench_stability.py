@@ -29,3 +29,13 @@ def test_cli_table_on_a_user_file(tmp_path, capsys, monkeypatch):
     assert main(["bench", "stability", str(path)]) == 0
     text = capsys.readouterr().out
     assert text.count("ball.xyz") == 2 and "50% |dH|/|H|" in text
+
+
+def test_measure_counts_border_and_file_normal_repairs():
+    s = shapes.plane(2000, seed=2)
+    given = s.normals.copy()
+    given[:7] = 0.0
+    given[7:10] *= 3.0
+    out = stability.measure(s.points, given, estimate_kw=dict(k=15, method="nf"))
+    assert out["repaired"] == 10
+    assert 0.02 < out["border"] < 0.5  # an open square: its rim, not its inside
