@@ -91,7 +91,8 @@ class ResultPresenter:
         name = s.field if s.field in out.fields else "mean"
         spec = FIELDS[name]
         pairs = self._pairs()
-        both = np.concatenate([fields[name] for _, _, fields in pairs if fields and name in fields])
+        # border points (scan rims, holes) are drawn grey and kept out of the colour limits
+        both = np.concatenate([_off_border(fields[name], res) for _, res, fields in pairs if fields and name in fields])
         signed = is_signed(spec, both)
         if s.clim_auto or s.clim is None:
             floor = curvature_floor(name, self.scene.radius())
@@ -101,8 +102,8 @@ class ResultPresenter:
         else:
             clim = s.clim
         cmap = colormap_for(spec, signed)
-        for scene, _res, fields in pairs:
-            scene.set_values(fields[name], title=spec.title, cmap=cmap, clim=clim)
+        for scene, res, fields in pairs:
+            scene.set_values(_off_border(fields[name], res, keep_shape=True), title=spec.title, cmap=cmap, clim=clim)
         self.field_panel.show_limits(*clim)
         self.histogram.set_data(out.fields[name], clim=clim, cmap=cmap, label=spec.label)
         self.shown = {"field": name, "clim": clim, "cmap": cmap, "gen": out.gen}
@@ -157,6 +158,14 @@ def _title(out, method: str, result, summary: dict | None) -> str:
     return text
 
 
+def _off_border(values, res, *, keep_shape=False):
+    """``values`` without the result's border points (NaN there with ``keep_shape``)."""
+    border = getattr(res, "border", None)
+    if border is None or not np.any(border) or np.ndim(values) != 1:
+        return values
+    return np.where(border, np.nan, values) if keep_shape else np.asarray(values)[~border]
+
+
 def status_line(out) -> str:
     """The status bar's description of a result."""
     res, req = out.result, out.request
@@ -168,6 +177,12 @@ def status_line(out) -> str:
     if req.noise > 0:
         text += f"  ·  noise {req.noise:g}%"
     text += f"  ·  {invalid:,} invalid (grey)" if invalid else "  ·  all valid"
+    border = getattr(res, "border", None)
+    n_border = 0 if border is None else int(np.count_nonzero(border))
+    text += f"  ·  {n_border:,} on a border (grey)" if n_border else ""
+    repaired = (getattr(res, "params", None) or {}).get("normals_repaired") or {}
+    fixed = repaired.get("unusable", 0) + repaired.get("renormalised", 0)
+    text += f"  ·  {fixed:,} file normals repaired" if fixed else ""
     text += f"  ·  {out.elapsed:.2f} s" + (" (neighbours reused)" if out.reused_neighbours else "")
     return text
 

@@ -404,6 +404,7 @@ class MainWindow(QMainWindow):
         self.scene.set_title(f"{source.name}\nestimating…")
         self.setWindowTitle(f"Darboux — {source.name}")
         self.status_label.setText(f"{source.name}: {source.n_points:,} points — estimating…")
+        self.normals_check.setEnabled(source.normals is not None)  # nothing to use otherwise
         self.summary_label.setText("")
         self.render_all()
 

@@ -32,14 +32,20 @@ def as_points(points, *, name: str = "points", drop_nonfinite: bool = False):
     return arr, finite
 
 
-def as_normals(normals, n_points: int, *, name: str = "normals"):
-    """Validate optional input normals: (N, 3), finite, non-zero; returned unit length."""
+def as_normals(normals, n_points: int, *, name: str = "normals", repair: bool = False):
+    """Validate optional input normals: (N, 3), finite, non-zero; returned unit length.
+
+    With ``repair`` only the dtype and shape are checked and a float64 copy is returned
+    as it is: :mod:`core.normal_repair` then fixes the unusable rows one by one.
+    """
     arr = np.asarray(normals)
     if not (np.issubdtype(arr.dtype, np.integer) or np.issubdtype(arr.dtype, np.floating)):
         raise ValueError(f"{name} must be a numeric array (real) of shape ({n_points}, 3), got dtype {arr.dtype}")
     if arr.shape != (n_points, 3):
         raise ValueError(f"{name} must have shape ({n_points}, 3) to match points, got shape {arr.shape}")
     arr = np.array(arr, dtype=np.float64, order="C", copy=True)
+    if repair:
+        return arr
     if not np.isfinite(arr).all():
         raise ValueError(f"{name} contains NaN or inf values")
     # scaled by the largest component first: the norm of (1e300, 0, 0) would overflow to inf

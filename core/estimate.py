@@ -11,10 +11,10 @@ import numpy as np
 from . import degenerate, interop
 from ._progress import Progress
 from ._validate import as_normals, as_points
-from .normals import orient_normals
 from .planning import EstimatePlan
 from .result import CurvatureResult
-from .stages import Initial, choose_scale, crease_reference, find_neighbours, flags, initial_normals, outlier_scores, refine
+from .stages import (choose_scale, crease_reference, find_neighbours, flags, given_normals, initial_normals,
+                     orient_signs, outlier_scores, refine)
 from .tuning import AUTO_PASSES, MAX_PASSES, OUTLIER_SCORE, PASS_DECAY, PCA_K
 
 __all__ = ["estimate", "AUTO_PASSES", "MAX_PASSES", "OUTLIER_SCORE", "PASS_DECAY", "PCA_K"]
@@ -45,7 +45,9 @@ def estimate(
         Open3D, trimesh or laspy (or a :class:`core.io.Cloud`), whose normals, if it has
         any, are used unless ``normals`` is given (see :mod:`core.interop`).
     normals : (N, 3) array_like, optional. Used as the initial normals (their signs are
-        kept); otherwise weighted PCA (eqs. 13–14) estimates them.
+        kept); otherwise weighted PCA (eqs. 13–14) estimates them. Rows a file left
+        zero, NaN or inf are estimated from their neighbours and rows of another length
+        renormalised (``params["normals_repaired"]`` counts them).
     k : "auto" (default) or int. Neighbourhood size including the point itself (the paper
         uses 15). "auto" (NF/NR only) chooses k per point by a bias–variance rule, see
         :mod:`core.scale`; the result's ``k_point`` holds the choice. Unless set in
@@ -68,7 +70,9 @@ def estimate(
         units of their radius; ``params["initial_k"]``; see :data:`core.scale.INITIAL_K0`),
         and in robust mode leaves out the points flagged as outliers.
     orientation : "auto" (keep given normals; orient estimated ones outward), "propagate"
-        (Hoppe et al. 1992), "outward", "keep", or a (3,) viewpoint.
+        (each component's highest point faces +z), "outward", "keep", or a (3,) viewpoint;
+        signs follow the chord-aware spanning forest of :mod:`core.orientation`, which
+        holds across thin parts (the result's ``orientation_confidence``).
     neighbours : :class:`core.Neighbours`, optional, from :func:`build_neighbours` on the
         same points with ``k_max >= k``; reused instead of a new search.
     options : dict, optional, method options (see ``core.METHODS[name].options``).
@@ -109,7 +113,7 @@ def estimate(
         shape = np.shape(normals)
         if shape != (len(kept), 3):
             raise ValueError(f"normals must have shape ({len(kept)}, 3) to match points, got shape {shape}")
-        normals = as_normals(np.asarray(normals)[kept], len(pts))
+        normals = as_normals(np.asarray(normals)[kept], len(pts), repair=True)
     report = Progress(progress)
 
     nb = find_neighbours(pts, plan, neighbours, report.sub(0.0, 0.3))
@@ -117,11 +121,12 @@ def estimate(
     idx_p, _ = nb.take(plan.k_initial)
     scores = outlier_scores(pts, idx_p)
     outlier = scores > OUTLIER_SCORE
+    repaired = None
     if normals is None:
         init = initial_normals(pts, nb, plan, outlier, report)
     else:
-        init = Initial(normals, np.ones(len(pts), dtype=bool))
-    init = init._replace(normals=orient_normals(pts, init.normals, idx_p, plan.orientation, ok=init.has_normal))
+        init, repaired = given_normals(pts, normals, nb, plan)
+    init, confidence = orient_signs(pts, init, idx_p, plan)
     report(0.45, "orientation")
 
     reference = None
@@ -130,9 +135,9 @@ def estimate(
     inliers = init.has_normal & ~outlier if plan.robust else init.has_normal  # outliers sit out the choice of k
     kc = choose_scale(pts, init.normals, nb, inliers, plan, report.sub(0.47, 0.7))
     best = refine(pts, init, outlier, nb, kc, plan, report.sub(0.7 if plan.auto else 0.45, 1.0))
-    marks = flags(best.fit, scores, plan, reference)
+    marks = flags(best.fit, scores, plan, reference, nb=nb, confidence=confidence)
     report(1.0, "done")
-    return _result(pts, kept, plan, stages=(init, best, kc, marks), neighbours=nb, normals_given=normals is not None)
+    return _result(pts, kept, plan, stages=(init, best, kc, marks), neighbours=nb, repaired=repaired)
 
 
 def _plan(plan, n, asked, normals_given) -> EstimatePlan:
@@ -151,20 +156,22 @@ def _plan(plan, n, asked, normals_given) -> EstimatePlan:
     return plan
 
 
-def _result(pts, kept, plan, *, stages, neighbours, normals_given) -> CurvatureResult:
+def _result(pts, kept, plan, *, stages, neighbours, repaired) -> CurvatureResult:
     """The result and its params from the stages' outputs (initial normals, refined fit,
-    k per point, flags)."""
+    k per point, flags); ``repaired``: the counts of the given normals' repair, or None
+    when no normals were given."""
     init, best, kc, marks = stages
+    normals_given = repaired is not None
     fit = best.fit
     params = dict(
         method=plan.method.name, k=plan.k, passes=plan.passes, passes_run=best.passes_run, tol=plan.tol,
         orientation=plan.orientation_label, options=dict(plan.options), n_points=len(pts),
         dropped=int(np.count_nonzero(~kept)), normals_given=normals_given,
         initial=None if normals_given else plan.initial, initial_k=init.k, noise=init.noise,
-        crease_typical=marks.crease_typical,
+        crease_typical=marks.crease_typical, normals_repaired=repaired,
     )
     return CurvatureResult(
         points=pts, normals=np.where(fit.valid[:, None], fit.normals, best.input_normals), k1=fit.k1, k2=fit.k2,
         e1=fit.e1, e2=fit.e2, valid=fit.valid, k_point=kc, outlier_score=marks.outlier_score, crease=marks.crease,
-        method=plan.method.name, k=plan.k, passes=plan.passes, params=params, neighbours=neighbours,
+        border=marks.border, orientation_confidence=marks.orientation_confidence, method=plan.method.name, k=plan.k, passes=plan.passes, params=params, neighbours=neighbours,
     )

@@ -1,4 +1,4 @@
-"""Initial normals by weighted PCA (paper eqs. 13–14) and global orientation (Hoppe et al. 1992)."""
+"""Initial normals by weighted PCA (paper eqs. 13–14) and 2-jets; orientation is in :mod:`core.orientation`."""
 
 from __future__ import annotations
 
@@ -6,7 +6,8 @@ import numpy as np
 
 from . import kernels
 from .linalg import tangent_basis
-from .tuning import COLLINEAR, ORIENT_K, RCOND, THETA_REACH
+from .orientation import orient_normals  # noqa: F401  (moved: orientation lives in core.orientation)
+from .tuning import COLLINEAR, RCOND, THETA_REACH
 
 _CHUNK = 131_072
 
@@ -63,47 +64,3 @@ def jet_normals(points, normals, ok, idx, dist, *, progress=None):
         if progress is not None:
             progress(min(len(rows), start + _CHUNK) / max(len(rows), 1), "normals")
     return out, height
-
-
-def orient_normals(points, normals, idx, mode, *, ok=None):
-    """Make normal signs globally consistent; returns a new array.
-
-    Parameters
-    ----------
-    mode : "propagate" (Hoppe et al. 1992: flip along a minimum spanning tree of the
-        kNN graph weighted by 1 - |n_i . n_j|, each component seeded at its highest point
-        with its normal pointing up), "outward" (propagate, then flip each connected
-        component so most normals point away from its centroid), "keep", or a (3,)
-        viewpoint array (each normal faces the viewpoint).
-    """
-    normals = np.array(normals, dtype=np.float64, order="C", copy=True)
-    if ok is None:
-        ok = np.isfinite(normals).all(axis=1)
-    if isinstance(mode, str) and mode == "keep":
-        return normals
-    if not isinstance(mode, str):
-        flip = np.einsum("ij,ij->i", normals, np.asarray(mode, dtype=float) - points) < 0
-        normals[flip] *= -1
-        return normals
-    labels = np.empty(len(normals), dtype=np.int64)
-    z_order = np.argsort(-points[:, 2], kind="stable")
-    graph = np.ascontiguousarray(idx[:, :ORIENT_K])
-    n_comp = kernels.propagate_orientation(z_order, normals, graph, ok, labels)
-    if mode == "outward":
-        _outward(points, normals, labels, n_comp)
-    return normals
-
-
-def _outward(points, normals, labels, n_comp):
-    """Flip whole components so that most normals point away from the component centroid."""
-    have = labels >= 0
-    if not have.any():  # harden: no point has a normal (empty bincounts would be int)
-        return
-    lab = labels[have]
-    count = np.bincount(lab, minlength=n_comp).astype(float)
-    centre = np.stack([np.bincount(lab, points[have, j], n_comp) for j in range(3)], axis=1)
-    centre /= np.maximum(count, 1)[:, None]
-    out = np.sign(np.einsum("ij,ij->i", normals[have], points[have] - centre[lab]))
-    flip_comp = np.bincount(lab, out, n_comp) < 0
-    rows = np.flatnonzero(have)[flip_comp[lab]]
-    normals[rows] *= -1

@@ -27,6 +27,12 @@ class CurvatureResult:
     crease : (N,) bool, points where the linear normal model fails (RMS residual of the
         normal fit > 0.25 of the normals' spread, and > 3x the cloud's median residual, so
         that noise is not taken for edges): sharp edges and corners, flagged rather than trusted.
+    border : (N,) bool, points on a border of the sampled surface (scan rims, holes,
+        silhouettes; see :mod:`core.border`): their fits are one-sided, flagged rather
+        than trusted.
+    orientation_confidence : (N,) float in [0, 1], the evidence-weighted share of a
+        point's neighbours whose normal sign agrees with its own (1: all; 0 without a
+        normal; see :mod:`core.orientation`).
     method, k, passes, params : what was run (``k`` is an int or "auto").
     neighbours : the :class:`core.Neighbours` used, to pass back for a fast re-estimate.
     """
@@ -46,6 +52,8 @@ class CurvatureResult:
     k_point: np.ndarray = None
     outlier_score: np.ndarray = None
     crease: np.ndarray = None
+    border: np.ndarray = None
+    orientation_confidence: np.ndarray = None
 
     def __post_init__(self):
         n = len(self.points)
@@ -53,8 +61,11 @@ class CurvatureResult:
             object.__setattr__(self, "k_point", np.full(n, self.k if isinstance(self.k, int) else -1))
         if self.outlier_score is None:
             object.__setattr__(self, "outlier_score", np.full(n, np.nan))
-        if self.crease is None:
-            object.__setattr__(self, "crease", np.zeros(n, dtype=bool))
+        for name in ("crease", "border"):
+            if getattr(self, name) is None:
+                object.__setattr__(self, name, np.zeros(n, dtype=bool))
+        if self.orientation_confidence is None:
+            object.__setattr__(self, "orientation_confidence", np.full(n, np.nan))
 
     def __len__(self) -> int:
         return len(self.points)

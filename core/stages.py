@@ -11,8 +11,11 @@ import numpy as np
 
 from . import kernels, scale
 from .frame import darboux_frame
+from .border import border_of
 from .neighbours import Neighbours, search_neighbours
+from .normal_repair import repair_normals
 from .normals import jet_normals, pca_normals
+from .orientation import orient
 from .patch import Chunk
 from .tuning import CREASE_NOISE, CREASE_RATIO, CREASE_SPREAD, OUTLIER_FLOOR, OUTLIER_SCORE, PASS_DECAY
 
@@ -54,12 +57,15 @@ class Refined(NamedTuple):
 
 class Flags(NamedTuple):
     """Per-point flags of the result (another flag is one more field here and one more
-    line in :func:`flags`): ``outlier_score`` (N,), ``crease`` (N,) bool, and the typical
-    residual the creases were judged against."""
+    line in :func:`flags`): ``outlier_score`` (N,), ``crease`` (N,) bool, the typical
+    residual the creases were judged against, ``border`` (N,) bool (see
+    :mod:`core.border`) and the ``orientation_confidence`` (N,) of :func:`core.orientation.orient`."""
 
     outlier_score: np.ndarray
     crease: np.ndarray
     crease_typical: float
+    border: np.ndarray | None = None
+    orientation_confidence: np.ndarray | None = None
 
 
 def find_neighbours(pts, plan, neighbours, report) -> Neighbours:
@@ -80,6 +86,20 @@ def outlier_scores(pts, idx) -> np.ndarray:
     scores = np.full(len(pts), np.nan)
     kernels.outlier_scores(pts, np.ascontiguousarray(idx), OUTLIER_FLOOR, scores)
     return scores
+
+
+def given_normals(pts, normals, nb, plan) -> tuple[Initial, dict]:
+    """The caller's (or file's) normals with unusable rows (zero, NaN, inf) estimated from
+    their neighbours and unscaled ones renormalised (:mod:`core.normal_repair`); the
+    counts go to ``params["normals_repaired"]``."""
+    fixed, counts = repair_normals(pts, normals, *nb.take(plan.k_initial))
+    return Initial(fixed, np.isfinite(fixed).all(axis=1)), counts
+
+
+def orient_signs(pts, init: Initial, idx, plan) -> tuple[Initial, np.ndarray]:
+    """Signs made consistent (:func:`core.orientation.orient`) and their confidence."""
+    out = orient(pts, init.normals, idx, plan.orientation, ok=init.has_normal)
+    return init._replace(normals=out.normals), out.confidence
 
 
 def initial_normals(pts, nb, plan, outlier, report) -> Initial:
@@ -215,12 +235,17 @@ def _mean_angle_deg(a, b, mask):
     return float(np.degrees(np.arccos(np.clip(cos, 0.0, 1.0))).mean())
 
 
-def flags(fit: Fit, scores, plan, reference: Fit | None) -> Flags:
-    """Per-point flags: the outlier scores, and creases judged on ``reference`` (the
-    linear fit at the initial scale, k="auto") or on the fit itself."""
+def flags(fit: Fit, scores, plan, reference: Fit | None, *, nb=None, confidence=None) -> Flags:
+    """Per-point flags: the outlier scores, creases judged on ``reference`` (the linear
+    fit at the initial scale, k="auto") or on the fit itself, and, given the neighbours
+    ``nb``, the border points among the valid ones (on the refined normals)."""
     judged = fit if reference is None else reference
     crease, typical = _creases(judged.valid, judged.rms, judged.spread, plan.crease_typical)
-    return Flags(outlier_score=scores, crease=fit.valid & crease, crease_typical=typical)
+    border = None
+    if nb is not None:
+        border = fit.valid & border_of(nb.points, np.where(fit.valid[:, None], fit.normals, np.nan), nb)
+    return Flags(outlier_score=scores, crease=fit.valid & crease, crease_typical=typical, border=border,
+                 orientation_confidence=confidence)
 
 
 def _creases(valid, rms, spread, typical=None):

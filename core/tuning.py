@@ -27,8 +27,6 @@ THETA_REACH = 1.1
 #: a neighbourhood is treated as collinear (no normal) when its middle eigenvalue is
 #: this small relative to the largest
 COLLINEAR = 1e-10
-#: neighbours per point in the orientation graph (Hoppe et al. use a small k too)
-ORIENT_K = 8
 #: initial normals for k="auto" come from INITIAL_K0 x sqrt(noise) neighbours (at least
 #: PCA_K), noise being the cloud's median of (RMS distance of the neighbours from their
 #: osculating 2-jet) / (radius of the 15 neighbours). The jet normal's variance falls as

@@ -83,7 +83,7 @@ def _stage_rows(points, k):
     (nrm, ok), dt, mem = _timed(lambda: pca_normals(nb.points, idx, dist))
     rows.append(("PCA normals (eqs. 13-14)", dt, mem))
     nrm, dt, mem = _timed(lambda: orient_normals(nb.points, nrm, idx, "outward", ok=ok))
-    rows.append(("orientation (Hoppe MST)", dt, mem))
+    rows.append(("orientation (core.orientation)", dt, mem))
     m = get_method("nr")
     kc = np.full(len(points), k, dtype=np.int64)
 

@@ -5,7 +5,8 @@ per algorithm.
 - :mod:`.nf` the normal fit NF (eqs. 21-26) with :mod:`.lstsq` (its least
   squares) and :mod:`.robust` (IRLS weights, median);
 - :mod:`.scale` the per-point choice of k (ICI) and the fold test that bounds it;
-- :mod:`.orientation` Hoppe's minimum-spanning-tree orientation; :mod:`.outliers` scores;
+- :mod:`.sign_evidence` the signed chord evidence and Kruskal signs of :mod:`core.orientation`;
+  :mod:`.border` the angular-gap border test; :mod:`.outliers` scores;
 - :mod:`.algebra` small dense linear algebra shared by them.
 
 Each kernel is a plain loop over points doing what its docstring's numpy reference says;
@@ -16,12 +17,11 @@ argument lists.
 
 from .jet import jet_normals
 from .nf import Fits, Frames, Settings, normal_fit
-from .orientation import propagate_orientation
 from .outliers import outlier_scores
 from .pca import pca_normals
 from .scale import ScaleRule, choose_scales
 
 __all__ = [
     "pca_normals", "jet_normals", "normal_fit", "Frames", "Settings", "Fits", "ScaleRule", "choose_scales",
-    "propagate_orientation", "outlier_scores",
+    "outlier_scores",
 ]

@@ -60,7 +60,7 @@ def monomials(u, v, n, degree, R):
         poly_row(u[j], v[j], degree, R[:, j])
 
 
-@njit(cache=True, nogil=True, fastmath=True)
+@njit(**OPTS, fastmath=True)
 def _accumulate_linear(R, X, Y, wt, j0, j1, vec, G, acc):
     """:func:`accumulate` for degree 1: all sums in one pass (short neighbourhoods
     gain nothing from vectors)."""
@@ -100,7 +100,7 @@ def _accumulate_linear(R, X, Y, wt, j0, j1, vec, G, acc):
     acc[2] += yy
 
 
-@njit(cache=True, nogil=True, fastmath=True)
+@njit(**OPTS, fastmath=True)
 def accumulate(R, X, Y, wt, j0, j1, degree, vec, G, acc):
     """Add neighbours j0..j1-1 to the weighted normal equations of X and Y on the
     monomials R (G lower triangle, right-hand sides vec[BX], vec[BY]) and to acc =

@@ -6,8 +6,8 @@ the tile that owns it and by the tile that sees it in its halo: each such point 
 "same" or "opposite" on the edge between the two nodes. Signs are fixed along a maximum
 spanning tree of that graph (the strongest agreements first, as Hoppe's tree follows the
 most parallel normals), then each connected part of the whole cloud gets the in-memory
-rule: "outward" flips it so that most normals point away from its centroid, "propagate"
-so that its highest point's normal points up (+z).
+rule (:func:`core.orientation.orient`): "outward" by a vote of its points farthest from
+the cloud's centre, "propagate" so that its highest point's normal points up (+z).
 """
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import breadth_first_order, connected_components, minimum_spanning_tree
 
+from ..orientation import FAR_SHARE
 from .store import TileStore
 
 _CHUNK = 1_000_000
@@ -112,19 +113,32 @@ def _upward(flat, part, parity) -> np.ndarray:
 
 
 def _outward(store, nodes, offset, flat, part, parity) -> np.ndarray:
-    """Flip each part so most of its normals point away from its centroid."""
+    """Flip each part as :func:`core.orientation.orient` does in memory: a vote of its
+    points farthest from the cloud's centre (beyond FAR_SHARE x its RMS distance), each
+    weighted by how squarely its normal faces away from the centre."""
     n_parts = int(part.max()) + 1
-    count = np.bincount(part, flat["count"], n_parts)
-    centre = np.stack([np.bincount(part, flat["sum"][:, j], n_parts) for j in range(3)], axis=1)
-    centre /= np.maximum(count, 1)[:, None]
+    centre = flat["sum"].sum(axis=0) / max(float(flat["count"].sum()), 1.0)
+    square = np.zeros(n_parts)
+    for chunk, node in _own_chunks(store, nodes, offset):
+        square += np.bincount(part[node], np.sum((chunk["xyz"] - centre) ** 2, axis=1), n_parts)
+    reach = np.sqrt(square / np.maximum(np.bincount(part, flat["count"], n_parts), 1))
     vote = np.zeros(n_parts)
+    for chunk, node in _own_chunks(store, nodes, offset):
+        rel = chunk["xyz"] - centre
+        dist = np.linalg.norm(rel, axis=1)
+        far = dist >= FAR_SHARE * reach[part[node]]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            facing = np.einsum("ij,ij->i", chunk["n"][far], rel[far]) / dist[far]
+        vote += np.bincount(part[node[far]], np.nan_to_num(facing) * parity[node[far]], n_parts)
+    return np.where(vote[part] < 0, -1.0, 1.0)
+
+
+def _own_chunks(store, nodes, offset):
+    """(rows, global node id) of every tile's own points that have a normal, in chunks."""
     for t in range(len(nodes)):
         rows = store.load_result(t)
         for start in range(0, len(rows), _CHUNK):
             chunk = rows[start:start + _CHUNK]
             node = _node_of(nodes[t], offset[t], chunk["comp"])
             have = node >= 0
-            node = node[have]
-            out = np.sign(np.einsum("ij,ij->i", chunk["n"][have], chunk["xyz"][have] - centre[part[node]]))
-            vote += np.bincount(part[node], np.nan_to_num(out) * parity[node], n_parts)
-    return np.where(vote[part] < 0, -1.0, 1.0)
+            yield chunk[have], node[have]

@@ -14,7 +14,8 @@ from scipy.sparse.csgraph import connected_components
 
 from ..estimate import estimate
 from ..neighbours import build_neighbours
-from ..normals import ORIENT_K, pca_normals
+from ..normals import pca_normals
+from ..orientation import ORIENT_K
 from .halo import chain_rings, check_halo, first_margin, gather, grown, rings_from
 from .plan import TilePlan
 from .store import TileStore

@@ -157,18 +157,26 @@ def test_validation_happens_before_the_search(small):
         (lambda n: n[:-1], r"normals must have shape \(200, 3\) to match points, got shape \(199, 3\)"),
         (lambda n: n[:, :2], r"normals must have shape \(200, 3\) to match points, got shape \(200, 2\)"),
         (lambda n: n[:, 0], r"normals must have shape \(200, 3\) to match points, got shape \(200,\)"),
-        (lambda n: np.vstack([[0.0, 0, 0], n[1:]]), r"normals has 1 zero-length vector\(s\) \(first at row 0\)"),
-        (lambda n: np.vstack([n[:5], [[0.0, 0, 0]] * 2, n[7:]]),
-         r"normals has 2 zero-length vector\(s\) \(first at row 5\)"),
-        (lambda n: np.vstack([[np.nan, 0, 1], n[1:]]), r"normals contains NaN or inf"),
         (lambda n: n.astype(object), r"normals must be a numeric array.*dtype object"),
         (lambda n: n.astype(str), r"normals must be a numeric array.*dtype <U"),
     ],
-    ids=["short", "N2", "1d", "zero_row", "two_zero_rows", "nan", "object", "strings"],
+    ids=["short", "N2", "1d", "object", "strings"],
 )
 def test_bad_normals(make, match, small):
     with pytest.raises(ValueError, match=match):
         core.estimate(small.points, make(small.normals), k=15)
+
+
+@pytest.mark.parametrize("bad", [[0.0, 0, 0], [np.nan, 0, 1], [np.inf, 0, 0]], ids=["zero", "nan", "inf"])
+def test_unusable_file_normals_repaired_not_refused(bad, small):
+    """Issue 12: a scan's zero / NaN normals are estimated per row, not a reason to refuse
+    the file (the message used to be "pass normals=None")."""
+    given = small.normals.copy()
+    given[[0, 5, 6]] = bad
+    r = core.estimate(small.points, given, k=15)
+    assert r.params["normals_repaired"] == {"unusable": 3, "renormalised": 0, "estimated": 3}
+    assert np.all(np.einsum("ij,ij->i", r.normals[[0, 5, 6]], small.normals[[0, 5, 6]]) > 0.99)
+    np.testing.assert_array_equal(given[[0, 5, 6]], [bad] * 3)  # the caller's array untouched
 
 
 def test_unnormalised_normals_are_normalised(small):

@@ -67,13 +67,17 @@ def test_huge_or_small_given_normals_normalised(sphere, scale):
     np.testing.assert_allclose(np.linalg.norm(res.normals, axis=1), 1.0)
 
 
-def test_zero_normals_still_refused(sphere):
+def test_zero_and_tiny_normals(sphere):
+    """A zero row is repaired (issue 12: estimated from its neighbours); a file whose
+    normals are all tiny is merely unscaled."""
     nrm = sphere.normals.copy()
     nrm[5] = 0.0
-    with pytest.raises(ValueError, match="zero-length"):
-        core.estimate(sphere.points, nrm, k=15)
-    with pytest.raises(ValueError, match="zero-length"):  # below 1e-12: taken as 'no normal'
-        core.estimate(sphere.points, sphere.normals * 1e-300, k=15)
+    res = core.estimate(sphere.points, nrm, k=15)
+    assert res.valid.all() and res.params["normals_repaired"]["estimated"] == 1
+    assert np.dot(res.normals[5], sphere.normals[5]) > 0.99
+    res = core.estimate(sphere.points, sphere.normals * 1e-300, k=15)
+    assert res.valid.all() and res.params["normals_repaired"]["renormalised"] == len(sphere.points)
+    np.testing.assert_allclose(np.median(res.mean), 1.0, rtol=0.05)
 
 
 def test_check_int_empty_range_message():

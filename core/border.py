@@ -1,0 +1,75 @@
+"""Border points: where the surface sampled by a cloud ends (scan rims, holes, silhouettes).
+
+A point inside a sampled surface has neighbours all around it in its tangent plane; a
+border point has an empty side. Two readings of the neighbours projected on the tangent
+plane flag it:
+
+- the **angular gap**, the widest angle between consecutive neighbour directions (the
+  classic test of PCL's boundary estimation): a point on a straight rim sees about 180
+  degrees empty. Random sampling alone leaves gaps of 80-100 degrees inside a surface at
+  30 neighbours, so only a wide gap counts (:data:`GAP`);
+- the **reach**, the smallest over directions u of the farthest neighbour offset along u,
+  in units of the neighbourhood radius: about 1 inside, at most d / r at a distance d from
+  a border, since nothing lies beyond it. This catches the points a spacing or so inside
+  the rim, whose gap the neighbours between them and the rim have already closed.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .kernels import border as kern
+from .neighbours import build_neighbours
+
+#: neighbours per point for the test (the point itself included). With 30 the disc of
+#: neighbours reaches ~3.1 spacings, so that a point 1 spacing from a rim has a clear
+#: empty side while the chance that random sampling leaves one inside is ~1e-3
+#: (measured: tests/core/test_border.py, random planes, noise 0 and 0.2 spacing).
+BORDER_K = 30
+#: flag when the widest empty angle between neighbour directions exceeds this (degrees);
+#: at 30 random neighbours an interior gap this wide has a probability of ~2e-4
+GAP = 120.0
+#: flag when the reach (see module doc) is below this: 1 spacing / 3.1 spacings plus room
+#: for noise of 0.2 spacing; interior points measured at >= 0.6 (1st percentile)
+REACH = 0.42
+#: directions over which the reach is the minimum (every 11.25 degrees)
+N_DIRS = 32
+
+
+def border_flags(points, normals, idx):
+    """Flag border points from their neighbours in the tangent plane.
+
+    Parameters
+    ----------
+    points : (N, 3) float array.
+    normals : (N, 3) unit normals (sign irrelevant), NaN rows where there is none.
+    idx : (N, K) int neighbour indices, the point first; the first :data:`BORDER_K`
+        columns are used.
+
+    Returns
+    -------
+    border : (N,) bool, False where there is no normal.
+    gap : (N,) widest empty angle (degrees), NaN where there is no normal.
+    reach : (N,) float, see the module doc, NaN where there is no normal.
+    """
+    pts = np.ascontiguousarray(points, dtype=np.float64)
+    nrm = np.ascontiguousarray(normals, dtype=np.float64)
+    graph = np.ascontiguousarray(idx[:, :BORDER_K], dtype=np.int64)
+    gap = np.empty(len(pts))
+    reach = np.empty(len(pts))
+    kern.tangent_extent(pts, nrm, graph, N_DIRS, gap, reach)
+    gap = np.degrees(gap)
+    with np.errstate(invalid="ignore"):
+        border = (gap > GAP) | (reach < REACH)
+    return border, gap, reach
+
+
+def border_of(points, normals, nb):
+    """:func:`border_flags` with :data:`BORDER_K` neighbours from ``nb`` (a
+    :class:`core.Neighbours`), or from a search of their own when ``nb`` holds fewer."""
+    k = min(BORDER_K, len(points))
+    if nb.k_max >= k:
+        idx = nb.take(k)[0]
+    else:  # e.g. an integer k < 30: one more search, the test is meaningless on fewer
+        idx = build_neighbours(points, k).take(k)[0]
+    return border_flags(points, normals, idx)[0]

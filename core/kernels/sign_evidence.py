@@ -1,0 +1,173 @@
+"""Compiled loops of :mod:`core.orientation` (numba, ``nogil``)."""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+from ._base import OPTS as _OPTS
+
+
+@njit(**_OPTS, parallel=True)
+def plane_spread(points, normals, idx, ok, out):
+    """RMS offset along n_i of point i's neighbours from their centroid: the noise (and
+    sagitta) that an offset along the normal must exceed to mean something."""
+    n, k = idx.shape
+    for i in prange(n):
+        out[i] = 0.0
+        if not ok[i]:
+            continue
+        cx = cy = cz = 0.0
+        for m in range(k):
+            j = idx[i, m]
+            cx += points[j, 0]
+            cy += points[j, 1]
+            cz += points[j, 2]
+        cx, cy, cz = cx / k, cy / k, cz / k
+        acc = 0.0
+        for m in range(k):
+            j = idx[i, m]
+            t = (normals[i, 0] * (points[j, 0] - cx) + normals[i, 1] * (points[j, 1] - cy)
+                 + normals[i, 2] * (points[j, 2] - cz))
+            acc += t * t
+        out[i] = np.sqrt(acc / k)
+
+
+@njit(**_OPTS, parallel=True)
+def sign_evidence(packed, idx, ok, gate, out, first):
+    """Signed evidence that normals i and j = idx[i, m] point the same way (> 0) or not (< 0).
+
+    ``packed`` rows are (p, n, spread, 0): one cache line per neighbour. With the chord
+    c = p_j - p_i, d = |c|, the offsets t_i = n_i . c and t_j = -n_j . c, shrunk towards
+    0 by ``gate`` x the pair's spread (so noise is not read as an offset), and
+    a_i = t_i / d, a_j = t_j / d:
+
+        e = (1 - |a_i|)(1 - |a_j|) (n_i . n_j)  +  a_i a_j
+
+    The first term is Hoppe's test, trusted where the chord lies in both tangent planes
+    (neighbours on one sheet); the second is the chord test, trusted where the chord leaves
+    them (across a thin part, a gap or a crease): a segment between two surface points that
+    does not cross the surface lies wholly inside or wholly outside the solid, so it leaves
+    both points on the same side of their consistently oriented normals (a_i a_j > 0).
+    ``out[i, m]`` is 0 where either point has no normal or the chord has zero length;
+    ``first[i, m]`` is False where the edge also appears in row j with j < i.
+    """
+    n, k = idx.shape
+    for i in prange(n):
+        for m in range(k):
+            j = idx[i, m]
+            out[i, m] = 0.0
+            first[i, m] = True
+            if j == i or not ok[i] or not ok[j]:
+                continue
+            if j < i:
+                for q in range(k):
+                    if idx[j, q] == i:
+                        first[i, m] = False
+            cx = packed[j, 0] - packed[i, 0]
+            cy = packed[j, 1] - packed[i, 1]
+            cz = packed[j, 2] - packed[i, 2]
+            d = np.sqrt(cx * cx + cy * cy + cz * cz)
+            if d == 0.0:
+                continue
+            floor = gate * np.sqrt(packed[i, 6] * packed[i, 6] + packed[j, 6] * packed[j, 6])
+            ti = packed[i, 3] * cx + packed[i, 4] * cy + packed[i, 5] * cz
+            tj = -(packed[j, 3] * cx + packed[j, 4] * cy + packed[j, 5] * cz)
+            ai = np.sign(ti) * max(0.0, abs(ti) - floor) / d
+            aj = np.sign(tj) * max(0.0, abs(tj) - floor) / d
+            nn = packed[i, 3] * packed[j, 3] + packed[i, 4] * packed[j, 4] + packed[i, 5] * packed[j, 5]
+            out[i, m] = (1.0 - abs(ai)) * (1.0 - abs(aj)) * nn + ai * aj
+
+
+@njit(**_OPTS)
+def _find(parent, parity, x):
+    """Root of x and the parity of x relative to it; compresses the path."""
+    root = x
+    acc = 0
+    while parent[root] != root:
+        acc ^= parity[root]
+        root = parent[root]
+    total = acc
+    node = x  # second pass: point every node on the path straight at the root
+    while node != root:
+        nxt = parent[node]
+        p_node = parity[node]
+        parent[node] = root
+        parity[node] = acc
+        acc ^= p_node
+        node = nxt
+    return root, total
+
+
+@njit(**_OPTS)
+def kruskal_signs(order, rows, cols, evidence, n, flip):
+    """Maximum spanning forest (Kruskal) of the evidence graph with a parity union-find.
+
+    Edges are taken in ``order`` (decreasing |evidence|); an edge joining two trees fixes
+    their relative sign (flip when its evidence is negative). Writes ``flip`` (1: flip the
+    normal) and returns the component root of every node.
+    """
+    parent = np.arange(n)
+    parity = np.zeros(n, dtype=np.int8)
+    size = np.ones(n, dtype=np.int64)
+    for e in order:
+        i, j = rows[e], cols[e]
+        ri, pi = _find(parent, parity, i)
+        rj, pj = _find(parent, parity, j)
+        if ri == rj:
+            continue
+        s = 1 if evidence[e] < 0.0 else 0
+        if size[ri] < size[rj]:
+            ri, rj = rj, ri
+        parent[rj] = ri
+        parity[rj] = pi ^ pj ^ s
+        size[ri] += size[rj]
+    roots = np.empty(n, dtype=np.int64)
+    for x in range(n):
+        r, p = _find(parent, parity, x)
+        roots[x] = r
+        flip[x] = p
+    return roots
+
+
+@njit(**_OPTS)
+def strongest_first(evidence, use, levels):
+    """Indices of the non-zero entries of ``evidence`` where ``use`` by decreasing |evidence|, to within
+    1 / ``levels`` (a counting sort: linear time, where a comparison sort of 10^7 edges
+    costs more than the whole spanning forest)."""
+    count = np.zeros(levels + 1, dtype=np.int64)
+    for e in range(len(evidence)):
+        if evidence[e] != 0.0 and use[e]:
+            b = levels - min(levels - 1, int(abs(evidence[e]) * levels))
+            count[b] += 1
+    start = np.zeros(levels + 1, dtype=np.int64)
+    for b in range(1, levels + 1):
+        start[b] = start[b - 1] + count[b - 1]
+    order = np.empty(start[levels] + count[levels], dtype=np.int64)
+    for e in range(len(evidence)):
+        if evidence[e] != 0.0 and use[e]:
+            b = levels - min(levels - 1, int(abs(evidence[e]) * levels))
+            order[start[b]] = e
+            start[b] += 1
+    return order
+
+
+@njit(**_OPTS, parallel=True)
+def agreement(evidence, idx, flip, ok, out):
+    """Evidence-weighted share of each point's edges that agree with the signs after
+    ``flip`` (the evidence is bilinear in the two normals: flipping one flips it); 0.5
+    where a point has no evidence, 0 where it has no normal."""
+    n, k = idx.shape
+    for i in prange(n):
+        if not ok[i]:
+            out[i] = 0.0
+            continue
+        total = 0.0
+        agree = 0.0
+        for m in range(k):
+            e = evidence[i, m]
+            if flip[i] != flip[idx[i, m]]:
+                e = -e
+            total += abs(e)
+            agree += max(e, 0.0)
+        out[i] = agree / total if total > 0.0 else 0.5

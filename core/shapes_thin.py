@@ -1,0 +1,150 @@
+"""Thin parts and scan-like samples: the shapes on which orientation and borders are tested.
+
+Each sampler returns a :class:`core.shapes.Sample` whose size is set in units of the
+sampling ``spacing`` (sqrt(area / n), stored in ``params["spacing"]``), because what makes
+a part "thin" is its thickness against the spacing, not in absolute units. Normals are
+the outward normals of the solid (k = +1/R on a convex part). ``params["parts"]``, where
+present, labels separate surfaces (their relative sign is a convention, not a fact).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .shapes import Sample, _ordered, _rng_n, _unit, torus
+
+
+def thin_tube(n=20000, *, radius_spacings=2.0, R=1.0, seed=0):
+    """A closed ring-shaped tube (torus) whose tube radius is ``radius_spacings`` spacings.
+
+    Area 4 pi^2 R r with r = c s and s^2 = area / n gives s = 4 pi^2 R c / n.
+    """
+    n, _ = _rng_n(n, seed)
+    spacing = 4 * np.pi**2 * R * radius_spacings / n
+    s = torus(n, R=R, r=radius_spacings * spacing, seed=seed)
+    return Sample("thin_tube", s.points, s.normals, s.k1, s.k2, s.e1, s.e2, s.interior,
+                  {**s.params, "spacing": spacing})
+
+
+def thin_plate(n=20000, *, thickness_spacings=3.0, size=1.0, seed=0):
+    """A closed square slab ``size`` x ``size`` x (``thickness_spacings`` spacings), all six
+    faces sampled: two sides a few spacings apart joined by a narrow rim of sharp edges.
+
+    ``interior`` marks points at least 2 spacings from every edge (the two big faces).
+    """
+    n, rng = _rng_n(n, seed)
+    c = thickness_spacings
+    # n s^2 = 2 size^2 + 4 size c s  ->  the positive root
+    spacing = (4 * size * c + np.sqrt(16 * size**2 * c**2 + 8 * n * size**2)) / (2 * n)
+    half = np.array([size, size, c * spacing]) / 2
+    area = 4 * np.array([half[1] * half[2], half[0] * half[2], half[0] * half[1]])  # one face per axis
+    axis = rng.choice(3, size=n, p=area / area.sum())
+    sign = np.where(rng.random(n) < 0.5, 1.0, -1.0)
+    rows = np.arange(n)
+    pts = (rng.random((n, 3)) * 2 - 1) * half
+    pts[rows, axis] = sign * half[axis]
+    nrm = np.zeros((n, 3))
+    nrm[rows, axis] = sign
+    ea = np.zeros((n, 3))
+    ea[rows, (axis + 1) % 3] = 1.0
+    in_face = np.abs(pts) < half * (1 - 1e-12)
+    edge_dist = np.where(in_face, half - np.abs(pts), np.inf).min(axis=1)
+    zeros = np.zeros(n)
+    return _ordered(nrm, zeros, zeros, ea, np.cross(nrm, ea), pts, "thin_plate", edge_dist > 2 * spacing,
+                    spacing=spacing, size=size)
+
+
+def two_sheets(n=20000, *, gap_spacings=4.0, radius=1.0, angle=np.pi / 2, seed=0):
+    """Two concentric open cylinder patches (height ``radius``, ``angle`` wide) a few
+    spacings apart, like the two layers of a bent sheet. Normals point away from the gap
+    (outer: away from the axis, k1 = 1/r; inner: towards it, k2 = -1/r); ``params["parts"]``
+    is 0 for the outer sheet and 1 for the inner one.
+    """
+    n, rng = _rng_n(n, seed)
+    spacing = np.sqrt(2 * radius * angle * radius / n)  # approx: both sheets ~ radius x angle
+    r_in = radius - gap_spacings * spacing
+    part = (rng.random(n) < r_in / (radius + r_in)).astype(np.int64)  # area-proportional
+    r = np.where(part == 1, r_in, radius)
+    phi = (rng.random(n) - 0.5) * angle
+    z = (rng.random(n) - 0.5) * radius
+    c, s, zeros, ones = np.cos(phi), np.sin(phi), np.zeros(n), np.ones(n)
+    pts = np.column_stack([r * c, r * s, z])
+    out = np.where(part == 1, -1.0, 1.0)
+    nrm = out[:, None] * np.column_stack([c, s, zeros])
+    around = np.column_stack([-s, c, zeros])
+    axis = np.column_stack([zeros, zeros, ones])
+    edge = np.minimum(np.abs(np.abs(phi) - angle / 2) * r, np.abs(np.abs(z) - radius / 2))
+    return _ordered(nrm, out / r, zeros, around, axis, pts, "two_sheets", edge > 3 * spacing,
+                    spacing=spacing, parts=part)
+
+
+def thin_shell(n=20000, *, thickness_spacings=3.0, radius=1.0, seed=0):
+    """A bowl: the closed solid between two concentric hemispheres (z <= 0) a few spacings
+    apart, with its flat rim. Outward normals: away from the centre outside (k = 1/R),
+    towards it inside (k = -1/r), +z on the rim (k = 0).
+    """
+    n, rng = _rng_n(n, seed)
+    spacing = np.sqrt(4 * np.pi * radius**2 / n)
+    for _ in range(20):  # fixed point: the inner radius depends on the spacing
+        r_in = radius - thickness_spacings * spacing
+        area = np.array([2 * np.pi * radius**2, 2 * np.pi * r_in**2, np.pi * (radius**2 - r_in**2)])
+        spacing = np.sqrt(area.sum() / n)
+    part = rng.choice(3, size=n, p=area / area.sum())
+    d = _unit(rng.normal(size=(n, 3)))
+    d[:, 2] = -np.abs(d[:, 2])
+    rim_r = np.sqrt(rng.random(n) * (radius**2 - r_in**2) + r_in**2)
+    rim_phi = rng.random(n) * 2 * np.pi
+    rim = np.column_stack([rim_r * np.cos(rim_phi), rim_r * np.sin(rim_phi), np.zeros(n)])
+    r = np.where(part == 0, radius, r_in)[:, None]
+    pts = np.where((part == 2)[:, None], rim, r * d)
+    nrm = np.where((part == 2)[:, None], [[0.0, 0.0, 1.0]], np.where((part == 1)[:, None], -d, d))
+    k = np.select([part == 0, part == 1], [1 / radius, -1 / r_in], 0.0)
+    ea = _unit(np.cross(nrm, np.where(np.abs(nrm[:, :1]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]])))
+    interior = (part != 2) & (pts[:, 2] < -2 * spacing)
+    return _ordered(nrm, k, k, ea, np.cross(nrm, ea), pts, "thin_shell", interior, spacing=spacing,
+                    parts=part)
+
+
+def range_scan(n=20000, *, radius=1.0, seed=0):
+    """A single-view range scan of a sphere: an orthographic pixel grid from +z hits the
+    visible hemisphere, so samples thin out towards the silhouette (grazing rays) and the
+    patch ends there. ``interior`` marks points whose normal is within 60 degrees of the
+    view; k1 = k2 = 1/radius everywhere.
+    """
+    n, rng = _rng_n(n, seed)
+    pixel = radius * np.sqrt(np.pi / n)  # n pixels on the disc
+    g = np.arange(-radius, radius + pixel, pixel)
+    x, y = (a.ravel() for a in np.meshgrid(g, g))
+    x = x + rng.normal(scale=1e-3 * pixel, size=x.shape)  # sub-pixel jitter: no exact ties
+    y = y + rng.normal(scale=1e-3 * pixel, size=y.shape)
+    hit = x * x + y * y < radius**2
+    x, y = x[hit], y[hit]
+    pts = np.column_stack([x, y, np.sqrt(radius**2 - x * x - y * y)])
+    nrm = pts / radius
+    ea = _unit(np.cross(nrm, np.where(np.abs(nrm[:, :1]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]])))
+    k = np.full(len(pts), 1 / radius)
+    return _ordered(nrm, k, k, ea, np.cross(nrm, ea), pts, "range_scan", nrm[:, 2] > 0.5,
+                    spacing=pixel, radius=radius)
+
+
+def orientation_agreement(normals, truth, parts=None):
+    """Fraction of rows whose normal points the same way as ``truth`` (NaN rows count as
+    wrong). With ``parts``, each part may be flipped as a whole (its sign is a convention).
+    """
+    dots = np.einsum("ij,ij->i", np.nan_to_num(normals), truth)
+    if parts is None:
+        return float(np.mean(dots > 0))
+    good = 0
+    for p in np.unique(parts):
+        d = dots[parts == p]
+        good += max(np.count_nonzero(d > 0), np.count_nonzero(d < 0))
+    return good / len(dots)
+
+
+#: thin-part shape name -> sampler(n, *, seed)
+THIN_SHAPES = {
+    "thin_tube": thin_tube,
+    "thin_plate": thin_plate,
+    "two_sheets": two_sheets,
+    "thin_shell": thin_shell,
+}

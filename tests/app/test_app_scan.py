@@ -1,0 +1,38 @@
+"""Viewer bits of real scans: the file-normals checkbox follows the file."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from app.source import load_file
+
+
+def test_normals_checkbox_disabled_without_file_normals(make_window, qtbot, torus, tmp_path):
+    path = tmp_path / "bare.xyz"
+    np.savetxt(path, torus.points)
+    w = make_window(load_file(path))
+    assert not w.normals_check.isEnabled()
+    assert w.output is not None  # estimated its own normals
+    w.set_source(torus)  # a shape comes with exact normals
+    assert w.normals_check.isEnabled()
+
+
+def test_repaired_normals_and_border_in_the_status_bar(make_window, tmp_path):
+    """A scan-like file: an open patch whose normals are partly zero. The estimate runs
+    (no "pass normals=None"), the status bar counts the repairs and the border points,
+    and the border points are grey (NaN) on screen and out of the colour limits."""
+    from core import shapes
+
+    s = shapes.plane(3000, seed=3)
+    normals = s.normals.copy()
+    normals[::20] = 0.0
+    path = tmp_path / "patch.xyz"
+    np.savetxt(path, np.hstack([s.points, normals]))
+    w = make_window(load_file(path))
+    assert w.normals_check.isEnabled()
+    text = w.status_label.text()
+    assert "150 file normals repaired" in text
+    border = w.output.result.border
+    assert border.any() and f"{int(border.sum()):,} on a border" in text
+    shown = w.scene._cloud.point_data["values"]
+    assert np.isnan(shown[border]).all()
