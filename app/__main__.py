@@ -7,10 +7,21 @@ whole window and exits (0 on success, 1 with a message on failure).
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 from pathlib import Path
 
+from PySide6.QtCore import QSettings, QTimer
+from PySide6.QtWidgets import QApplication
+
+import core
+import core.shapes
 from core.estimate import AUTO_PASSES
+
+from . import DEFAULT_CLOUD
+from .fields import resolve_field
+from .persist import restore_layout, restore_state
+from .state import ViewerState
 
 __all__ = ["main", "build_parser"]
 
@@ -44,11 +55,6 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _state_from_args(args, parser):
     """Validated start-up parameters (raises SystemExit via parser.error)."""
-    import core
-
-    from .fields import resolve_field
-    from .state import ViewerState
-
     state = ViewerState()
     values = {}
     for name, valid in (("method", args.method), ("compare", args.compare)):
@@ -91,7 +97,18 @@ def _state_from_args(args, parser):
     if args.pick is not None:
         values["picked"] = args.pick
     state.set(**values)
+    state.given = set(values)  # what the command line fixed (not overridden by remembered values)
     return state
+
+
+def _quit_on_sigint(app: QApplication) -> QTimer:
+    """Ctrl-C quits the event loop (Qt's loop never returns to Python otherwise, so a
+    Python signal handler would not run: a 200 ms timer gives it the chance)."""
+    signal.signal(signal.SIGINT, lambda *_: app.quit())
+    timer = QTimer()
+    timer.timeout.connect(lambda: None)
+    timer.start(200)
+    return timer
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -103,26 +120,25 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError:
         parser.error(f"--size must look like 1440x900, got {args.size!r}")
     if args.shape:
-        import core.shapes
-
         if args.shape not in core.shapes.SHAPES:
             parser.error(f"--shape {args.shape!r} is unknown; valid shapes: {', '.join(core.shapes.SHAPES)}")
     if args.points < 10:
         parser.error(f"--points must be at least 10, got {args.points}")
     state = _state_from_args(args, parser)
 
-    from PySide6.QtCore import QTimer
-    from PySide6.QtWidgets import QApplication
-
-    from . import DEFAULT_CLOUD
-    from .window import MainWindow
+    from .window import MainWindow  # noqa: PLC0415 - pyvistaqt/VTK only once the arguments are valid
 
     app = QApplication.instance() or QApplication([sys.argv[0], *args_list])
     app.setApplicationName("Darboux")
     app.setOrganizationName("Darboux")
-    window = MainWindow(state=state, dialogs=args.screenshot is None)
+    settings = QSettings("Darboux", "darboux")
+    if args.screenshot is None:  # a screenshot is reproducible: defaults + arguments only
+        restore_state(state, settings, skip=state.given)
+    window = MainWindow(state=state, settings=settings, dialogs=args.screenshot is None)
+    sigint_timer = _quit_on_sigint(app)
     if args.screenshot is None:
         window.notifier.install_hooks()
+        restore_layout(window, settings)
     if args.screenshot and args.view_only:
         for dock in (window.controls_dock, window.histogram_dock, window.inspector_dock):
             dock.hide()  # a figure: the 3D view(s) get the whole window
@@ -173,17 +189,17 @@ def main(argv: list[str] | None = None) -> int:
     # load after the window exists so that a bad file is reported through the notifier
     if args.shape:
         window.load_shape(args.shape, args.points)
+    elif args.file:
+        window.open_file(args.file, remember=args.screenshot is None)
+        if args.screenshot is None and DEFAULT_CLOUD.exists():
+            # keep the app useful when the file cannot be read (the error was shown)
+            window.loader.failed.connect(lambda *_: window.open_default() if window.state.source is None else None)
     else:
-        opened = window.open_file(args.file, remember=args.screenshot is None) if args.file else window.open_default()
-        if not opened:
-            if args.screenshot:
-                window.close()
-                return 1
-            if args.file and DEFAULT_CLOUD.exists():
-                window.open_default()  # keep the app useful; the error was shown
+        window.open_default()
     if pick is not None and args.screenshot is None:
         window.result_shown.connect(lambda _o: window.state.set(picked=pick) if window.state.picked is None else None)
     code = app.exec()
+    sigint_timer.stop()
     window.shutdown()
     window.notifier.uninstall_hooks()
     return outcome["code"] or code

@@ -33,9 +33,13 @@ class EstimateProgress(QWidget):
         busy = bool(busy)
         if busy:
             self.bar.setValue(0)
-            self.stage.setText("estimating…")
+            self.stage.setText("working…")
         self.setVisible(busy)
 
     def set_progress(self, fraction: float, stage: str) -> None:
-        self.bar.setValue(int(round(1000 * min(max(fraction, 0.0), 1.0))))
+        """Show ``stage``; a negative ``fraction`` changes only the text (e.g. compiling)."""
+        if fraction >= 0:
+            self.bar.setValue(int(round(1000 * min(fraction, 1.0))))
         self.stage.setText(stage)
+        if fraction < 0:
+            self.setVisible(True)
