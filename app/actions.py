@@ -103,7 +103,8 @@ class WindowActions:
     def _on_loaded(self, ticket, source) -> None:
         if self._closed:
             return
-        if ticket.remember and ticket.path is not None:
+        if ticket.remember and ticket.path is not None and safe_text(ticket.path) == ticket.path:
+            # (a name that is not valid UTF-8 cannot round-trip through QSettings: not remembered)
             path = Path(ticket.path)
             self.recent_menu.add(path)
             self.settings.setValue("last_dir", safe_text(path.resolve().parent))

@@ -7,6 +7,7 @@ to the GUI thread. A load superseded by a newer one is dropped on arrival.
 
 from __future__ import annotations
 
+import os
 import traceback
 
 from PySide6.QtCore import QObject, Signal, Slot
@@ -49,6 +50,7 @@ class CloudLoader(QObject):
         self.pending: LoadTicket | None = None
 
     def open_file(self, path, *, remember: bool = True) -> LoadTicket:
+        path = os.fsdecode(path)  # bytes names too (undecodable bytes as surrogate escapes)
         ticket = self._ticket(display_name(path), path, remember)
         relay = self._relay
         self._jobs.put(lambda: _run(relay, ticket, lambda: load_file(ticket.path), file=True))

@@ -39,8 +39,10 @@ def wants_preview(n_points: int, heavy: bool) -> bool:
     return n_points > PREVIEW_POINTS or (heavy and n_points > PREVIEW_AUTO_MIN)
 
 
-def make_subsample(points: np.ndarray, m: int = PREVIEW_POINTS, *, seed: int = 0) -> Subsample:
-    """A uniform random subsample of at most ``m`` points and the nearest map."""
+def make_subsample(points: np.ndarray, m: int | None = None, *, seed: int = 0) -> Subsample:
+    """A uniform random subsample of at most ``m`` (default :data:`PREVIEW_POINTS`) points
+    and the nearest map."""
+    m = PREVIEW_POINTS if m is None else int(m)
     n = len(points)
     if n <= m:
         return Subsample(np.arange(n), np.arange(n))

@@ -96,6 +96,10 @@ class MainWindow(WindowActions, QMainWindow):
         self._debounce.setSingleShot(True)
         self._debounce.setInterval(DEBOUNCE_MS)
         self._debounce.timeout.connect(self.request_estimate)
+        self._render_timer = QTimer(self)  # coalesces renders requested by status changes
+        self._render_timer.setSingleShot(True)
+        self._render_timer.setInterval(0)
+        self._render_timer.timeout.connect(self.render_all)
         self._build_views()
         build_controls(self)
         self.presenter = ResultPresenter(self.state, self.scene, field_panel=self.field_panel,
@@ -247,7 +251,7 @@ class MainWindow(WindowActions, QMainWindow):
             self.status_label.setText(f"{source.name}: {source.n_points:,} points — not estimated "
                                       "(cancelled or failed; change a parameter or press F5)")
             self.scene.set_title(f"{source.name}\nnot estimated")
-            self.render_all()
+            self._render_timer.start()  # after the GUI went idle
         elif source is None:
             self.status_label.setText("No cloud")
 
@@ -340,6 +344,7 @@ class MainWindow(WindowActions, QMainWindow):
         save_state(self.state, self.settings)
         save_layout(self, self.settings)
         self._debounce.stop()
+        self._render_timer.stop()
         self.compile_watch.close()
         self.loader.shutdown()
         self.estimator.shutdown()
