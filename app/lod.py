@@ -37,6 +37,7 @@ class LevelOfDetail:
         self._actor = None
         self._full = None
         self.active = False
+        self.held = False
         self._tags: list = []
 
     def set_cloud(self, points: np.ndarray, full_actor, point_size: float, nan_colour: str) -> None:
@@ -72,13 +73,23 @@ class LevelOfDetail:
             self._full.SetVisibility(False)
             self._actor.SetVisibility(True)
 
-    def end(self, *_args) -> None:
-        """The camera stopped: back to the full cloud (rendered by the caller or VTK)."""
-        if self.active:
+    def hold(self, on: bool) -> None:
+        """Keep the stand-in on screen until released (a new cloud or a preview on a big
+        cloud: one full render of 1M sprites costs ~1 s of GUI time, paid once, for the final result)."""
+        self.held = bool(on)
+        if on:
+            self.begin()
+        else:
+            self.end(render=False)
+
+    def end(self, *_args, render: bool = True) -> None:
+        """The camera stopped: back to the full cloud unless held."""
+        if self.active and not self.held:
             self.active = False
             self._actor.SetVisibility(False)
             self._full.SetVisibility(True)
-            self.plotter.render()
+            if render:
+                self.plotter.render()
 
     def attach(self) -> None:
         """Follow the interactor style's start/end of interaction (drag, zoom, pan)."""
@@ -103,4 +114,4 @@ class LevelOfDetail:
         if self._actor is not None:
             self.plotter.remove_actor(self._actor, render=False)
         self._mesh = self._actor = self.index = None
-        self.active = False
+        self.active = self.held = False

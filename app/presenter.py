@@ -84,6 +84,7 @@ class ResultPresenter:
         cmap = colormap_for(spec, signed)
         self.scene.set_cloud(out.points)
         self.scene.set_values(values, title=spec.title, cmap=cmap, clim=clim)
+        self.scene.lod.hold(True)  # a big cloud shows its stand-in until the full result
         self.scene.set_title(f"{method_title(out.request.method)} — preview on {out.preview:,} points\n"
                              f"{out.request.source.name}\ncomputing the full result…")
         self.histogram.set_data(values, clim=clim, cmap=cmap, label=spec.label + " (preview)")
@@ -92,6 +93,7 @@ class ResultPresenter:
         """Draw a new result in the main view (and the compare view if set)."""
         self.output = out
         req = out.request
+        self.scene.lod.hold(False)
         for scene, res, _fields in self._pairs():
             scene.spacing = out.spacing
             scene.set_cloud(out.points)

@@ -198,6 +198,7 @@ class MainWindow(WindowActions, QMainWindow):
         self.presenter.clear()
         self.scene.spacing = 1.0
         self.scene.set_cloud(source.points, reset_camera="oblique" if source.has_truth else "front")
+        self.scene.lod.hold(True)  # a big cloud: its stand-in until there are colours to show
         self.scene.set_title(f"{source.name}\nestimating…")
         self.setWindowTitle(f"Darboux — {source.name}")
         self.status_label.setText(f"{source.name}: {source.n_points:,} points — estimating…")
@@ -251,6 +252,7 @@ class MainWindow(WindowActions, QMainWindow):
             self.status_label.setText(f"{source.name}: {source.n_points:,} points — not estimated "
                                       "(cancelled or failed; change a parameter or press F5)")
             self.scene.set_title(f"{source.name}\nnot estimated")
+            self.scene.lod.hold(False)
             self._render_timer.start()  # after the GUI went idle
         elif source is None:
             self.status_label.setText("No cloud")

@@ -124,9 +124,13 @@ def test_level_of_detail_while_the_camera_moves(make_window, qtbot, torus):
     window = make_window(size=(640, 480))
     scene = window.scene
     scene.lod.limit = 500  # the real limit is LOD_POINTS; a small cloud keeps the test fast
-    window.set_source(torus)
-    window.estimator.cancel()
-    assert len(scene.lod.index) == 500 and not scene.lod.active
+    with wait_result(qtbot, window, 60_000):
+        window.set_source(torus)
+        # a new big cloud shows its stand-in (cheap to draw) until the result is in
+        assert scene.lod.active and scene.lod.held and not scene._actor.GetVisibility()
+    assert len(scene.lod.index) == 500 and not scene.lod.active and scene._actor.GetVisibility()
+    lod_values = scene.lod._mesh.point_data["values"]
+    assert np.allclose(lod_values, window.output.fields["mean"][scene.lod.index], equal_nan=True)
     style = window.plotter.iren.interactor.GetInteractorStyle()
     style.InvokeEvent("StartInteractionEvent")  # what a drag starts with
     assert scene.lod.active and not scene._actor.GetVisibility() and scene.lod._actor.GetVisibility()
