@@ -87,6 +87,7 @@ class WindowActions:
         ticket = self.loader.open_file(path, remember=remember)
         self.estimator.cancel()
         self.status_label.setText(f"reading {ticket.label}…")
+        self.progress.set_progress(-1.0, "reading…")
         return ticket
 
     def open_default(self):
@@ -98,6 +99,7 @@ class WindowActions:
         self.estimator.cancel()
         ticket = self.loader.make_shape(name, n)
         self.status_label.setText(f"generating {ticket.label}…")
+        self.progress.set_progress(-1.0, "generating…")
         return ticket
 
     def _on_loaded(self, ticket, source) -> None:

@@ -117,7 +117,7 @@ def _cancel(app, window, timeout: float) -> dict:
     _wait(app, lambda: time.perf_counter() - t_busy > 0.5, timeout)  # well inside the estimate
     t0 = time.perf_counter()
     window.progress.cancel.click()
-    _wait(app, lambda: not window.estimator.busy and not window.progress.isVisible(), timeout)
+    _wait(app, lambda: not window.estimator.busy and not window.progress.shown, timeout)
     return {"cancel -> idle ms": 1000 * (time.perf_counter() - t0)}
 
 

@@ -66,7 +66,7 @@ def test_cancel_idles_at_once_and_a_cancelled_first_estimate_stays_usable(make_w
     t0 = time.perf_counter()
     window.progress.cancel.click()
     assert time.perf_counter() - t0 < 0.3 and not window.estimator.busy
-    assert not window.progress.isVisible()
+    assert not window.progress.shown
     assert "not estimated" in window.status_label.text()
     assert window.output is None
     # usable: estimate again gives a result for the same cloud
