@@ -162,6 +162,35 @@ def bench_size(label: str, tmp: Path, timeout: float) -> dict:
     return row
 
 
+def frames_only(label: str) -> dict:
+    """Frame times of a big cloud without estimating it (5M: the estimate alone takes minutes)."""
+    from pyvistaqt import QtInteractor  # noqa: PLC0415 - after QApplication exists
+
+    from .scene import CloudScene  # noqa: PLC0415
+
+    app = QApplication.instance() or QApplication([sys.argv[0]])
+    pts = core.shapes.torus(_SIZES[label] or 28_088, seed=1).points
+    plotter = QtInteractor(auto_update=False)
+    plotter.resize(1100, 850)
+    plotter.show()
+    _wait(app, plotter.isVisible, 10)
+    scene = CloudScene(plotter)
+    scene.set_cloud(pts, reset_camera="oblique")
+    scene.set_values(pts[:, 2], title="z", cmap="RdBu_r", clim=(-1.0, 1.0))
+    plotter.render()
+
+    class _Window:  # what _frames reads
+        pass
+
+    window = _Window()
+    window.scene, window.plotter = scene, plotter
+    try:
+        return {"cloud": f"{label} (frames only)", **_frames(app, window)}
+    finally:
+        scene.close()
+        plotter.close()
+
+
 def startup(cold: bool, tmp: Path, timeout: float) -> float:
     """Seconds from ``python -m app --screenshot`` to the first full picture saved."""
     env = dict(os.environ)
@@ -187,11 +216,13 @@ def _table(rows: list[dict]) -> str:
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="python -m app.bench", description=__doc__.split("\n\n")[0])
     p.add_argument("--sizes", default="bunny,200k", help=f"comma-separated from {', '.join(_SIZES)}")
+    p.add_argument("--frames", default="", help="sizes to time turning only, without estimating (e.g. 5M)")
     p.add_argument("--startup", action="store_true", help="also time start-up, cold and warm numba cache")
     p.add_argument("--timeout", type=float, default=600.0)
     args = p.parse_args(argv)
     sizes = [s.strip() for s in args.sizes.split(",") if s.strip()]
-    bad = [s for s in sizes if s not in _SIZES]
+    frames = [s.strip() for s in args.frames.split(",") if s.strip()]
+    bad = [s for s in sizes + frames if s not in _SIZES]
     if bad:
         p.error(f"--sizes {bad!r} unknown; valid: {', '.join(_SIZES)}")
     with tempfile.TemporaryDirectory(prefix="darboux-bench-") as tmp:
@@ -203,6 +234,7 @@ def main(argv=None) -> int:
         for label in sizes:
             rows.append(bench_size(label, tmp, args.timeout))
             print(f"{label}: done", file=sys.stderr, flush=True)
+        rows += [frames_only(label) for label in frames]
         print(_table(rows))
     return 0
 

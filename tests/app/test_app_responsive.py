@@ -195,3 +195,25 @@ def test_closed_windows_are_freed(qtbot, settings):
     assert all(r() is None for r in refs), "a closed window is still referenced"
     assert rss[-1] - rss[1] < 40, rss  # MB over the last three cycles
     qtbot.waitUntil(lambda: not Estimator.running_threads(), timeout=10_000)
+
+
+def test_compile_watch_reports_a_numba_compile(qtbot):
+    """The status bar's "compiling kernels" comes from numba's compile event."""
+    from numba import njit
+
+    from app.compiling import CompileWatch
+
+    watch = CompileWatch()
+    try:
+        @njit
+        def fresh(x):  # never cached: compiled on its first call
+            return x + 1
+
+        with qtbot.waitSignal(watch.started, timeout=30_000):
+            assert fresh(1) == 2
+        fired = []
+        watch.started.connect(lambda: fired.append(1))
+        assert fresh(2) == 3  # compiled already: no event
+        assert not fired
+    finally:
+        watch.close()
