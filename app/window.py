@@ -191,8 +191,10 @@ class MainWindow(WindowActions, QMainWindow):
     def cancel(self) -> None:
         """Cancel button: idle at once; the shown result (if any) stays."""
         self.loader.cancel()
-        self.estimator.cancel()
-        self._show_status()
+        if self.estimator.busy:
+            self.estimator.cancel()  # its cancelled signal updates the status line
+        else:
+            self._show_status()
 
     def _on_source(self, source: CloudSource) -> None:
         self.presenter.clear()
@@ -268,7 +270,10 @@ class MainWindow(WindowActions, QMainWindow):
         if gen == self.estimator.generation and not self.estimator.busy:
             self._show_status()
             if self.output is not None:
-                self.statusBar().showMessage("Estimate cancelled; showing the previous result.", 5000)
+                # the label, not showMessage(): a temporary message hides the status widgets,
+                # re-lays out the window and re-renders the whole cloud (seconds at 1M points)
+                self.status_label.setText("Estimate cancelled; showing the previous result: "
+                                          + self.status_label.text())
 
     def _show_compare(self) -> None:
         """Create (once) and show the second view beside the main one."""
