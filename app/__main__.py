@@ -16,7 +16,7 @@ from PySide6.QtWidgets import QApplication
 
 import core
 import core.shapes
-from core.estimate import AUTO_PASSES
+from core.tuning import AUTO_PASSES
 
 from . import DEFAULT_CLOUD
 from .fields import resolve_field

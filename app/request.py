@@ -10,7 +10,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
-from core.scale import candidates
+from core.planning import plan
 
 from .source import CloudSource
 
@@ -49,11 +49,13 @@ class EstimateRequest:
         return "auto" if self.k_auto and method in AUTO_METHODS else int(self.k)
 
     def k_needed(self, n_points: int) -> int:
-        """Neighbours the request needs cached on ``n_points`` (the largest automatic k when auto)."""
+        """Neighbours the request needs cached on ``n_points``: the library's plan says
+        (``core.planning.plan(...).k_search``), for the method and the compared one.
+
+        Raises ValueError (from the plan) when the request cannot run on ``n_points``.
+        """
         methods = [self.method] + ([self.compare_method] if self.compare_method else [])
-        auto = self.k_auto and any(m in AUTO_METHODS for m in methods)
-        need = max(int(self.k), candidates(n_points)[-1]) if auto else int(self.k)
-        return min(need, n_points)
+        return max(plan(n_points, k=self.k_for(m), method=m).k_search for m in methods)
 
     @property
     def cloud_key(self) -> tuple:

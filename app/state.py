@@ -16,7 +16,7 @@ from typing import Any, Callable
 import numpy as np
 from PySide6.QtCore import QObject, Signal
 
-from core.estimate import AUTO_PASSES
+from core.tuning import AUTO_PASSES
 
 __all__ = ["ViewerState"]
 

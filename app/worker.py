@@ -21,6 +21,7 @@ from PySide6.QtCore import QObject, Signal
 import core
 import core.metrics
 import core.noise
+from core.spacing import mean_spacing
 
 from .fields import compute_fields
 from .preview import PREVIEW_K, make_subsample, spread, wants_preview
@@ -163,7 +164,7 @@ class EstimateWorker(QObject):
                             neighbours=self._sub_nb if self._sub_nb.k_max >= k else None,
                             progress=_sub(callback, 0.0, 0.05, "preview"))
         fields = spread(compute_fields(res), sub)
-        spacing = float(np.nanmean(self._sub_nb.distances[:, 1])) if self._sub_nb.k_max > 1 else 1.0
+        spacing = mean_spacing(pts, neighbours=self._sub_nb) if self._sub_nb.k_max > 1 else 1.0
         return EstimateOutput(gen=req.gen, request=req, points=points, result=res, fields=fields,
                               spacing=spacing, elapsed=time.perf_counter() - t0, preview=len(pts))
 
@@ -189,11 +190,11 @@ class EstimateWorker(QObject):
         reference = sample.normals if sample is not None else req.source.normals
         fields = [compute_fields(r, reference_normals=reference, sample=sample) for r in results]
         summaries = [core.metrics.summary(r, sample) if sample is not None else None for r in results]
-        d = np.asarray(self._nb.distances)
         two = len(results) > 1
+        spacing = mean_spacing(points, neighbours=self._nb) if self._nb.k_max > 1 else 1.0
         return EstimateOutput(
             gen=req.gen, request=req, points=points, result=results[0], fields=fields[0],
-            spacing=float(np.nanmean(d[:, 1])) if d.shape[1] > 1 else 1.0, summary=summaries[0],
+            spacing=spacing, summary=summaries[0],
             compare=results[1] if two else None, compare_fields=fields[1] if two else None,
             compare_summary=summaries[1] if two else None, elapsed=time.perf_counter() - t0,
             reused_neighbours=reused, timings=timings,

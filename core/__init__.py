@@ -9,10 +9,11 @@ from ._progress import Cancelled
 from .estimate import estimate
 from .methods import METHODS, Method, get_method
 from .neighbours import Neighbours, build_neighbours
-from .result import FIELDS, CurvatureResult
+from .planning import EstimatePlan, plan
+from .result import SCALAR_FIELDS, CurvatureResult
 
 __all__ = [
-    "estimate", "build_neighbours", "Neighbours", "CurvatureResult", "METHODS", "Method",
-    "get_method", "Cancelled", "FIELDS", "shapes", "noise", "metrics", "io",
+    "estimate", "plan", "EstimatePlan", "build_neighbours", "Neighbours", "CurvatureResult", "METHODS", "Method",
+    "get_method", "Cancelled", "SCALAR_FIELDS", "shapes", "noise", "metrics", "io",
 ]
 __version__ = "0.1.0"

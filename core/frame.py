@@ -13,12 +13,24 @@ W = -Hess f(0, 0).
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from .linalg import symmetric_eig2
+from .tuning import MAX_TILT2
 
-#: |mu|^2 at or above this leaves no upward normal: the fit is rejected.
-MAX_TILT2 = 1.0 - 1e-6
+
+class DarbouxFrame(NamedTuple):
+    """The augmented Darboux frame of M points: ``normal``, ``e1``, ``e2`` (M, 3),
+    ``k1`` >= ``k2`` (M,) and ``ok`` (M,) bool."""
+
+    normal: np.ndarray
+    k1: np.ndarray
+    k2: np.ndarray
+    e1: np.ndarray
+    e2: np.ndarray
+    ok: np.ndarray
 
 
 def darboux_frame(t1, t2, z, mu, W):
@@ -32,7 +44,7 @@ def darboux_frame(t1, t2, z, mu, W):
 
     Returns
     -------
-    normal, e1, e2 : (M, 3); k1, k2 : (M,) with k1 >= k2; ok : (M,) bool.
+    DarbouxFrame: normal, e1, e2 : (M, 3); k1, k2 : (M,) with k1 >= k2; ok : (M,) bool.
 
     Notes
     -----
@@ -83,7 +95,7 @@ def darboux_frame(t1, t2, z, mu, W):
     e1 = np.einsum("mi,mij->mj", e1_loc, to_world)
     e2 = np.einsum("mi,mij->mj", e2_loc, to_world)
     ok &= np.isfinite(k1) & np.isfinite(k2)
-    return normal, k1, k2, e1, e2, ok
+    return DarbouxFrame(normal, k1, k2, e1, e2, ok)
 
 
 def height_field_derivatives(fu, fv, fuu, fuv, fvv):

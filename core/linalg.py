@@ -4,8 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-#: Reciprocal condition number below which a (column-equilibrated) normal matrix is singular.
-RCOND = 1e-10
+from .tuning import RCOND
 
 
 def tangent_basis(n: np.ndarray):

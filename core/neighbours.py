@@ -10,6 +10,7 @@ from scipy.spatial import cKDTree
 
 from ._progress import Progress
 from ._validate import as_points, check_int
+from .spacing import mean_spacing
 
 _CHUNK = 200_000
 #: rows per step when neighbours are re-ordered (bounds the temporary arrays)
@@ -68,9 +69,7 @@ class Neighbours:
 
     def mean_spacing(self) -> float:
         """Mean distance to the nearest other point (the unit of relative noise)."""
-        if self.k_max < 2:
-            raise ValueError("mean spacing needs k_max >= 2")
-        return float(np.mean(self.distances[:, 1]))
+        return mean_spacing(self.points, neighbours=self)
 
 
 def build_neighbours(points, k_max: int, *, progress=None) -> Neighbours:
@@ -90,6 +89,14 @@ def build_neighbours(points, k_max: int, *, progress=None) -> Neighbours:
     ((100, 8), True)
     """
     pts, _ = as_points(points)
+    nb = search_neighbours(pts, k_max, progress=progress)
+    pts.setflags(write=False)
+    return nb
+
+
+def search_neighbours(pts: np.ndarray, k_max: int, *, progress=None) -> Neighbours:
+    """:func:`build_neighbours` on points already validated (a C-contiguous (N, 3)
+    float64 array, e.g. from :func:`core.estimate`), which are kept, not copied."""
     k_max = check_int(k_max, name="k_max", low=1, high=len(pts))
     report = Progress(progress)
     report(0.0, "neighbours")
@@ -104,7 +111,6 @@ def build_neighbours(points, k_max: int, *, progress=None) -> Neighbours:
         idx[start:stop] = np.reshape(i, (stop - start, k_max))
         report(stop / n, "neighbours")
     _self_first(idx, dist)
-    pts.setflags(write=False)
     idx.setflags(write=False)
     dist.setflags(write=False)
     return Neighbours(points=pts, indices=idx, distances=dist)

@@ -3,20 +3,12 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from ._validate import as_normals, as_points
+from .spacing import mean_spacing
 
 _DIRECTIONS = ("isotropic", "normal")
-
-
-def mean_spacing(points) -> float:
-    """Mean distance from each point to its nearest other point."""
-    pts, _ = as_points(points)
-    if len(pts) < 2:
-        raise ValueError(f"mean spacing needs at least 2 points, got {len(pts)}")
-    d, _ = cKDTree(pts).query(pts, k=2, workers=-1)
-    return float(np.mean(d[:, 1]))
+__all__ = ["mean_spacing", "add_noise", "add_outliers"]
 
 
 def add_noise(points, sigma, *, normals=None, direction="isotropic", relative=True, seed=0, spacing=None):

@@ -5,15 +5,10 @@ from __future__ import annotations
 import numpy as np
 
 from . import kernels
+from .linalg import tangent_basis
+from .tuning import COLLINEAR, ORIENT_K, RCOND, THETA_REACH
 
 _CHUNK = 131_072
-#: h of eq. 14 in units of the k-th neighbour distance, so no neighbour gets weight 0
-THETA_REACH = 1.1
-#: a neighbourhood is treated as collinear (no normal) when its middle eigenvalue is this
-#: small relative to the largest
-COLLINEAR = 1e-10
-#: neighbours per point in the orientation graph (Hoppe et al. use a small k too)
-ORIENT_K = 8
 
 
 def pca_normals(points, idx, dist, *, progress=None):
@@ -51,9 +46,6 @@ def jet_normals(points, normals, ok, idx, dist, *, progress=None):
     from the fitted quadric (NaN where it was not fitted), the position noise along the
     normal once the curvature is taken up.
     """
-    from .linalg import tangent_basis
-    from .methods.normal_fit import RCOND_DET
-
     out = normals.copy()
     height = np.full(len(points), np.nan)
     rows = np.flatnonzero(ok & (dist[:, -1] > 0))
@@ -65,7 +57,7 @@ def jet_normals(points, normals, ok, idx, dist, *, progress=None):
         hgt = np.full(len(centres), np.nan)
         good = np.empty(len(centres), dtype=bool)
         kernels.jet_normals(points, np.ascontiguousarray(idx[centres]), dist[centres, -1], centres,
-                            t1, t2, z, RCOND_DET, res, hgt, good)
+                            t1, t2, z, RCOND, res, hgt, good)
         out[centres[good]] = res[good]
         height[centres[good]] = hgt[good]
         if progress is not None:

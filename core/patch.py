@@ -7,6 +7,7 @@ from functools import cached_property
 
 import numpy as np
 
+from .kernels import Frames
 from .linalg import tangent_basis
 
 
@@ -38,6 +39,10 @@ class Chunk:
         if kc is None:
             kc = np.full(len(centres), idx.shape[1], dtype=np.int64)
         return cls(points, normals, np.ascontiguousarray(idx), h, centres, t1, t2, z, kc)
+
+    def frames(self) -> Frames:
+        """The chunk as the record the compiled kernels take."""
+        return Frames(self.points, self.normals, self.idx, self.kc, self.h, self.centres, self.t1, self.t2, self.z)
 
     @cached_property
     def patch(self) -> "Patch":

@@ -6,6 +6,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .tuning import OUTLIER_SCORE
+
 
 @dataclass(frozen=True, eq=False)
 class CurvatureResult:
@@ -64,8 +66,6 @@ class CurvatureResult:
     @property
     def outlier(self) -> np.ndarray:
         """Points far off the surface of their neighbours (score > 4)."""
-        from .estimate import OUTLIER_SCORE
-
         return np.nan_to_num(self.outlier_score, nan=0.0) > OUTLIER_SCORE
 
     @property
@@ -93,14 +93,14 @@ class CurvatureResult:
         return np.sqrt(0.5 * (self.k1**2 + self.k2**2))
 
     def field(self, name: str) -> np.ndarray:
-        """A scalar field by name: one of :data:`FIELDS`."""
-        if name not in FIELDS:
-            raise ValueError(f"field {name!r} is unknown; valid fields are: {', '.join(FIELDS)}")
-        return getattr(self, FIELDS[name])
+        """A scalar field by name: one of :data:`SCALAR_FIELDS`."""
+        if name not in SCALAR_FIELDS:
+            raise ValueError(f"field {name!r} is unknown; valid fields are: {', '.join(SCALAR_FIELDS)}")
+        return getattr(self, SCALAR_FIELDS[name])
 
 
-#: scalar fields by short name -> attribute
-FIELDS = {
+#: the per-point scalar fields of a result, by short name -> attribute
+SCALAR_FIELDS = {
     "mean": "mean",
     "gaussian": "gaussian",
     "k1": "k1",

@@ -10,7 +10,7 @@ deviations s_k. While the intervals [W_k - G s_k, W_k + G s_k] of all scales so 
 still intersect, the larger k only removes noise; the first k whose interval leaves the
 common intersection shows bias, and the previous k is kept. Noise sets s_k, curvature
 sets the bias, and both are read from the data: nothing is tuned per shape. k also stops
-growing where a ring of new neighbours folds over (see ``kernels._folded``): past the far
+growing where a ring of new neighbours folds over (see :mod:`core.kernels.scale`): past the far
 side of a thin part the residuals explode and would hide the bias from the intervals.
 A fold is judged against the smallest neighbourhood (its centroid, mean normal and noise
 height), not the centre alone, and must persist into the next ring: with noise of a whole
@@ -21,29 +21,13 @@ from __future__ import annotations
 import numpy as np
 
 from . import kernels
-from .methods.normal_fit import RCOND_DET
 from .patch import Chunk
+from .tuning import (AUTO_DEGREE, AUTO_KS, FOLD_COS, FOLD_FRACTION, FOLD_MIN_BAD, FOLD_NOISE, GAMMA,
+                     INITIAL_K0, NEIGHBOUR_BUDGET, RCOND)
 
-#: candidate neighbourhood sizes (about x1.4 apart)
-AUTO_KS = (20, 28, 40, 56, 80, 113, 160, 226)
-#: the candidates stop where N x k would exceed this many cached neighbours (~0.8 GB)
-NEIGHBOUR_BUDGET = 64_000_000
-#: degree of the normal fit used by k="auto" (a cubic normal field: bias O(h^3))
-AUTO_DEGREE = 3
-#: width of the confidence intervals in standard deviations. The least-squares variance
-#: treats the neighbours' normals as independent, but neighbouring estimated normals
-#: share most of their own neighbours, so their errors are correlated and the variance
-#: is underestimated; 4 (not the textbook 2) compensates. Measured on the torus, saddle,
-#: ellipsoid and a thin torus (r = 0.3) at noise 0–0.2 of the spacing.
-GAMMA = 4.0
-#: initial normals for k="auto" come from INITIAL_K0 x sqrt(noise) neighbours (at least
-#: estimate.PCA_K), noise being the cloud's median of (RMS distance of the neighbours from
-#: their osculating 2-jet) / (radius of the 15 neighbours). The jet normal's variance
-#: falls as noise^2 / k^2 and its bias (third-order terms) grows as k, so the best k grows
-#: as sqrt(noise). 182 puts 28 neighbours at noise 0.1 of the mean spacing and 40 at 0.2
-#: (the radius of 15 neighbours is ~4.2 spacings): measured best on the torus, saddle and
-#: ellipsoid at 0.05-1 spacing of noise.
-INITIAL_K0 = 182.0
+__all__ = ["AUTO_DEGREE", "AUTO_KS", "GAMMA", "INITIAL_K0", "NEIGHBOUR_BUDGET", "candidates", "choose_k",
+           "noise_ratio", "initial_k"]
+
 _CHUNK = 32_768
 
 
@@ -61,12 +45,12 @@ def choose_k(points, normals, nb, has_normal, ks, degree, report):
     chosen = np.full(n, ks[0], dtype=np.int64)
     usable = np.flatnonzero(has_normal & (dist_all[:, -1] > 0))
     ks_arr = np.asarray(ks, dtype=np.int64)
+    rule = kernels.ScaleRule(degree, GAMMA, RCOND, FOLD_FRACTION, FOLD_COS, FOLD_NOISE, FOLD_MIN_BAD)
     for start in range(0, len(usable), _CHUNK):
         centres = usable[start:start + _CHUNK]
         chunk = Chunk.build(points, normals, idx_all[centres], dist_all[centres, -1], centres)
         out = np.empty(len(centres), dtype=np.int64)
-        kernels.choose_scales(chunk.points, chunk.normals, chunk.idx, chunk.h, chunk.centres,
-                              chunk.t1, chunk.t2, chunk.z, ks_arr, degree, GAMMA, RCOND_DET, out)
+        kernels.choose_scales(chunk.frames(), ks_arr, rule, out)
         chosen[centres] = out
         report(min(len(usable), start + _CHUNK) / max(len(usable), 1), "choosing k")
     return chosen
@@ -82,6 +66,6 @@ def noise_ratio(height, h) -> float:
 
 
 def initial_k(noise: float, k_min: int, k_max: int) -> int:
-    """Neighbours for the initial normals at a measured ``noise_ratio`` (see INITIAL_K0)."""
+    """Neighbours for the initial normals at a measured ``noise_ratio`` (see :data:`core.tuning.INITIAL_K0`)."""
     k = int(round(INITIAL_K0 * np.sqrt(max(noise, 0.0))))
     return int(min(max(k, k_min), max(k_max, k_min)))

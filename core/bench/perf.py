@@ -18,6 +18,11 @@ import time
 import numpy as np
 from scipy.spatial import cKDTree
 
+from .. import build_neighbours, estimate, plan, shapes
+from .._progress import Progress
+from ..methods import get_method
+from ..normals import orient_normals, pca_normals
+from ..stages import fit_all
 from ._table import fmt, text_table
 
 
@@ -71,13 +76,8 @@ def _timed(fn):
 
 def _stage_rows(points, k):
     """Each stage of the NR pipeline run by hand, in the order estimate() runs them."""
-    import core
-    from core.estimate import _fit_all
-    from core.methods import get_method
-    from core.normals import orient_normals, pca_normals
-
     rows = []
-    nb, dt, mem = _timed(lambda: core.build_neighbours(points, k))
+    nb, dt, mem = _timed(lambda: build_neighbours(points, k))
     rows.append(("neighbours (kd-tree)", dt, mem))
     idx, dist = nb.take(k)
     (nrm, ok), dt, mem = _timed(lambda: pca_normals(nb.points, idx, dist))
@@ -88,40 +88,37 @@ def _stage_rows(points, k):
     kc = np.full(len(points), k, dtype=np.int64)
 
     def fit(normals):
-        return _fit_all(nb.points, normals, idx, kc, dist[:, -1], ok, m, m.options, core._progress.Progress())
+        return fit_all(nb.points, normals, idx, kc, dist[:, -1], ok, method=m, options=m.options, report=Progress())
 
     out, dt, mem = _timed(lambda: fit(nrm))
     rows.append(("NF fit + frame, pass 1", dt, mem))
-    nrm2 = np.where(out[5][:, None], out[0], nrm)
+    nrm2 = np.where(out.valid[:, None], out.normals, nrm)
     _, dt, mem = _timed(lambda: fit(nrm2))
     rows.append(("NF fit + frame, pass 2 (NR)", dt, mem))
     return rows, nb
 
 
 def run(sizes=(100_000, 1_000_000), k=15, seed=0, out=print):
-    import core
-    from core.scale import candidates
-
-    warm = core.shapes.torus(2000, seed=seed).points  # compile every kernel variant once
-    core.estimate(warm, k=k)
-    core.estimate(warm)
+    warm = shapes.torus(2000, seed=seed).points  # compile every kernel variant once
+    estimate(warm, k=k)
+    estimate(warm)
     _stage_rows(warm, k)
     summary = []
     for n in sizes:
-        pts = core.shapes.torus(n, seed=seed).points
+        pts = shapes.torus(n, seed=seed).points
         _, t_ref, mem_ref = _timed(lambda: cKDTree(pts).query(pts, k=k, workers=-1))
-        res, t_all, mem_all = _timed(lambda: core.estimate(pts, k=k, method="nr"))
+        res, t_all, mem_all = _timed(lambda: estimate(pts, k=k, method="nr"))
         invalid = res.n_invalid
         del res  # each measurement starts without the previous result (its neighbours) alive
-        res, t_auto, mem_auto = _timed(lambda: core.estimate(pts, k="auto", method="nr"))
+        res, t_auto, mem_auto = _timed(lambda: estimate(pts, k="auto", method="nr"))
         opts, passes = res.params["options"], res.params["passes_run"]  # the same fit: the passes auto kept
         del res
-        k_top = candidates(n)[-1]
-        res, t_same, mem_same = _timed(lambda: core.estimate(pts, k=k_top, method="nr", options=opts, passes=passes))
+        k_top = plan(n, k="auto").k_search
+        res, t_same, mem_same = _timed(lambda: estimate(pts, k=k_top, method="nr", options=opts, passes=passes))
         del res
         stages, nb = _stage_rows(pts, k)
-        _, t_re, _ = _timed(lambda: core.estimate(pts, k=k, method="nr", neighbours=nb))
-        _, t_nf, _ = _timed(lambda: core.estimate(pts, k=k, method="nf", neighbours=nb))
+        _, t_re, _ = _timed(lambda: estimate(pts, k=k, method="nr", neighbours=nb))
+        _, t_nf, _ = _timed(lambda: estimate(pts, k=k, method="nf", neighbours=nb))
         rows = [("cKDTree build + query (reference)", t_ref, mem_ref)] + stages + [
             ("core.estimate NR, end to end", t_all, mem_all),
             ('core.estimate NR, k="auto", end to end', t_auto, mem_auto),

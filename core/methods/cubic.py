@@ -6,6 +6,7 @@ import numpy as np
 
 from ..frame import quadratic_form
 from ..linalg import weighted_lstsq
+from ._result import MethodFit
 from .quadric import normal_rows
 
 CF_DOC = (
@@ -25,7 +26,7 @@ def _normal_design(u, v):
 def _solve(A, y, wt):
     x, ok = weighted_lstsq(A, y, wt)
     mu, W = quadratic_form(x[:, 0], x[:, 1], x[:, 2])
-    return mu, W, ok
+    return MethodFit(mu, W, ok)
 
 
 def fit_points_normals(chunk):

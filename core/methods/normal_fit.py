@@ -5,10 +5,9 @@ from __future__ import annotations
 import numpy as np
 
 from .. import kernels
-from ..normals import THETA_REACH
-
-#: smallest determinant of the equilibrated 3x3 normal matrix (unit diagonal) accepted
-RCOND_DET = 1e-10
+from ..tuning import IRLS_ITERATIONS, RCOND, THETA_REACH
+from ._options import choose
+from ._result import MethodFit
 
 NF_DOC = (
     "Normal fitting (§4.3–4.4): in a frame at p, fit X ≈ μ1 + w11·u + w12·v and "
@@ -33,38 +32,33 @@ NR_DOC = NF_DOC + " NR repeats the fit with the refined normals of all points (�
 #: accurate (k="auto" uses 3).
 DEFAULTS = {"weights": "uniform", "constraint": "project", "robust": None, "degree": 1}
 DEGREES = (1, 2, 3)
-#: reweighting iterations of the robust fits (each one re-solves the least squares)
-IRLS_ITERATIONS = 2
 _WEIGHTS = ("uniform", "theta")
 _CONSTRAINTS = ("none", "project", "exact")  # kernel codes 0, 1, 2
 _ROBUST = (None, "huber", "tukey")
 
 
-def _check_degree(degree):
-    if degree not in DEGREES:
-        raise ValueError(f"degree {degree!r} is invalid; must be one of {list(DEGREES)}")
+def check(*, weights="uniform", constraint="project", robust=None, degree=1):
+    """Refuse an option value the fit does not know (before any compiled kernel runs)."""
+    choose("weights", weights, _WEIGHTS)
+    choose("constraint", constraint, _CONSTRAINTS)
+    choose("robust", robust, _ROBUST)
+    choose("degree", degree, DEGREES)
 
 
 def min_k(degree=1, **_):
     """Smallest neighbourhood that determines the fit: one more point than monomials."""
-    _check_degree(degree)
+    choose("degree", degree, DEGREES)
     return (degree + 1) * (degree + 2) // 2 + 1
 
 
 def fit(chunk, *, weights="uniform", constraint="project", robust=None, degree=1):
     """Fit (mu, W) per point of a :class:`core.patch.Chunk`; see :data:`NF_DOC`.
 
-    Returns ``(mu, W, ok, diag)`` with ``diag`` holding the least-squares variances of
+    Returns a :class:`MethodFit` whose ``diag`` holds the least-squares variances of
     W11, (W12 + W21)/2, W22 ("var", units of 1/h^2), the RMS residual of the normal components ("rms") and
     their RMS deviation from their mean ("spread").
     """
-    if weights not in _WEIGHTS:
-        raise ValueError(f"weights {weights!r} is invalid; must be one of {list(_WEIGHTS)}")
-    if constraint not in _CONSTRAINTS:
-        raise ValueError(f"constraint {constraint!r} is invalid; must be one of {list(_CONSTRAINTS)}")
-    if robust not in _ROBUST:
-        raise ValueError(f"robust {robust!r} is invalid; must be one of {list(_ROBUST)}")
-    _check_degree(degree)
+    check(weights=weights, constraint=constraint, robust=robust, degree=degree)
     m = len(chunk.centres)
     mu = np.zeros((m, 2))
     W = np.zeros((m, 2, 2))
@@ -72,9 +66,7 @@ def fit(chunk, *, weights="uniform", constraint="project", robust=None, degree=1
     rms = np.full(m, np.nan)
     spread = np.full(m, np.nan)
     ok = np.empty(m, dtype=bool)
-    kernels.normal_fit(
-        chunk.points, chunk.normals, chunk.idx, chunk.kc, chunk.h, chunk.centres, chunk.t1, chunk.t2,
-        chunk.z, THETA_REACH, _WEIGHTS.index(weights), _CONSTRAINTS.index(constraint),
-        _ROBUST.index(robust), IRLS_ITERATIONS, degree, RCOND_DET, mu, W, var, rms, spread, ok,
-    )
-    return mu, W, ok, {"var": var, "rms": rms, "spread": spread}
+    settings = kernels.Settings(THETA_REACH, _WEIGHTS.index(weights), _CONSTRAINTS.index(constraint),
+                                _ROBUST.index(robust), IRLS_ITERATIONS, degree, RCOND)
+    kernels.normal_fit(chunk.frames(), settings, kernels.Fits(mu, W, var, rms, spread, ok))
+    return MethodFit(mu, W, ok, {"var": var, "rms": rms, "spread": spread})

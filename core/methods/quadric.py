@@ -6,6 +6,7 @@ import numpy as np
 
 from ..frame import quadratic_form
 from ..linalg import weighted_lstsq
+from ._result import MethodFit
 
 QP_DOC = "Quadric fitted to points: a/2·u² + b·uv + c/2·v² = w (eq. 7), dn = -Hess."
 QN_DOC = (
@@ -19,7 +20,7 @@ def fit_points(chunk):
     A = np.stack([0.5 * u * u, u * v, 0.5 * v * v], axis=2)
     x, ok = weighted_lstsq(A, patch.w)
     mu, W = quadratic_form(x[:, 0], x[:, 1], x[:, 2])
-    return mu, W, ok
+    return MethodFit(mu, W, ok)
 
 
 def normal_rows(patch):
@@ -37,4 +38,4 @@ def fit_normals(chunk):
     wt = np.concatenate([patch.weight, patch.weight], axis=1)
     x, ok = weighted_lstsq(A, y, wt)
     mu, W = quadratic_form(x[:, 0], x[:, 1], x[:, 2])
-    return mu, W, ok
+    return MethodFit(mu, W, ok)

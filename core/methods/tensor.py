@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..linalg import weighted_lstsq
+from ._result import MethodFit
 
 DOC = (
     "Curvature tensor: with z along the normal of p, fit a symmetric 2x2 tensor "
@@ -14,8 +15,8 @@ DOC = (
 
 
 def fit(chunk):
-    patch = chunk.patch
     """Fit (mu = 0, W symmetric) per point."""
+    patch = chunk.patch
     u, v = patch.u, patch.v
     zero = np.zeros_like(u)
     A = np.concatenate(
@@ -26,4 +27,4 @@ def fit(chunk):
     x, ok = weighted_lstsq(A, y, wt)
     a, b, c = x[:, 0], x[:, 1], x[:, 2]
     W = np.stack([np.stack([a, b], axis=1), np.stack([b, c], axis=1)], axis=1)
-    return np.zeros((len(u), 2)), W, ok
+    return MethodFit(np.zeros((len(u), 2)), W, ok)

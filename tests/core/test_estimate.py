@@ -246,8 +246,8 @@ def test_result_properties_are_the_conventions(torus_small):
     assert np.all(si >= -1) and np.all(si <= 1)
     # shape index > 0 where H > 0, < 0 where H < 0
     assert np.all(np.sign(si) == np.sign(r.mean))
-    for name in core.FIELDS:
-        np.testing.assert_array_equal(r.field(name), getattr(r, core.FIELDS[name]))
+    for name in core.SCALAR_FIELDS:
+        np.testing.assert_array_equal(r.field(name), getattr(r, core.SCALAR_FIELDS[name]))
     with pytest.raises(ValueError, match="bogus"):
         r.field("bogus")
     assert r.params["normals_given"] is True and r.params["dropped"] == 0

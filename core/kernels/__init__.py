@@ -1,0 +1,27 @@
+"""Compiled inner loops (numba, ``nogil``): the hot paths of a large estimate, one module
+per algorithm.
+
+- :mod:`.pca` weighted-PCA normals (eqs. 13-14); :mod:`.jet` osculating 2-jet normals;
+- :mod:`.nf` the normal fit NF (eqs. 21-26) with :mod:`.lstsq` (its least
+  squares) and :mod:`.robust` (IRLS weights, median);
+- :mod:`.scale` the per-point choice of k (ICI) and the fold test that bounds it;
+- :mod:`.orientation` Hoppe's minimum-spanning-tree orientation; :mod:`.outliers` scores;
+- :mod:`.algebra` small dense linear algebra shared by them.
+
+Each kernel is a plain loop over points doing what its docstring's numpy reference says;
+they release the GIL so a GUI thread keeps running. Many arrays travel together as small
+records (:class:`Frames`, :class:`Settings`, :class:`Fits`) rather than as long
+argument lists.
+"""
+
+from .jet import jet_normals
+from .nf import Fits, Frames, Settings, normal_fit
+from .orientation import propagate_orientation
+from .outliers import outlier_scores
+from .pca import pca_normals
+from .scale import ScaleRule, choose_scales
+
+__all__ = [
+    "pca_normals", "jet_normals", "normal_fit", "Frames", "Settings", "Fits", "ScaleRule", "choose_scales",
+    "propagate_orientation", "outlier_scores",
+]

@@ -1,0 +1,228 @@
+"""The weighted least squares of the normal fit (eqs. 25-26, and degree 2-3 models).
+
+Per centre a scratch record holds the monomials R of the neighbours' offsets, the normal
+matrix G (lower triangle), its Cholesky factor L, the vectors ``vec`` (rows BX, BY:
+right-hand sides; CX, CY: coefficients; C1, C2: columns 1, 2 of G^-1; D, E: work) and
+the sums ``acc`` = (sum w, sum w X^2, sum w Y^2, RSS X, RSS Y).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from ._base import OPTS
+from .algebra import MAX_TERMS, chol_solve, cholesky, n_terms, poly_row
+
+# rows of the per-block vector scratch of the NF kernels
+BX, BY, CX, CY, C1, C2, D, E = range(8)
+
+
+class Scratch(NamedTuple):
+    """Per-block work arrays of the NF kernels (allocated once per block of centres: a
+    per-point allocation would cost more than the fit). Per neighbour: offsets u, v (in
+    units of h), normal components X, Y, base and current weights, residuals res and a
+    copy tmp for the median; then the monomials R, the vectors of :func:`solve` (rows
+    BX..E), the normal matrix G, its factor L and the sums acc."""
+
+    u: np.ndarray
+    v: np.ndarray
+    X: np.ndarray
+    Y: np.ndarray
+    base: np.ndarray
+    wt: np.ndarray
+    res: np.ndarray
+    tmp: np.ndarray
+    R: np.ndarray
+    vec: np.ndarray
+    G: np.ndarray
+    L: np.ndarray
+    acc: np.ndarray
+
+
+@njit(**OPTS)
+def fit_scratch(kmax):
+    """A :class:`Scratch` for neighbourhoods of up to ``kmax`` points."""
+    return Scratch(np.empty(kmax), np.empty(kmax), np.empty(kmax), np.empty(kmax), np.empty(kmax),
+                   np.empty(kmax), np.empty(kmax), np.empty(kmax), np.empty((MAX_TERMS, kmax)),
+                   np.zeros((E + 1, MAX_TERMS)), np.zeros((MAX_TERMS, MAX_TERMS)),
+                   np.zeros((MAX_TERMS, MAX_TERMS)), np.zeros(5))
+
+
+@njit(**OPTS)
+def monomials(u, v, n, degree, R):
+    """R[:, j] = the monomials (:func:`poly_row`) of neighbour j < n, once per point:
+    every reweighting and every nested size reuses them."""
+    for j in range(n):
+        poly_row(u[j], v[j], degree, R[:, j])
+
+
+@njit(cache=True, nogil=True, fastmath=True)
+def _accumulate_linear(R, X, Y, wt, j0, j1, vec, G, acc):
+    """:func:`accumulate` for degree 1: all sums in one pass (short neighbourhoods
+    gain nothing from vectors)."""
+    s1 = su = sv = suu = suv = svv = x0 = x1 = x2 = y0 = y1 = y2 = xx = yy = 0.0
+    for j in range(j0, j1):
+        w = wt[j]
+        uj, vj, Xj, Yj = R[1, j], R[2, j], X[j], Y[j]
+        wu, wv = w * uj, w * vj
+        s1 += w
+        su += wu
+        sv += wv
+        suu += wu * uj
+        suv += wu * vj
+        svv += wv * vj
+        x0 += w * Xj
+        x1 += wu * Xj
+        x2 += wv * Xj
+        y0 += w * Yj
+        y1 += wu * Yj
+        y2 += wv * Yj
+        xx += w * Xj * Xj
+        yy += w * Yj * Yj
+    G[0, 0] += s1
+    G[1, 0] += su
+    G[2, 0] += sv
+    G[1, 1] += suu
+    G[2, 1] += suv
+    G[2, 2] += svv
+    vec[BX, 0] += x0
+    vec[BX, 1] += x1
+    vec[BX, 2] += x2
+    vec[BY, 0] += y0
+    vec[BY, 1] += y1
+    vec[BY, 2] += y2
+    acc[0] += s1
+    acc[1] += xx
+    acc[2] += yy
+
+
+@njit(cache=True, nogil=True, fastmath=True)
+def accumulate(R, X, Y, wt, j0, j1, degree, vec, G, acc):
+    """Add neighbours j0..j1-1 to the weighted normal equations of X and Y on the
+    monomials R (G lower triangle, right-hand sides vec[BX], vec[BY]) and to acc =
+    (sum w, sum w X^2, sum w Y^2). Sums run over neighbours innermost (vectorised), or
+    all in one pass for degree 1, whose few sums over short neighbourhoods gain nothing
+    from vectors."""
+    if degree == 1:
+        _accumulate_linear(R, X, Y, wt, j0, j1, vec, G, acc)
+        return
+    p = n_terms(degree)
+    for a in range(p):
+        sx = 0.0
+        sy = 0.0
+        for j in range(j0, j1):
+            t = wt[j] * R[a, j]
+            sx += t * X[j]
+            sy += t * Y[j]
+        vec[BX, a] += sx
+        vec[BY, a] += sy
+        for c in range(a + 1):
+            g = 0.0
+            for j in range(j0, j1):
+                g += wt[j] * R[a, j] * R[c, j]
+            G[a, c] += g
+    s0 = 0.0
+    s1 = 0.0
+    s2 = 0.0
+    for j in range(j0, j1):
+        s0 += wt[j]
+        s1 += wt[j] * X[j] * X[j]
+        s2 += wt[j] * Y[j] * Y[j]
+    acc[0] += s0
+    acc[1] += s1
+    acc[2] += s2
+
+
+@njit(**OPTS)
+def reset(degree, vec, G, acc):
+    p = n_terms(degree)
+    G[:p, :p] = 0.0
+    vec[BX, :p] = 0.0
+    vec[BY, :p] = 0.0
+    acc[:] = 0.0
+
+
+@njit(**OPTS)
+def solve_linear(rcond, vec, G, acc):
+    """:func:`solve` for degree 1 (the paper's eqs. 25–26) by the closed-form inverse of
+    the equilibrated 3x3 matrix: the common case, and twice as fast as a Cholesky."""
+    s1, su, sv, suu, suv, svv = G[0, 0], G[1, 0], G[2, 0], G[1, 1], G[2, 1], G[2, 2]
+    if not (s1 > 0.0 and suu > 0.0 and svv > 0.0):
+        return False
+    d0, d1, d2 = math.sqrt(s1), math.sqrt(suu), math.sqrt(svv)
+    g01, g02, g12 = su / (d0 * d1), sv / (d0 * d2), suv / (d1 * d2)
+    i00 = 1.0 - g12 * g12
+    i01 = g02 * g12 - g01
+    i02 = g01 * g12 - g02
+    i11 = 1.0 - g02 * g02
+    i12 = g01 * g02 - g12
+    i22 = 1.0 - g01 * g01
+    det = i00 + g01 * i01 + g02 * i02
+    if not det > rcond:
+        return False
+    # G = D Gs D, so G^-1 = D^-1 adj(Gs) D^-1 / det
+    e00 = i00 / (det * d0 * d0)
+    e01 = i01 / (det * d0 * d1)
+    e02 = i02 / (det * d0 * d2)
+    e11 = i11 / (det * d1 * d1)
+    e12 = i12 / (det * d1 * d2)
+    e22 = i22 / (det * d2 * d2)
+    x0, x1, x2 = vec[BX, 0], vec[BX, 1], vec[BX, 2]
+    y0, y1, y2 = vec[BY, 0], vec[BY, 1], vec[BY, 2]
+    vec[CX, 0] = e00 * x0 + e01 * x1 + e02 * x2
+    vec[CX, 1] = e01 * x0 + e11 * x1 + e12 * x2
+    vec[CX, 2] = e02 * x0 + e12 * x1 + e22 * x2
+    vec[CY, 0] = e00 * y0 + e01 * y1 + e02 * y2
+    vec[CY, 1] = e01 * y0 + e11 * y1 + e12 * y2
+    vec[CY, 2] = e02 * y0 + e12 * y1 + e22 * y2
+    vec[C1, 0], vec[C1, 1], vec[C1, 2] = e01, e11, e12
+    vec[C2, 0], vec[C2, 1], vec[C2, 2] = e02, e12, e22
+    acc[3] = max(acc[1] - (vec[CX, 0] * x0 + vec[CX, 1] * x1 + vec[CX, 2] * x2), 0.0)
+    acc[4] = max(acc[2] - (vec[CY, 0] * y0 + vec[CY, 1] * y1 + vec[CY, 2] * y2), 0.0)
+    return True
+
+
+@njit(**OPTS)
+def solve(degree, rcond, vec, G, L, acc):
+    """Least squares of X and Y on the monomials (eqs. 25–26 for degree 1).
+
+    Fills vec[CX], vec[CY] (coefficients: constant = mu, then the slopes = W rows),
+    vec[C1], vec[C2] (columns 1, 2 of G^-1) and acc[3], acc[4] (residual sums of
+    squares of X, Y). False when G is near singular.
+    """
+    if degree == 1:
+        return solve_linear(rcond, vec, G, acc)
+    p = n_terms(degree)
+    if not cholesky(G, p, rcond, vec[D], L):
+        return False
+    chol_solve(L, vec[D], p, vec[BX], vec[CX])
+    chol_solve(L, vec[D], p, vec[BY], vec[CY])
+    e = vec[E]
+    e[:p] = 0.0
+    e[1] = 1.0
+    chol_solve(L, vec[D], p, e, vec[C1])
+    e[1] = 0.0
+    e[2] = 1.0
+    chol_solve(L, vec[D], p, e, vec[C2])
+    fx = fy = 0.0
+    for a in range(p):
+        fx += vec[CX, a] * vec[BX, a]
+        fy += vec[CY, a] * vec[BY, a]
+    acc[3] = max(acc[1] - fx, 0.0)
+    acc[4] = max(acc[2] - fy, 0.0)
+    return True
+
+
+@njit(**OPTS)
+def slope_variances(degree, n, vec, acc):
+    """Least-squares variances of W11, (W12 + W21)/2 and W22 from the residuals."""
+    p = n_terms(degree)
+    dof = max(acc[0] * (1.0 - p / max(n, p + 1)), 1e-12)
+    sx2 = acc[3] / dof
+    sy2 = acc[4] / dof
+    e11, e22 = vec[C1, 1], vec[C2, 2]
+    return sx2 * e11, 0.25 * (sx2 * e22 + sy2 * e11), sy2 * e22

@@ -1,0 +1,212 @@
+"""NF, normal fitting (Cheng & Zhang 2009, §4.3-4.4), at every centre of a chunk.
+
+In a local frame (t1, t2, z) at p, with the neighbours' offsets (u, v) (eq. 23's
+coordinates, divided by h) and their normals' components (X, Y) flipped to agree with
+z, the normal field is modelled as
+
+    X ~ mu1 + w11 u + w12 v,    Y ~ mu2 + w21 u + w22 v          (eqs. 23-24)
+
+and fitted by least squares (eqs. 25-26; :mod:`core.kernels.lstsq`, optionally
+reweighted by :mod:`core.kernels.robust`). (mu1, mu2) is the refined normal at p and
+W = [[w11, w12], [w21, w22]] the matrix of dn in the basis (r_u, r_v) (eq. 21). W must
+satisfy the symmetry constraint of eq. 22, g . (w11, w12, w21, w22) = 0 with
+g = (mu1 mu2, -(1 - mu2^2), 1 - mu1^2, -mu1 mu2): "project" removes W's component
+along g (§4.4), "exact" solves the constrained least squares with a Lagrange
+multiplier in the metric of the normal equations. Degrees 2 and 3 add the higher
+monomials of (u, v) to both models, so the slopes at p are not biased by the curving
+of the normal field over a wide neighbourhood (k="auto").
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit, prange
+
+from ._base import BLOCK, OPTS, theta
+from .lstsq import BX, BY, C1, C2, CX, CY, accumulate, fit_scratch, monomials, reset, slope_variances, solve
+from .robust import robust_weights
+
+
+class Frames(NamedTuple):
+    """M centres with their neighbours and local frames (a :class:`core.patch.Chunk`).
+
+    points, normals : the whole cloud's (N, 3) arrays (normals NaN where a point has none);
+    idx : (M, k) neighbours of each centre; kc : (M,) how many of them are used;
+    h : (M,) length unit of each centre; centres : (M,) point indices;
+    t1, t2, z : (M, 3) local frames (z = the centre's current normal).
+    """
+
+    points: np.ndarray
+    normals: np.ndarray
+    idx: np.ndarray
+    kc: np.ndarray
+    h: np.ndarray
+    centres: np.ndarray
+    t1: np.ndarray
+    t2: np.ndarray
+    z: np.ndarray
+
+
+class Settings(NamedTuple):
+    """The options of the fit as kernel codes.
+
+    theta_reach : h of eq. 14's weight in units of the centre's h (weighting 1);
+    weighting : 0 uniform (eqs. 25-26), 1 theta of eq. 14;
+    constraint : 0 none, 1 projection onto eq. 22's plane (§4.4), 2 exact;
+    robust : 0 none, 1 Huber, 2 Tukey, with ``irls`` reweighting iterations;
+    degree : 1 (the paper's linear model), 2 or 3; rcond : singularity threshold.
+    """
+
+    theta_reach: float
+    weighting: int
+    constraint: int
+    robust: int
+    irls: int
+    degree: int
+    rcond: float
+
+
+class Fits(NamedTuple):
+    """What the fit writes per centre: mu (M, 2), W (M, 2, 2) in units of 1/h, var (M, 3)
+    the least-squares variances of W11, (W12 + W21)/2, W22, rms (M,) the weighted RMS
+    residual of the normal components, spread (M,) their weighted RMS deviation from
+    their mean (how much the normals turn), ok (M,) bool."""
+
+    mu: np.ndarray
+    W: np.ndarray
+    var: np.ndarray
+    rms: np.ndarray
+    spread: np.ndarray
+    ok: np.ndarray
+
+
+@njit(**OPTS)
+def gather(f, r, n, weighting, theta_reach, s):
+    """Neighbours 0..n-1 of centre r of the :class:`Frames` ``f`` in its frame, into the
+    scratch ``s``: offsets (u, v) / h, normal components (X, Y) flipped to agree with the
+    frame's z (§4.3), and base weights (0 without a normal)."""
+    points, normals, idx = f.points, f.normals, f.idx
+    u, v, X, Y, base = s.u, s.v, s.X, s.Y, s.base
+    i = f.centres[r]
+    hi = f.h[r]
+    a0, a1, a2 = f.t1[r, 0], f.t1[r, 1], f.t1[r, 2]
+    b0, b1, b2 = f.t2[r, 0], f.t2[r, 1], f.t2[r, 2]
+    c0, c1, c2 = f.z[r, 0], f.z[r, 1], f.z[r, 2]
+    for j in range(n):
+        q = idx[r, j]
+        nx, ny, nz = normals[q, 0], normals[q, 1], normals[q, 2]
+        dx = (points[q, 0] - points[i, 0]) / hi
+        dy = (points[q, 1] - points[i, 1]) / hi
+        dz = (points[q, 2] - points[i, 2]) / hi
+        u[j] = dx * a0 + dy * a1 + dz * a2
+        v[j] = dx * b0 + dy * b1 + dz * b2
+        if not math.isfinite(nx):
+            X[j] = Y[j] = base[j] = 0.0
+            continue
+        sgn = 1.0 if nx * c0 + ny * c1 + nz * c2 >= 0.0 else -1.0
+        X[j] = sgn * (nx * a0 + ny * a1 + nz * a2)
+        Y[j] = sgn * (nx * b0 + ny * b1 + nz * b2)
+        base[j] = 1.0
+        if weighting == 1:
+            base[j] = theta(math.sqrt(dx * dx + dy * dy + dz * dz) / theta_reach)
+
+
+@njit(**OPTS, parallel=True)
+def normal_fit(f, opt, out):
+    """NF at every centre of the :class:`Frames` ``f`` with the :class:`Settings` ``opt``,
+    written into the :class:`Fits` ``out`` (see the module docstring)."""
+    m = len(f.centres)
+    kmax = f.idx.shape[1]
+    n_blocks = (m + BLOCK - 1) // BLOCK
+    for blk in prange(n_blocks):
+        _fit_block(f, opt, out, blk * BLOCK, min(m, (blk + 1) * BLOCK), fit_scratch(kmax))
+
+
+@njit(**OPTS)
+def _fit_block(f, opt, out, start, stop, s):
+    """NF at centres start..stop-1 with the scratch ``s`` (allocated once per block: a
+    per-point allocation would cost more than the fit)."""
+    for r in range(start, stop):
+        n = f.kc[r]
+        out.ok[r] = _fit_point(f, opt, r, n, s)
+        if out.ok[r]:
+            _store(opt, r, n, s, out)
+
+
+@njit(**OPTS)
+def _fit_point(f, opt, r, n, s):
+    """Least squares (eqs. 25-26) of centre r's n neighbours, then ``opt.irls`` robust
+    reweightings; False when the system is singular."""
+    gather(f, r, n, opt.weighting, opt.theta_reach, s)
+    for j in range(n):
+        s.wt[j] = s.base[j]
+    monomials(s.u, s.v, n, opt.degree, s.R)
+    reset(opt.degree, s.vec, s.G, s.acc)
+    accumulate(s.R, s.X, s.Y, s.wt, 0, n, opt.degree, s.vec, s.G, s.acc)
+    ok = solve(opt.degree, opt.rcond, s.vec, s.G, s.L, s.acc)
+    if opt.robust > 0:
+        for _ in range(opt.irls):
+            if not ok:
+                break
+            robust_weights(s, n, opt.degree, opt.robust)
+            reset(opt.degree, s.vec, s.G, s.acc)
+            accumulate(s.R, s.X, s.Y, s.wt, 0, n, opt.degree, s.vec, s.G, s.acc)
+            ok = solve(opt.degree, opt.rcond, s.vec, s.G, s.L, s.acc)
+    return ok
+
+
+@njit(**OPTS)
+def _exact_constraint(vec):
+    """mu and W of the least squares under eq. 22 (Lagrange multiplier in the metric of
+    the normal equations; two fixed-point iterations on mu, which g depends on)."""
+    cx0, cx1, cx2 = vec[CX, 0], vec[CX, 1], vec[CX, 2]
+    cy0, cy1, cy2 = vec[CY, 0], vec[CY, 1], vec[CY, 2]
+    # G^-1 a for a = (0, g1, g2, 0.. | 0, g3, g4, 0..): columns 1, 2 of G^-1 are needed
+    e01, e11, e12 = vec[C1, 0], vec[C1, 1], vec[C1, 2]
+    e02, e22 = vec[C2, 0], vec[C2, 2]
+    ex0, ex1, ex2, ey0, ey1, ey2 = cx0, cx1, cx2, cy0, cy1, cy2
+    for _ in range(2):
+        m1, m2 = cx0, cy0
+        g1, g2, g3, g4 = m1 * m2, -(1.0 - m2 * m2), 1.0 - m1 * m1, -m1 * m2
+        ax0, ax1, ax2 = e01 * g1 + e02 * g2, e11 * g1 + e12 * g2, e12 * g1 + e22 * g2
+        ay0, ay1, ay2 = e01 * g3 + e02 * g4, e11 * g3 + e12 * g4, e12 * g3 + e22 * g4
+        num = g1 * ex1 + g2 * ex2 + g3 * ey1 + g4 * ey2
+        den = g1 * ax1 + g2 * ax2 + g3 * ay1 + g4 * ay2
+        if den == 0.0:
+            break
+        lam = num / den
+        cx0, cx1, cx2 = ex0 - lam * ax0, ex1 - lam * ax1, ex2 - lam * ax2
+        cy0, cy1, cy2 = ey0 - lam * ay0, ey1 - lam * ay1, ey2 - lam * ay2
+    return cx0, cy0, cx1, cx2, cy1, cy2
+
+
+@njit(**OPTS)
+def _store(opt, r, n, s, out):
+    """Write centre r's mu and W (under the constraint of eq. 22) and diagnostics."""
+    vec, acc = s.vec, s.acc
+    if opt.constraint == 2:
+        cx0, cy0, w11, w12, w21, w22 = _exact_constraint(vec)
+    else:
+        cx0, cy0 = vec[CX, 0], vec[CY, 0]
+        w11, w12, w21, w22 = vec[CX, 1], vec[CX, 2], vec[CY, 1], vec[CY, 2]
+    if opt.constraint == 1:  # §4.4: the Euclidean projection onto g . w = 0
+        g1, g2, g3, g4 = cx0 * cy0, -(1.0 - cy0 * cy0), 1.0 - cx0 * cx0, -cx0 * cy0
+        t = (g1 * w11 + g2 * w12 + g3 * w21 + g4 * w22) / (g1 * g1 + g2 * g2 + g3 * g3 + g4 * g4)
+        w11 -= t * g1
+        w12 -= t * g2
+        w21 -= t * g3
+        w22 -= t * g4
+    out.mu[r, 0] = cx0
+    out.mu[r, 1] = cy0
+    out.W[r, 0, 0] = w11
+    out.W[r, 0, 1] = w12
+    out.W[r, 1, 0] = w21
+    out.W[r, 1, 1] = w22
+    out.var[r, 0], out.var[r, 1], out.var[r, 2] = slope_variances(opt.degree, n, vec, acc)
+    sw = max(acc[0], 1e-300)
+    out.rms[r] = math.sqrt((acc[3] + acc[4]) / sw)
+    mx, my = vec[BX, 0] / sw, vec[BY, 0] / sw
+    out.spread[r] = math.sqrt(max(acc[1] / sw - mx * mx + acc[2] / sw - my * my, 0.0))

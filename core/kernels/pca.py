@@ -1,0 +1,46 @@
+"""Initial normals by weighted PCA (paper eqs. 13-14)."""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit, prange
+
+from ._base import OPTS, theta
+from .algebra import smallest_eigvec_sym3
+
+
+@njit(**OPTS, parallel=True)
+def pca_normals(points, idx, dist, start, reach, collinear, normals, ok):
+    """Weighted-PCA normal of points ``start + i`` (eqs. 13–14), written into ``normals`` / ``ok``.
+
+    Numpy reference: C = sum_i theta(d_i/h) (p_i - q)(p_i - q)^T / h^2, with h =
+    reach x distance to the k-th neighbour; n = eigenvector of the smallest eigenvalue.
+    """
+    n, k = idx.shape
+    for i in prange(n):
+        h = dist[i, k - 1] * reach
+        ok[i] = False
+        normals[i, 0] = math.nan
+        normals[i, 1] = math.nan
+        normals[i, 2] = math.nan
+        if not h > 0.0:
+            continue
+        c00 = c01 = c02 = c11 = c12 = c22 = 0.0
+        g = start + i
+        for j in range(k):
+            q = idx[i, j]
+            w = theta(dist[i, j] / h)
+            dx = (points[q, 0] - points[g, 0]) / h
+            dy = (points[q, 1] - points[g, 1]) / h
+            dz = (points[q, 2] - points[g, 2]) / h
+            c00 += w * dx * dx
+            c01 += w * dx * dy
+            c02 += w * dx * dz
+            c11 += w * dy * dy
+            c12 += w * dy * dz
+            c22 += w * dz * dz
+        l0, l1, l2, x, y, z = smallest_eigvec_sym3(c00, c01, c02, c11, c12, c22)
+        if l1 > collinear * max(l2, 1e-300) and l1 > l0 and math.isfinite(x):
+            normals[i, 0], normals[i, 1], normals[i, 2] = x, y, z
+            ok[i] = True

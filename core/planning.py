@@ -1,0 +1,170 @@
+"""The plan of an estimate: every argument checked and every default resolved, once.
+
+:func:`plan` (or :meth:`EstimatePlan.build`) turns what a user asked for into a frozen
+:class:`EstimatePlan`; :func:`core.estimate` then only runs stages. A caller can ask the
+plan the library's rules instead of re-deriving them (``plan.k_search``: how many
+neighbours the request needs) and can fix, through it, the quantities an estimate
+otherwise measures on the whole cloud (``noise``, ``crease_typical``), as an estimate
+of one tile of a large cloud must.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from types import MappingProxyType
+from typing import Mapping
+
+import numpy as np
+
+from . import scale
+from ._validate import check_int
+from .methods import Method, check_options, get_method
+from .tuning import AUTO_PASSES, MAX_PASSES, PCA_K
+
+_ORIENTATIONS = ("auto", "propagate", "outward", "keep")
+_INITIAL = ("auto", "pca", "jet")
+
+
+@dataclass(frozen=True)
+class EstimatePlan:
+    """What an estimate of ``n_points`` points will do, all defaults resolved.
+
+    Attributes
+    ----------
+    n_points : int, points after non-finite rows were dropped.
+    method : the registered :class:`core.Method`.
+    options : read-only mapping, the method's options with the user's merged in (and,
+        with k="auto", the automatic pipeline's robust="tukey" and degree=3 unless given).
+    auto : True when k is chosen per point (:mod:`core.scale`), False for the paper's
+        pipeline at one k.
+    k : the user's k (an int, or "auto").
+    candidates : the sizes the automatic choice picks from (``(k,)`` for an integer k).
+    k_search : neighbours to search per point (the largest candidate, or k).
+    k_initial : neighbours of the outlier scores and the initial normals (PCA_K with
+        k="auto", before the noise widens the latter; k otherwise).
+    passes : refinement passes after the first fit (a maximum when ``adaptive``).
+    adaptive : undo, and stop at, a pass that smooths the shape (k="auto").
+    tol : stop refining once a pass turns the normals by less (degrees), or None.
+    initial : "pca" or "jet", how normals are estimated when none are given.
+    orientation : "propagate", "outward", "keep" or a viewpoint (x, y, z).
+    orientation_label : what the result reports ("viewpoint" for a viewpoint).
+    noise : float or None. The noise ratio the initial scale grows with (k="auto"); None
+        measures it on this cloud (``result.params["noise"]``).
+    crease_typical : float or None. The typical normal-fit residual a crease must stand
+        out against; None takes this cloud's median (``result.params["crease_typical"]``).
+    """
+
+    n_points: int
+    method: Method
+    options: Mapping
+    auto: bool
+    k: object
+    candidates: tuple
+    k_search: int
+    k_initial: int
+    passes: int
+    adaptive: bool
+    tol: float | None
+    initial: str
+    orientation: object
+    orientation_label: str
+    noise: float | None = None
+    crease_typical: float | None = None
+
+    @property
+    def robust(self) -> bool:
+        """Whether the fit is robust (outliers then sit out the fits and the choice of k)."""
+        return self.options.get("robust") is not None
+
+    @classmethod
+    def build(cls, n_points, *, k="auto", method="nr", passes=None, tol=None, initial="auto",
+              orientation="auto", options=None, normals_given=False, noise=None, crease_typical=None):
+        """Check every argument (ValueError naming it, its value and what is allowed)
+        and resolve the defaults; see :func:`core.estimate` for their meaning."""
+        n = check_int(n_points, name="n_points", low=3)
+        m = get_method(method)
+        opts = check_options(m, options)
+        auto = isinstance(k, str) and k == "auto"
+        if auto:
+            ks, passes = _auto_defaults(m, n, opts, options or {}, passes)
+            k_initial = min(PCA_K, ks[-1])
+        else:
+            if isinstance(k, str):
+                raise ValueError(f'k must be an integer or "auto", got {k!r}')
+            k = check_int(k, name="k", low=m.min_k_for(opts), high=n)
+            ks, k_initial = (k,), k
+        passes = m.default_passes if passes is None else check_int(passes, name="passes", low=0, high=MAX_PASSES)
+        view, label = _orientation(orientation, normals_given)
+        return cls(
+            n_points=n, method=m, options=MappingProxyType(opts), auto=auto, k="auto" if auto else k,
+            candidates=ks, k_search=ks[-1], k_initial=k_initial, passes=passes, adaptive=auto,
+            tol=_tol(tol), initial=_initial(initial, auto), orientation=view, orientation_label=label,
+            noise=_measure("noise", noise), crease_typical=_measure("crease_typical", crease_typical),
+        )
+
+
+def plan(n_points, **kwargs) -> EstimatePlan:
+    """:meth:`EstimatePlan.build`: the frozen plan of an estimate of ``n_points`` points.
+
+    >>> plan(10_000, k="auto").k_search, plan(10_000, k=15).k_search
+    (226, 15)
+    """
+    return EstimatePlan.build(n_points, **kwargs)
+
+
+def _auto_defaults(m, n, opts, given, passes):
+    """k="auto" (NF/NR only): the candidates, and a robust cubic normal field with
+    adaptive passes unless the user set them."""
+    if m.name not in ("nf", "nr"):
+        raise ValueError(f'k="auto" is available for methods nf and nr, not {m.name!r}; pass an integer k')
+    ks = scale.candidates(n)
+    if "robust" not in given:
+        opts["robust"] = "tukey"  # free on clean data, keeps 3 % outliers from spoiling their neighbours
+    if "degree" not in given:  # a cubic normal field, unless the cloud is too small for it
+        opts["degree"] = scale.AUTO_DEGREE if ks[0] >= scale.AUTO_KS[0] else 1
+    if passes is None and m.default_passes:
+        passes = AUTO_PASSES
+    return ks, passes
+
+
+def _tol(tol):
+    if tol is not None and not (isinstance(tol, (int, float)) and not isinstance(tol, bool)
+                                and np.isfinite(tol) and tol > 0):
+        raise ValueError(f"tol must be a positive number of degrees or None, got {tol!r}")
+    return tol
+
+
+def _initial(initial, auto):
+    if not isinstance(initial, str) or initial not in _INITIAL:
+        raise ValueError(f"initial {initial!r} is invalid; must be one of {list(_INITIAL)}")
+    if initial == "auto":
+        return "jet" if auto else "pca"
+    return initial
+
+
+def _orientation(orientation, normals_given):
+    """(mode, label): "auto" keeps given normals and orients estimated ones outward."""
+    if isinstance(orientation, str):
+        if orientation not in _ORIENTATIONS:
+            raise ValueError(
+                f"orientation {orientation!r} is invalid; must be one of {list(_ORIENTATIONS)} or a (3,) viewpoint"
+            )
+        if orientation == "auto":
+            return ("keep" if normals_given else "outward"), orientation
+        return orientation, orientation
+    try:
+        view = np.asarray(orientation, dtype=float)
+    except (TypeError, ValueError):
+        view = np.empty(0)
+    if view.shape != (3,) or not np.isfinite(view).all():
+        raise ValueError(f"orientation as a viewpoint must be 3 finite numbers, got {orientation!r}")
+    return tuple(float(v) for v in view), "viewpoint"
+
+
+def _measure(name, value):
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)) \
+            or not np.isfinite(value) or value < 0:
+        raise ValueError(f"{name} must be a finite number >= 0 or None, got {value!r}")
+    return float(value)

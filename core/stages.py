@@ -1,0 +1,242 @@
+"""The stages of :func:`core.estimate`, each a function of a few named inputs returning
+a small named result: neighbours -> outlier scores -> initial normals -> orientation ->
+scale choice -> fit/refine -> flags. A tiled engine runs them with quantities fixed on
+the whole cloud through the :class:`core.planning.EstimatePlan`."""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from . import kernels, scale
+from .frame import darboux_frame
+from .neighbours import Neighbours, search_neighbours
+from .normals import jet_normals, pca_normals
+from .patch import Chunk
+from .tuning import CREASE_NOISE, CREASE_RATIO, CREASE_SPREAD, OUTLIER_FLOOR, OUTLIER_SCORE, PASS_DECAY
+
+_CHUNK = 32_768
+
+
+class Initial(NamedTuple):
+    """Initial normals: ``normals`` (N, 3), ``has_normal`` (N,) bool, and with k="auto"
+    the measured (or given) ``noise`` ratio and the ``k`` it chose (None otherwise)."""
+
+    normals: np.ndarray
+    has_normal: np.ndarray
+    noise: float | None = None
+    k: int | None = None
+
+
+class Fit(NamedTuple):
+    """One fit of the method over all points: refined ``normals``, ``k1``, ``k2``,
+    ``e1``, ``e2`` (NaN where not ``valid``), and the normal fit's residual ``rms`` and
+    the normals' ``spread`` (NaN for methods without a normal fit)."""
+
+    normals: np.ndarray
+    k1: np.ndarray
+    k2: np.ndarray
+    e1: np.ndarray
+    e2: np.ndarray
+    valid: np.ndarray
+    rms: np.ndarray
+    spread: np.ndarray
+
+
+class Refined(NamedTuple):
+    """The fit kept by the refinement loop, the normals it was fitted to, and its pass."""
+
+    fit: Fit
+    input_normals: np.ndarray
+    passes_run: int
+
+
+class Flags(NamedTuple):
+    """Per-point flags of the result (another flag is one more field here and one more
+    line in :func:`flags`): ``outlier_score`` (N,), ``crease`` (N,) bool, and the typical
+    residual the creases were judged against."""
+
+    outlier_score: np.ndarray
+    crease: np.ndarray
+    crease_typical: float
+
+
+def find_neighbours(pts, plan, neighbours, report) -> Neighbours:
+    """The ``plan.k_search`` nearest neighbours: searched, or the given ones checked."""
+    if neighbours is None:
+        return search_neighbours(pts, plan.k_search, progress=report)
+    if not isinstance(neighbours, Neighbours):
+        raise ValueError(f"neighbours must be a core.Neighbours, got {type(neighbours).__name__}")
+    if neighbours.k_max < plan.k_search:
+        raise ValueError(f"neighbours were built with k_max={neighbours.k_max} < k={plan.k_search}; rebuild them")
+    if not neighbours.matches(pts):
+        raise ValueError("neighbours were built on different points; rebuild them")
+    return neighbours
+
+
+def outlier_scores(pts, idx) -> np.ndarray:
+    """Distance of each point from its neighbours' plane in units of their spread."""
+    scores = np.full(len(pts), np.nan)
+    kernels.outlier_scores(pts, np.ascontiguousarray(idx), OUTLIER_FLOOR, scores)
+    return scores
+
+
+def initial_normals(pts, nb, plan, outlier, report) -> Initial:
+    """PCA normals (eqs. 13-14), refined by a 2-jet if ``plan.initial == "jet"``, on the
+    ``plan.k_initial`` nearest; with k="auto" on a neighbourhood that grows with the noise
+    the 2-jets measure (:func:`core.scale.initial_k`, or ``plan.noise`` when given),
+    without the known outliers in robust mode."""
+    idx_p, dist_p = nb.take(plan.k_initial)
+    nrm, ok = pca_normals(pts, idx_p, dist_p, progress=report.sub(0.3, 0.37))
+    if not plan.auto:
+        if plan.initial == "jet":
+            nrm, _ = jet_normals(pts, nrm, ok, idx_p, dist_p, progress=report.sub(0.37, 0.43))
+        return Initial(nrm, ok)
+    jet = None
+    noise = plan.noise
+    if noise is None:
+        jet, height = jet_normals(pts, nrm, ok, idx_p, dist_p)
+        clean = ~outlier[idx_p].any(axis=1)  # an outlier inflates the residuals around it
+        noise = scale.noise_ratio(np.where(clean, height, np.nan) if clean.any() else height, dist_p[:, -1])
+    k_init = scale.initial_k(noise, plan.k_initial, plan.k_search)
+    shun = plan.robust and outlier.any()
+    if k_init == plan.k_initial and not shun:
+        if plan.initial == "jet":
+            jet = jet if jet is not None else jet_normals(pts, nrm, ok, idx_p, dist_p)[0]
+            return Initial(jet, ok, noise, k_init)
+        return Initial(nrm, ok, noise, k_init)
+    idx, dist = nb.take_without(k_init, outlier) if shun else nb.take(k_init)
+    nrm, ok = pca_normals(pts, idx, dist, progress=report.sub(0.37, 0.4))
+    if plan.initial == "jet":
+        nrm, _ = jet_normals(pts, nrm, ok, idx, dist, progress=report.sub(0.4, 0.43))
+    return Initial(nrm, ok, noise, k_init)
+
+
+def crease_reference(pts, nrm, has_normal, nb, plan, report) -> Fit:
+    """The paper's linear fit at the initial scale, which creases are judged by with
+    k="auto": a cubic over a wide neighbourhood explains half of a step, so its
+    residuals do not show it."""
+    idx_p, dist_p = nb.take(plan.k_initial)
+    linear = {**plan.options, "degree": 1, "robust": None}
+    kc = np.full(len(pts), idx_p.shape[1])
+    return fit_all(pts, nrm, idx_p, kc, dist_p[:, -1], has_normal, method=plan.method, options=linear, report=report)
+
+
+def choose_scale(pts, nrm, nb, inliers, plan, report) -> np.ndarray:
+    """(N,) neighbourhood size per point: chosen by :func:`core.scale.choose_k` among
+    ``plan.candidates`` with k="auto" (only ``inliers`` take part), else ``plan.k``."""
+    if not plan.auto:
+        return np.full(len(pts), plan.k, dtype=np.int64)
+    normals = np.where(inliers[:, None], nrm, np.nan)
+    return scale.choose_k(pts, normals, nb, inliers, plan.candidates, plan.options["degree"], report)
+
+
+def fit_all(pts, nrm, idx, kc, h, has_normal, *, method, options, report) -> Fit:
+    """One fit of ``method`` with ``options`` over all points in chunks, through the shared
+    frame path: point i uses its first ``kc[i]`` neighbours in ``idx``, lengths in units of
+    ``h[i]``; points without ``has_normal`` (or h = 0) stay invalid."""
+    n = len(pts)
+    def vectors():
+        return np.full((n, 3), np.nan)
+
+    def scalars():
+        return np.full(n, np.nan)
+
+    out = Fit(vectors(), scalars(), scalars(), vectors(), vectors(), np.zeros(n, dtype=bool), scalars(), scalars())
+    usable = has_normal & (h > 0)
+    for start in range(0, n, _CHUNK):
+        centres = np.arange(start, min(n, start + _CHUNK))
+        centres = centres[usable[centres]]
+        if len(centres):
+            _fit_chunk(Chunk.build(pts, nrm, idx[centres], h[centres], centres, kc[centres]), method, options, out)
+        report(min(n, start + _CHUNK) / n, method.name)
+    return out
+
+
+def _fit_chunk(chunk, method, opts, out: Fit) -> None:
+    mu, W, ok, diag = method.fit(chunk, **opts)
+    c_n, c_k1, c_k2, c_e1, c_e2, ok2 = darboux_frame(chunk.t1, chunk.t2, chunk.z, mu, W / chunk.h[:, None, None])
+    good = ok & ok2
+    sel = chunk.centres[good]
+    out.normals[sel], out.e1[sel], out.e2[sel] = c_n[good], c_e1[good], c_e2[good]
+    out.k1[sel], out.k2[sel] = c_k1[good], c_k2[good]
+    if diag is not None and "rms" in diag:
+        out.rms[sel] = diag["rms"][good]
+        out.spread[sel] = diag["spread"][good]
+    out.valid[sel] = True
+
+
+def refine(pts, initial: Initial, outlier, nb, kc, plan, report) -> Refined:
+    """Fit, then refine the normals (NR, §4.4) up to ``plan.passes`` times: stop below
+    ``plan.tol``; with ``plan.adaptive`` undo a pass that turned the normals more than
+    PASS_DECAY x the pass before (it smoothed the shape, not the noise). In robust mode
+    the outliers leave their neighbours' fits after the first one."""
+    idx, dist = nb.take(int(kc.max()))
+    h = dist[np.arange(len(pts)), kc - 1]
+    nrm, has_normal = initial.normals, initial.has_normal
+    n_fits = plan.passes + 1
+    opts = dict(plan.options)
+    converged = False
+    best = None
+    for p in range(n_fits):
+        fit = fit_all(pts, nrm, idx, kc, h, has_normal, method=plan.method, options=opts,
+                      report=report.sub(p / n_fits, (p + 1) / n_fits))
+        # mean turn of the normals in this fit: what the adaptive stop and tol compare
+        change = _mean_angle_deg(fit.normals, nrm, fit.valid) if plan.adaptive or plan.tol is not None else None
+        if plan.adaptive and best is not None and change > PASS_DECAY * last_change:
+            break  # this pass smoothed the shape rather than the noise: keep the previous fit
+        best, last_change = Refined(fit, nrm, p), change
+        if p == plan.passes or converged:
+            break
+        new = np.where(fit.valid[:, None], fit.normals, nrm)
+        if plan.robust and p == 0:  # outliers leave their neighbours' fits (and are not estimated)
+            has_normal = has_normal & ~outlier
+            new[outlier] = np.nan
+        converged = plan.tol is not None and change < plan.tol
+        nrm = new
+    return _drop_outliers(best, outlier) if plan.robust else best
+
+
+def _drop_outliers(best: Refined, outlier) -> Refined:
+    """Outliers are not estimated in robust mode (a kept first fit still estimated them)."""
+    fit = best.fit
+    if not fit.valid[outlier].any():
+        return best
+    for a in (fit.normals, fit.k1, fit.k2, fit.e1, fit.e2):
+        a[outlier] = np.nan
+    return best._replace(fit=fit._replace(valid=fit.valid & ~outlier))
+
+
+def _mean_angle_deg(a, b, mask):
+    if not mask.any():
+        return 0.0
+    cos = np.abs(np.einsum("ij,ij->i", a[mask], b[mask]))
+    return float(np.degrees(np.arccos(np.clip(cos, 0.0, 1.0))).mean())
+
+
+def flags(fit: Fit, scores, plan, reference: Fit | None) -> Flags:
+    """Per-point flags: the outlier scores, and creases judged on ``reference`` (the
+    linear fit at the initial scale, k="auto") or on the fit itself."""
+    judged = fit if reference is None else reference
+    crease, typical = _creases(judged.valid, judged.rms, judged.spread, plan.crease_typical)
+    return Flags(outlier_score=scores, crease=fit.valid & crease, crease_typical=typical)
+
+
+def _creases(valid, rms, spread, typical=None):
+    """Points where the neighbours' normals turn a lot but not linearly (a step: a crease).
+
+    On a smooth patch the linear model of eq. 23 explains the turning of the normals and
+    the residual is a small part of it; across a sharp edge the normals jump and a line
+    explains only part of the jump. Noise leaves residuals everywhere: a crease must also
+    stand out against the cloud's typical residual (its median, unless ``typical`` is
+    given: creases are a minority of the points), or a noisy scan would be flagged all
+    over. Returns (crease (N,) bool, the typical residual used).
+    """
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratio = rms / spread
+    if typical is None:
+        seen = rms[valid & np.isfinite(rms)]  # methods without a normal fit report no residual
+        typical = float(np.median(seen)) if len(seen) else 0.0
+    crease = valid & (spread > CREASE_SPREAD) & (ratio > CREASE_RATIO) & (rms > CREASE_NOISE * typical)
+    return crease, typical

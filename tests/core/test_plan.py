@@ -1,0 +1,106 @@
+"""The frozen plan of an estimate: defaults resolved once, bad options refused before any
+compiled kernel runs, and the whole-cloud quantities a tiled run must fix."""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+
+import numpy as np
+import pytest
+
+import core
+from core import scale, shapes
+
+
+@pytest.fixture(scope="module")
+def sample():
+    return shapes.torus(1500, seed=3)
+
+
+def test_plan_resolves_the_automatic_and_the_paper_pipelines():
+    auto = core.plan(10_000)
+    assert auto.auto and auto.candidates == scale.candidates(10_000) and auto.k_search == scale.AUTO_KS[-1]
+    assert auto.options["robust"] == "tukey" and auto.options["degree"] == scale.AUTO_DEGREE
+    assert auto.passes == core.estimate.__globals__["AUTO_PASSES"] and auto.adaptive and auto.initial == "jet"
+    assert auto.orientation == "outward" and auto.k_initial == 15
+    paper = core.plan(10_000, k=15, method="nr")
+    assert not paper.auto and paper.k_search == 15 and paper.candidates == (15,) and paper.passes == 1
+    assert paper.options["degree"] == 1 and paper.options["robust"] is None and paper.initial == "pca"
+    assert core.plan(100, k=15, orientation="auto", normals_given=True).orientation == "keep"
+    assert core.plan(100, k=15, orientation=[0, 0, 5]).orientation == (0.0, 0.0, 5.0)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        paper.k_search = 30
+    with pytest.raises(TypeError):
+        paper.options["degree"] = 2
+
+
+@pytest.mark.parametrize("k", ["auto", 30])
+@pytest.mark.parametrize("value", [7, 0, "3", 3.0, None, True, np.float64(2.0)])
+def test_a_bad_degree_is_refused_before_any_kernel(k, value):
+    with pytest.raises(ValueError, match=rf"degree {re.escape(repr(value))} is invalid; must be one of \[1, 2, 3\]"):
+        core.plan(1000, k=k, options={"degree": value})
+
+
+@pytest.mark.parametrize("option, value", [
+    ("weights", "gauss"), ("weights", None), ("constraint", "strict"), ("constraint", 1),
+    ("robust", "cauchy"), ("robust", False), ("robust", 0),
+])
+def test_every_normal_fit_option_is_checked(option, value):
+    for k in ("auto", 15):
+        with pytest.raises(ValueError, match=rf"{option} {re.escape(repr(value))} is invalid; must be one of"):
+            core.plan(1000, k=k, options={option: value})
+
+
+@pytest.mark.parametrize("value", [1, 4, 2.0, "2", True])
+def test_jet_degree_is_checked(value):
+    with pytest.raises(ValueError, match=rf"degree {re.escape(repr(value))} is invalid; must be 2 or 3"):
+        core.plan(1000, k=20, method="jet", options={"degree": value})
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(tol=True), "tol must be a positive number"),
+    (dict(noise=-1.0), "noise must be a finite number >= 0"),
+    (dict(crease_typical=float("nan")), "crease_typical must be a finite number >= 0"),
+    (dict(initial=None), "initial None is invalid"),
+    (dict(orientation="up"), "orientation 'up' is invalid"),
+    (dict(orientation=(1, 2)), "viewpoint must be 3 finite numbers"),
+    (dict(k="15"), 'k must be an integer or "auto"'),
+    (dict(k="auto", method="qp"), 'k="auto" is available for methods nf and nr'),
+])
+def test_bad_plan_arguments_name_themselves(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        core.plan(1000, **kwargs)
+
+
+def test_estimate_refuses_a_degree_7_with_automatic_k(sample):
+    with pytest.raises(ValueError, match=r"degree 7 is invalid"):
+        core.estimate(sample.points, options={"degree": 7})
+
+
+def test_a_plan_runs_the_same_estimate(sample):
+    p = core.plan(len(sample.points), k=15, method="nr", options={"robust": "huber"})
+    a = core.estimate(sample.points, k=15, method="nr", options={"robust": "huber"})
+    b = core.estimate(sample.points, plan=p)
+    for name in ("normals", "k1", "k2", "valid", "crease", "outlier_score"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    with pytest.raises(ValueError, match="pass either plan or k, not both"):
+        core.estimate(sample.points, k=20, plan=p)
+    with pytest.raises(ValueError, match="plan was made for"):
+        core.estimate(sample.points[:-1], plan=p)
+
+
+def test_fixing_the_measured_quantities_reproduces_the_run(sample):
+    """What a tiled engine does: pass the noise and the typical crease residual the whole
+    cloud measured, and every tile sees the same thresholds (here: the same cloud, so the
+    same result, bit for bit); other values change the outcome."""
+    ref = core.estimate(sample.points)
+    fixed = core.plan(len(sample.points), noise=ref.params["noise"], crease_typical=ref.params["crease_typical"])
+    r = core.estimate(sample.points, plan=fixed)
+    for name in ("normals", "k1", "k2", "e1", "e2", "valid", "crease", "k_point", "outlier_score"):
+        np.testing.assert_array_equal(getattr(r, name), getattr(ref, name))
+    assert r.params["initial_k"] == ref.params["initial_k"]
+    noisier = core.estimate(sample.points, plan=core.plan(len(sample.points), noise=0.2))
+    assert noisier.params["noise"] == 0.2 and noisier.params["initial_k"] > ref.params["initial_k"]
+    strict = core.estimate(sample.points, plan=core.plan(len(sample.points), crease_typical=0.0))
+    assert strict.params["crease_typical"] == 0.0 and strict.crease.sum() >= ref.crease.sum()
