@@ -5,10 +5,19 @@ Layout (one responsibility per module):
 - :mod:`app.state`    the one observable state object (parameters the user set)
 - :mod:`app.source`   the loaded cloud (file or synthetic shape); no Qt
 - :mod:`app.fields`   displayable scalar fields and colour limits; numpy only
-- :mod:`app.worker`   frozen requests, the estimate worker thread and its controller
-- :mod:`app.scene`    every pyvista/VTK call (GUI thread only)
+- :mod:`app.request`  the frozen estimate request, built from the state (its keys derived once)
+- :mod:`app.worker`   the estimate pipeline as the worker thread runs it (preview, then full)
+- :mod:`app.estimator` GUI-thread controller: generations, stale results dropped, cancel
+- :mod:`app.loader`   reading files / generating shapes on a job thread
+- :mod:`app.jobs`     daemon job threads (never block the exit, never abort it)
+- :mod:`app.preview`  the fast first picture: k = 15 on a subsample, spread to every point
+- :mod:`app.scene`    every pyvista/VTK call (GUI thread only); :mod:`app.lod` level of detail
 - :mod:`app.errors`   the one notifier that errors reach the user through
-- :mod:`app.window`   the main window, composition only
+- :mod:`app.window`   the main window, composition; :mod:`app.layout` its docks;
+  :mod:`app.actions` menus, dialogs, export, drag-and-drop
+- :mod:`app.persist`  what is remembered between runs (QSettings); :mod:`app.theme` light/dark
+- :mod:`app.compiling` tells the user when numba compiles; :mod:`app.text` safe names
+- :mod:`app.bench`    ``python -m app.bench``: the interaction benchmark
 - :mod:`app.widgets`  one small widget per file, each bound to the state
 - :mod:`app.glyphs`   ± segment geometry for direction glyphs; numpy only
 - :mod:`app._refguard` works around a PySide6 6.12 reference-count bug

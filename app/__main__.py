@@ -7,10 +7,21 @@ whole window and exits (0 on success, 1 with a message on failure).
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 from pathlib import Path
 
-from core.estimate import AUTO_PASSES
+from PySide6.QtCore import QSettings, QTimer
+from PySide6.QtWidgets import QApplication
+
+import core
+import core.shapes
+from core.tuning import AUTO_PASSES
+
+from . import DEFAULT_CLOUD
+from .fields import resolve_field
+from .persist import restore_layout, restore_state
+from .state import ViewerState
 
 __all__ = ["main", "build_parser"]
 
@@ -42,148 +53,181 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def _state_from_args(args, parser):
-    """Validated start-up parameters (raises SystemExit via parser.error)."""
-    import core
+_GLYPHS = {"e1": "show_e1", "e2": "show_e2", "n": "show_normals", "normals": "show_normals"}
 
-    from .fields import resolve_field
-    from .state import ViewerState
 
-    state = ViewerState()
+def _k_values(text: str, parser) -> dict:
+    if text.lower() == "auto":
+        return {"k_auto": True}
+    try:
+        k = int(text)
+    except ValueError:
+        parser.error(f"--k must be an integer or auto, got {text!r}")
+    if k < 3:
+        parser.error(f"--k must be at least 3, got {k}")
+    return {"k": k, "k_auto": False}
+
+
+def _method_values(args, parser) -> dict:
     values = {}
-    for name, valid in (("method", args.method), ("compare", args.compare)):
-        if valid is not None and valid.lower() not in core.METHODS:
-            parser.error(f"--{name} {valid!r} is unknown; valid methods: {', '.join(core.METHODS)}")
-    if args.method:
-        values["method"] = args.method.lower()
-    if args.compare:
-        values["compare_method"] = args.compare.lower()
-    if args.k is not None:
-        if args.k.lower() == "auto":
-            values["k_auto"] = True
-        else:
-            try:
-                k = int(args.k)
-            except ValueError:
-                parser.error(f"--k must be an integer or auto, got {args.k!r}")
-            if k < 3:
-                parser.error(f"--k must be at least 3, got {k}")
-            values["k"], values["k_auto"] = k, False
-    if args.passes is not None:
-        if args.passes < 0:
-            parser.error(f"--passes must be >= 0, got {args.passes}")
-        values["passes"] = args.passes
-    if args.noise is not None:
-        if not args.noise >= 0:
-            parser.error(f"--noise must be >= 0, got {args.noise}")
-        values["noise"] = args.noise
+    for flag, key, name in (("method", "method", args.method), ("compare", "compare_method", args.compare)):
+        if name is not None:
+            if name.lower() not in core.METHODS:
+                parser.error(f"--{flag} {name!r} is unknown; valid methods: {', '.join(core.METHODS)}")
+            values[key] = name.lower()
+    return values
+
+
+def _display_values(args, parser) -> dict:
+    values = {}
     if args.field:
         try:
             values["field"] = resolve_field(args.field)
         except ValueError as exc:
             parser.error(str(exc))
-    if args.glyphs:
-        for g in (x.strip().lower() for x in args.glyphs.split(",") if x.strip()):
-            key = {"e1": "show_e1", "e2": "show_e2", "n": "show_normals", "normals": "show_normals"}.get(g)
-            if key is None:
-                parser.error(f"--glyphs: {g!r} is unknown; valid: e1, e2, normals")
-            values[key] = True
+    for g in (x.strip().lower() for x in (args.glyphs or "").split(",") if x.strip()):
+        if g not in _GLYPHS:
+            parser.error(f"--glyphs: {g!r} is unknown; valid: e1, e2, normals")
+        values[_GLYPHS[g]] = True
     if args.pick is not None:
         values["picked"] = args.pick
+    return values
+
+
+def _state_from_args(args, parser) -> ViewerState:
+    """Validated start-up parameters (raises SystemExit via parser.error)."""
+    values = _method_values(args, parser)
+    if args.k is not None:
+        values.update(_k_values(args.k, parser))
+    for flag, number in (("passes", args.passes), ("noise", args.noise)):
+        if number is not None:
+            if not number >= 0:
+                parser.error(f"--{flag} must be >= 0, got {number}")
+            values[flag] = number
+    values.update(_display_values(args, parser))
+    state = ViewerState()
     state.set(**values)
+    state.given = set(values)  # what the command line fixed (not overridden by remembered values)
     return state
+
+
+def _check_args(args, parser) -> tuple[int, int]:
+    try:
+        width, height = (int(v) for v in args.size.lower().split("x"))
+    except ValueError:
+        parser.error(f"--size must look like 1440x900, got {args.size!r}")
+    if args.shape and args.shape not in core.shapes.SHAPES:
+        parser.error(f"--shape {args.shape!r} is unknown; valid shapes: {', '.join(core.shapes.SHAPES)}")
+    if args.points < 10:
+        parser.error(f"--points must be at least 10, got {args.points}")
+    return width, height
+
+
+def _quit_on_sigint(app: QApplication, outcome: dict) -> QTimer:
+    """Ctrl-C quits the event loop with exit status 130 (Qt's loop never returns to Python
+    otherwise, so a Python signal handler would not run: a 200 ms timer gives it the chance)."""
+
+    def on_sigint(*_args):
+        outcome["code"] = 130
+        app.quit()
+
+    signal.signal(signal.SIGINT, on_sigint)
+    timer = QTimer()
+    timer.timeout.connect(lambda: None)
+    timer.start(200)
+    return timer
+
+
+class _Screenshot:
+    """``--screenshot``: save the window once the first full result is drawn, then close."""
+
+    def __init__(self, window, args, outcome: dict, pick):
+        self.window, self.outcome, self.pick = window, outcome, pick
+        self.target, self.whole = Path(args.screenshot), not args.view_only
+        self.done = False
+        window.result_shown.connect(self.on_result)
+        window.estimator.failed.connect(lambda msg: self.fail(f"the estimate failed: {msg}"))
+        window.notifier.notified.connect(lambda note: self.fail(note.message) if note.level == "error" else None)
+        QTimer.singleShot(int(args.timeout * 1000), lambda: self.fail(f"no result after {args.timeout:g} s"))
+
+    def fail(self, message: str) -> None:
+        if not self.done:
+            self.done = True
+            print(f"darboux: {message}", file=sys.stderr)
+            self.outcome["code"] = 1
+            self.window.close()
+
+    def on_result(self, _out) -> None:
+        if self.pick is not None and self.window.state.picked is None:
+            self.window.state.set(picked=self.pick)
+        QTimer.singleShot(400, self.save)  # let the event loop paint the new frame
+
+    def save(self) -> None:
+        if self.done:
+            return
+        self.done = True
+        try:
+            self.target.parent.mkdir(parents=True, exist_ok=True)
+            ok = self.window.save_screenshot(self.target, whole_window=self.whole)
+        except Exception as exc:  # noqa: BLE001
+            ok = False
+            print(f"darboux: could not save {self.target}: {exc}", file=sys.stderr)
+        if ok:
+            print(f"darboux: saved {self.target}")
+        else:
+            print(f"darboux: could not write the screenshot {self.target}", file=sys.stderr)
+            self.outcome["code"] = 1
+        self.window.close()
+
+
+def _open_first(window, args, pick) -> None:
+    """Load after the window exists, so that a bad file is reported through the notifier."""
+    interactive = args.screenshot is None
+    if args.shape:
+        window.load_shape(args.shape, args.points)
+    elif args.file:
+        window.open_file(args.file, remember=interactive)
+        if interactive and DEFAULT_CLOUD.exists():
+            # keep the app useful when the file cannot be read (the error was shown)
+            window.loader.failed.connect(lambda *_: window.open_default() if window.state.source is None else None)
+    else:
+        window.open_default()
+    if pick is not None and interactive:
+        window.result_shown.connect(lambda _o: window.state.set(picked=pick) if window.state.picked is None else None)
 
 
 def main(argv: list[str] | None = None) -> int:
     args_list = sys.argv[1:] if argv is None else list(argv)
     parser = build_parser()
     args = parser.parse_args(args_list)
-    try:
-        width, height = (int(v) for v in args.size.lower().split("x"))
-    except ValueError:
-        parser.error(f"--size must look like 1440x900, got {args.size!r}")
-    if args.shape:
-        import core.shapes
-
-        if args.shape not in core.shapes.SHAPES:
-            parser.error(f"--shape {args.shape!r} is unknown; valid shapes: {', '.join(core.shapes.SHAPES)}")
-    if args.points < 10:
-        parser.error(f"--points must be at least 10, got {args.points}")
+    width, height = _check_args(args, parser)
     state = _state_from_args(args, parser)
-
-    from PySide6.QtCore import QTimer
-    from PySide6.QtWidgets import QApplication
-
-    from . import DEFAULT_CLOUD
-    from .window import MainWindow
+    from .window import MainWindow  # noqa: PLC0415 - pyvistaqt/VTK only once the arguments are valid
 
     app = QApplication.instance() or QApplication([sys.argv[0], *args_list])
     app.setApplicationName("Darboux")
     app.setOrganizationName("Darboux")
-    window = MainWindow(state=state, dialogs=args.screenshot is None)
-    if args.screenshot is None:
+    settings = QSettings("Darboux", "darboux")
+    interactive = args.screenshot is None  # a screenshot is reproducible: defaults + arguments only
+    if interactive:
+        restore_state(state, settings, skip=state.given)
+    window = MainWindow(state=state, settings=settings, dialogs=interactive)
+    outcome = {"code": 0}
+    sigint_timer = _quit_on_sigint(app, outcome)
+    if interactive:
         window.notifier.install_hooks()
-    if args.screenshot and args.view_only:
+        restore_layout(window, settings)
+    elif args.view_only:
         for dock in (window.controls_dock, window.histogram_dock, window.inspector_dock):
             dock.hide()  # a figure: the 3D view(s) get the whole window
     window.resize(width, height)
     window.show()
-
-    outcome = {"code": 0}
-    if args.screenshot:
-        target = Path(args.screenshot)
-        done = {"saved": False}
-
-        def fail(message: str) -> None:
-            if done["saved"]:
-                return
-            done["saved"] = True
-            print(f"darboux: {message}", file=sys.stderr)
-            outcome["code"] = 1
-            window.close()
-
-        def save() -> None:
-            if done["saved"]:
-                return
-            done["saved"] = True
-            try:
-                target.parent.mkdir(parents=True, exist_ok=True)
-                ok = window.save_screenshot(target, whole_window=not args.view_only)
-            except Exception as exc:  # noqa: BLE001
-                ok = False
-                print(f"darboux: could not save {target}: {exc}", file=sys.stderr)
-            if ok:
-                print(f"darboux: saved {target}")
-            else:
-                print(f"darboux: could not write the screenshot {target}", file=sys.stderr)
-                outcome["code"] = 1
-            window.close()
-
-        def on_result(_out) -> None:
-            if pick is not None and window.state.picked is None:
-                window.state.set(picked=pick)
-            QTimer.singleShot(400, save)  # let the event loop paint the new frame
-
-        window.result_shown.connect(on_result)
-        window.estimator.failed.connect(lambda msg: fail(f"the estimate failed: {msg}"))
-        window.notifier.notified.connect(lambda note: fail(note.message) if note.level == "error" else None)
-        QTimer.singleShot(int(args.timeout * 1000), lambda: fail(f"no result after {args.timeout:g} s"))
-
     pick = state.picked  # loading a cloud clears the pick: restore it on the first result
-    # load after the window exists so that a bad file is reported through the notifier
-    if args.shape:
-        window.load_shape(args.shape, args.points)
-    else:
-        opened = window.open_file(args.file, remember=args.screenshot is None) if args.file else window.open_default()
-        if not opened:
-            if args.screenshot:
-                window.close()
-                return 1
-            if args.file and DEFAULT_CLOUD.exists():
-                window.open_default()  # keep the app useful; the error was shown
-    if pick is not None and args.screenshot is None:
-        window.result_shown.connect(lambda _o: window.state.set(picked=pick) if window.state.picked is None else None)
+    shot = None if interactive else _Screenshot(window, args, outcome, pick)
+    _open_first(window, args, pick)
     code = app.exec()
+    del shot
+    sigint_timer.stop()
     window.shutdown()
     window.notifier.uninstall_hooks()
     return outcome["code"] or code

@@ -23,6 +23,8 @@ from __future__ import annotations
 import ctypes
 import sys
 
+from PySide6.QtCore import QObject, QTimer, Signal
+
 __all__ = ["probe", "guard"]
 
 _EXTRA = 1 << 40
@@ -31,8 +33,6 @@ _done: dict = {}
 
 def probe(n: int = 32) -> dict:
     """References to None and True lost per call of a void Qt method / a True emit."""
-    from PySide6.QtCore import QObject, QTimer, Signal
-
     class _Emitter(QObject):
         fired = Signal(object)
 

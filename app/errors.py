@@ -17,6 +17,8 @@ from dataclasses import dataclass
 
 from PySide6.QtCore import QObject, Signal
 
+from .text import safe_text
+
 __all__ = ["Notifier", "Notification"]
 
 LOG = logging.getLogger("app")
@@ -40,7 +42,7 @@ class Notifier(QObject):
         self._old_hooks = None
 
     def notify(self, level: str, message: str, detail: str = "") -> None:
-        note = Notification(level, str(message), detail)
+        note = Notification(level, safe_text(message), safe_text(detail))
         self.history.append(note)
         getattr(LOG, "warning" if level == "warning" else ("error" if level == "error" else "info"))(
             "%s%s", message, ("\n" + detail) if detail else ""

@@ -10,21 +10,20 @@ from __future__ import annotations
 
 import numpy as np
 
+import core
+
 from .fields import FIELDS, colormap_for, curvature_floor, is_signed, robust_limits
 
-__all__ = ["ResultPresenter", "method_title", "uses_passes", "summary_line", "status_line", "point_info"]
+__all__ = ["ResultPresenter", "method_title", "uses_passes", "summary_line", "status_line", "preview_line",
+           "point_info"]
 
 
 def method_title(name: str | None) -> str:
-    import core
-
     method = core.METHODS.get(name) if name else None
     return getattr(method, "title", name or "")
 
 
 def uses_passes(name: str | None) -> bool:
-    import core
-
     return bool(getattr(core.METHODS.get(name), "uses_passes", False)) if name else False
 
 
@@ -66,12 +65,35 @@ class ResultPresenter:
         self.scene.set_highlight(None)
         for kind in ("e1", "e2", "normals"):
             self.scene.set_glyphs(kind, None, density=0, length=0)
+        self.scene.show_bar(False)
+        self.histogram.clear()
         self.inspector.clear()
+
+    def show_preview(self, out) -> None:
+        """Colour the cloud by a preview (:mod:`app.preview`); glyphs and pick wait for the full result."""
+        s = self.state
+        name = s.field if s.field in out.fields else "mean"
+        spec = FIELDS[name]
+        values = out.fields[name]
+        signed = is_signed(spec, values)
+        if s.clim_auto or s.clim is None:
+            clim = robust_limits(values, signed=signed, clip=s.clip_percent,
+                                 floor=curvature_floor(name, self.scene.radius()))
+        else:
+            clim = s.clim
+        cmap = colormap_for(spec, signed)
+        self.scene.set_cloud(out.points)
+        self.scene.set_values(values, title=spec.title, cmap=cmap, clim=clim)
+        self.scene.lod.hold(True)  # a big cloud shows its stand-in until the full result
+        self.scene.set_title(f"{method_title(out.request.method)} — preview on {out.preview:,} points\n"
+                             f"{out.request.source.name}\ncomputing the full result…")
+        self.histogram.set_data(values, clim=clim, cmap=cmap, label=spec.label + " (preview)")
 
     def show(self, out) -> None:
         """Draw a new result in the main view (and the compare view if set)."""
         self.output = out
         req = out.request
+        self.scene.lod.hold(False)
         for scene, res, _fields in self._pairs():
             scene.spacing = out.spacing
             scene.set_cloud(out.points)
@@ -185,6 +207,14 @@ def status_line(out) -> str:
     text += f"  ·  {fixed:,} file normals repaired" if fixed else ""
     text += f"  ·  {out.elapsed:.2f} s" + (" (neighbours reused)" if out.reused_neighbours else "")
     return text
+
+
+def preview_line(out) -> str:
+    """The status bar while a preview is shown."""
+    req = out.request
+    k = req.k if not req.k_auto else f"{out.result.k} (paper's pipeline)"
+    return (f"{req.source.name}: PREVIEW ({req.method.upper()} k={k} on {out.preview:,} of {len(out.points):,} "
+            f"points, {out.elapsed:.2f} s) — computing the full result…")
 
 
 def point_info(out, index: int) -> dict:

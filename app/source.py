@@ -1,16 +1,22 @@
 """The cloud being looked at: a file or a synthetic shape with its ground truth.
 
-Pure data, no Qt. Loading runs wherever it is called (the window calls it on the
-GUI thread; files are read with :func:`core.io.read_cloud`).
+Pure data, no Qt. Loading runs wherever it is called (the viewer calls it on a
+job thread, :mod:`app.loader`; files are read with :func:`core.io.read_cloud`).
 """
 
 from __future__ import annotations
 
 import itertools
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+
+import core.io
+import core.shapes
+
+from .text import display_name
 
 _uids = itertools.count(1)
 
@@ -63,19 +69,15 @@ def load_file(path) -> CloudSource:
     core.io.CloudFileError
         With a message that names the file, when it cannot be read.
     """
-    import core.io
-
-    path = Path(path)
+    path = Path(os.fsdecode(path))
     cloud = core.io.read_cloud(path)
     points = np.array(cloud.points, dtype=float, copy=True)
     normals = None if cloud.normals is None else np.array(cloud.normals, dtype=float, copy=True)
-    return CloudSource(name=path.name, points=points, normals=normals, path=path)
+    return CloudSource(name=display_name(path), points=points, normals=normals, path=path)
 
 
 def make_shape(name: str, n: int = 5000, *, seed: int = 0) -> CloudSource:
     """Sample a synthetic shape from :data:`core.shapes.SHAPES` (with exact truth)."""
-    import core.shapes
-
     try:
         factory = core.shapes.SHAPES[name]
     except KeyError:

@@ -1,6 +1,7 @@
 """The one observable state object: the parameters the user set.
 
-Widgets bind to it both ways: a widget writes with ``state.set(name=value)`` (or
+The estimate keys are the fields of :class:`app.request.EstimateRequest`
+(:data:`app.request.ESTIMATE_KEYS`). Widgets bind to it both ways: a widget writes with ``state.set(name=value)`` (or
 attribute assignment) and listens to :attr:`ViewerState.changed`, updating itself
 with its own signals blocked (see :func:`app.widgets._bind.blocked`). Everything
 here runs on the GUI thread.
@@ -15,12 +16,9 @@ from typing import Any, Callable
 import numpy as np
 from PySide6.QtCore import QObject, Signal
 
-from core.estimate import AUTO_PASSES
+from core.tuning import AUTO_PASSES
 
-__all__ = ["ViewerState", "ESTIMATE_KEYS"]
-
-#: Changing any of these asks the worker for a new estimate (debounced).
-ESTIMATE_KEYS = frozenset({"source", "k", "k_auto", "method", "passes", "noise", "use_input_normals", "compare_method"})
+__all__ = ["ViewerState"]
 
 
 @dataclass(frozen=True)
@@ -87,6 +85,7 @@ class ViewerState(QObject):
         "show_normals": _Field(False, bool),
         "glyph_density": _Field(0.05, float),  # fraction of points with glyphs
         "glyph_length": _Field(3.0, float),  # x mean point spacing
+        "eye_dome": _Field(False, bool),  # eye-dome lighting (depth edges, for scans)
         # inspection
         "picked": _Field(None, _opt_int),
     }

@@ -11,13 +11,11 @@ from .field_panel import FieldPanel
 from .glyph_controls import GlyphControls
 from .histogram import Histogram
 from .inspector import PointInspector
-from .k_slider import KSlider
 from .method_combo import MethodCombo
-from .noise_slider import NoiseSlider
-from .passes_slider import PassesSlider
 from .progress import EstimateProgress
 from .recent_menu import RecentFilesMenu
 from .shape_dialog import ShapeDialog
+from .state_slider import KSlider, StateSlider, k_slider, noise_slider, passes_slider
 
 __all__ = [
     "CompareView",
@@ -27,10 +25,12 @@ __all__ = [
     "Histogram",
     "KSlider",
     "MethodCombo",
-    "NoiseSlider",
-    "PassesSlider",
     "PointInspector",
     "RecentFilesMenu",
     "ShapeDialog",
     "StateCheckBox",
+    "StateSlider",
+    "k_slider",
+    "noise_slider",
+    "passes_slider",
 ]

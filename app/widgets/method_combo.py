@@ -6,6 +6,8 @@ from __future__ import annotations
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QComboBox
 
+import core
+
 from ._bind import blocked
 
 OFF = "Off"
@@ -21,8 +23,6 @@ class MethodCombo(QComboBox):
 
     def __init__(self, state, key: str = "method", parent=None):
         super().__init__(parent)
-        import core
-
         self._state = state
         self._key = key
         if key == "compare_method":

@@ -69,7 +69,7 @@ def make_window(qtbot, settings):
 
     from app.state import ViewerState
     from app.window import MainWindow
-    from app.worker import Estimator
+    from app.estimator import Estimator
 
     before = set(threading.enumerate())
     plotters_before = set(pv_plotter._ALL_PLOTTERS)
@@ -104,9 +104,10 @@ def make_window(qtbot, settings):
     windows.clear()
     gc.collect()
     _process_deletes()
-    assert not Estimator.running_threads(), "an estimate thread outlived its window"
-    # threads started by Qt show up as threading._DummyThread once they ran Python code;
-    # those (our QThreads) are checked above through Estimator.running_threads()
+    # an abandoned job stops at its next cancel check (a fraction of a second)
+    qtbot.waitUntil(lambda: not Estimator.running_threads(), timeout=10_000)
+    assert not Estimator.running_threads(), "a job thread outlived its window"
+    # threads started by Qt show up as threading._DummyThread once they ran Python code
     leaked = [t.name for t in threading.enumerate()
               if t not in before and t.is_alive() and not isinstance(t, threading._DummyThread)]
     assert not leaked, f"threads leaked: {leaked}"

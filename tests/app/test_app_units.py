@@ -118,7 +118,7 @@ def test_dialog_pieces(qtbot):
     import core.shapes
 
     from app.widgets import ShapeDialog
-    from app.window import _read_filter, _write_filter
+    from app.actions import read_filter as _read_filter, write_filter as _write_filter
 
     dialog = ShapeDialog(list(core.shapes.SHAPES), shape="saddle", count=1234)
     qtbot.addWidget(dialog)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import pytest
 from app_testutils import colour_stats, image_array, wait_result
@@ -83,7 +85,8 @@ def test_stale_result_is_dropped(make_window, qtbot, torus):
 
 def test_running_job_is_cancelled_through_core_callback(torus):
     """The worker answers False to core's progress callback once its job is stale."""
-    from app.worker import EstimateRequest, EstimateWorker
+    from app.request import EstimateRequest
+    from app.worker import EstimateWorker
 
     worker = EstimateWorker()
     req = EstimateRequest(gen=1, source=torus, k=12)
@@ -149,7 +152,8 @@ def test_bad_file_shows_message_and_app_survives(make_window, qtbot, torus, tmp_
     unknown.write_text("1 2 3\n")
     for path in (bad, missing, unknown):
         before = len(window.notifier.history)
-        assert window.open_file(path) is False
+        assert window.open_file(path)  # read on the loader thread; the answer comes back as an error
+        qtbot.waitUntil(lambda: len(window.notifier.history) > before, timeout=10_000)
         note = window.notifier.last
         assert len(window.notifier.history) == before + 1
         assert note.level == "error" and path.name in note.message
@@ -259,8 +263,10 @@ def test_closing_while_estimating_leaves_nothing_behind(make_window, qtbot):
     big = make_shape("sphere", 20000)
     window = make_window(big, wait=False)
     qtbot.waitUntil(lambda: window.estimator.busy, timeout=10_000)
+    t0 = time.perf_counter()
     window.close()  # the fixture checks threads and plotters
-    assert window.plotter._closed and not window.estimator._thread.isRunning()
+    assert time.perf_counter() - t0 < 1.0
+    assert window.plotter._closed
 
 
 def test_open_close_twenty_times(make_window, qtbot):
@@ -319,10 +325,15 @@ def test_gui_stays_responsive_while_estimating(make_window, qtbot):
 
 def test_automatic_k_is_the_default_and_can_be_turned_off(make_window, qtbot, torus):
     window = make_window(torus)
-    assert window.state.k_auto and not window.k_slider.slider.isEnabled()
+    assert window.state.k_auto and window.k_slider.slider.isEnabled()
     out = window.output
     assert out.result.k == "auto" and out.request.k_auto
     assert set(np.unique(out.result.k_point)) <= set(__import__("core").scale.AUTO_KS)
     with wait_result(qtbot, window, 30_000) as blocker:
         window.k_slider.auto.setChecked(False)
     assert blocker.args[0].result.k == window.state.k and window.k_slider.slider.isEnabled()
+    # moving the k slider while automatic k is on picks that fixed k
+    window.state.set(k_auto=True)
+    with wait_result(qtbot, window, 30_000) as blocker:
+        window.k_slider.slider.setValue(21)
+    assert not window.state.k_auto and blocker.args[0].result.k == 21

@@ -1,0 +1,189 @@
+"""What the user does through menus, dialogs and drag-and-drop (a mixin of MainWindow).
+
+GUI thread. Files are read and shapes generated on the loader's job thread
+(:mod:`app.loader`); :meth:`WindowActions.open_file` returns at once with a ticket
+and the cloud is swapped in when it arrives.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from PySide6.QtGui import QAction, QKeySequence
+from PySide6.QtWidgets import QFileDialog, QMessageBox
+
+import core.io
+import core.shapes
+
+from . import DEFAULT_CLOUD
+from .text import safe_text
+from .widgets import RecentFilesMenu, ShapeDialog
+
+__all__ = ["WindowActions", "read_filter", "write_filter"]
+
+
+def write_filter() -> str:
+    return ";;".join(f"{desc} (*{ext if ext.startswith('.') else '.' + ext})"
+                     for ext, desc in core.io.WRITE_FORMATS.items())
+
+
+def read_filter() -> str:
+    exts, described = [], []
+    for ext, desc in core.io.READ_FORMATS.items():
+        ext = ext if ext.startswith(".") else f".{ext}"
+        exts.append(f"*{ext}")
+        described.append(f"{desc} (*{ext})")
+    return ";;".join([f"Point clouds ({' '.join(exts)})", *described, "All files (*)"])
+
+
+class WindowActions:
+    """Menus, file and shape loading, export, screenshots, drag-and-drop."""
+
+    def _build_menus(self) -> None:
+        menu = self.menuBar().addMenu("&File")
+        self._action(menu, "&Open…", self.open_dialog, QKeySequence.StandardKey.Open)
+        self.recent_menu = RecentFilesMenu(self.settings, self)
+        self.recent_menu.open_requested.connect(self.open_file)
+        menu.addMenu(self.recent_menu)
+        self._action(menu, "Open the &bundled bunny", self.open_default)
+        menu.addSeparator()
+        self._action(menu, "&Export result…", self.export_dialog, "Ctrl+E")
+        self._action(menu, "Save &screenshot…", self.screenshot_dialog, "Ctrl+Shift+S")
+        menu.addSeparator()
+        self._action(menu, "&Quit", self.close, QKeySequence.StandardKey.Quit)
+
+        menu = self.menuBar().addMenu("&Shapes")
+        for name in core.shapes.SHAPES:
+            self._action(menu, name.capitalize(), lambda _=False, n=name: self.load_shape(n))
+        menu.addSeparator()
+        self._action(menu, "&Generate…", self.shape_dialog)
+
+        menu = self.menuBar().addMenu("&View")
+        self._action(menu, "&Fit view", self.fit_view, "F")
+        self._action(menu, "&Reset camera", self.reset_view, "R")
+        self._action(menu, "&Clear picked point", lambda: self.state.set(picked=None), "Esc")
+        self._action(menu, "Estimate &again", self.request_estimate, "F5")
+        self.eye_dome_action = self._action(menu, "&Eye-dome lighting (scans)",
+                                            lambda: self.state.set(eye_dome=self.eye_dome_action.isChecked()), "E")
+        self.eye_dome_action.setCheckable(True)
+        menu.addSeparator()
+        for dock in (self.controls_dock, self.histogram_dock, self.inspector_dock):
+            menu.addAction(dock.toggleViewAction())
+
+        menu = self.menuBar().addMenu("&Help")
+        self._action(menu, "&About Darboux", self._about)
+
+    def _action(self, menu, text, slot, shortcut=None) -> QAction:
+        action = QAction(text, self)
+        if shortcut is not None:
+            action.setShortcut(QKeySequence(shortcut))
+        action.triggered.connect(lambda *_: slot())
+        menu.addAction(action)
+        return action
+
+    # -- loading (answers arrive in _on_loaded / _on_load_failed) -------------------
+    def open_file(self, path, *, remember: bool = True):
+        """Read a file on the loader thread; the current cloud stays until it arrives."""
+        ticket = self.loader.open_file(path, remember=remember)
+        self.estimator.cancel()
+        self.status_label.setText(f"reading {ticket.label}…")
+        self.progress.set_progress(-1.0, "reading…")
+        return ticket
+
+    def open_default(self):
+        """Open the bundled real scan (the Stanford bunny)."""
+        return self.open_file(DEFAULT_CLOUD, remember=False)
+
+    def load_shape(self, name: str, n: int | None = None):
+        self.shape_count = n = int(n or self.shape_count)
+        self.estimator.cancel()
+        ticket = self.loader.make_shape(name, n)
+        self.status_label.setText(f"generating {ticket.label}…")
+        self.progress.set_progress(-1.0, "generating…")
+        return ticket
+
+    def _on_loaded(self, ticket, source) -> None:
+        if self._closed:
+            return
+        if ticket.remember and ticket.path is not None and safe_text(ticket.path) == ticket.path:
+            # (a name that is not valid UTF-8 cannot round-trip through QSettings: not remembered)
+            path = Path(ticket.path)
+            self.recent_menu.add(path)
+            self.settings.setValue("last_dir", safe_text(path.resolve().parent))
+        self.set_source(source)
+
+    def _on_load_failed(self, ticket, message: str, detail: str) -> None:
+        if self._closed:
+            return
+        self.notifier.notify("error", f"Could not open the file. {message}", detail)
+        self._show_status()
+
+    def open_dialog(self) -> None:
+        start = self.settings.value("last_dir", str(Path.home()))
+        path, _ = QFileDialog.getOpenFileName(self, "Open point cloud", str(start), read_filter())
+        if path:
+            self.open_file(path)
+
+    def shape_dialog(self) -> None:
+        dialog = ShapeDialog(list(core.shapes.SHAPES), count=self.shape_count, parent=self)
+        if dialog.exec():
+            self.load_shape(dialog.shape, dialog.count)
+
+    # -- export ---------------------------------------------------------------------
+    def export_result(self, path) -> Path | None:
+        if self.output is None:
+            self.notifier.warning("Nothing to export yet: wait for the estimate to finish.")
+            return None
+        try:
+            written = core.io.write_result(path, self.output.result)
+        except Exception as exc:  # noqa: BLE001
+            self.notifier.error(f"Could not export to {path}: {exc}", exc)
+            return None
+        self.notifier.info(f"Exported the result to {written}")
+        return Path(written)
+
+    def export_dialog(self) -> None:
+        start = Path(self.settings.value("last_dir", str(Path.home())))
+        stem = Path(self.state.source.name).stem.split(" ")[0] if self.state.source else "result"
+        path, _ = QFileDialog.getSaveFileName(self, "Export result", str(start / f"{stem}-curvature.ply"),
+                                              write_filter())
+        if path:
+            self.export_result(path)
+
+    def save_screenshot(self, path, *, whole_window: bool = False) -> bool:
+        """Save a PNG of the 3D view(s), or of the whole window."""
+        self.render_all()
+        widget = self if whole_window else self.splitter
+        ok = widget.grab().save(str(path))
+        if not ok:
+            self.notifier.error(f"Could not write the screenshot {path}")
+        return ok
+
+    def screenshot_dialog(self) -> None:
+        start = Path(self.settings.value("last_dir", str(Path.home())))
+        path, _ = QFileDialog.getSaveFileName(self, "Save screenshot", str(start / "darboux.png"), "PNG (*.png)")
+        if path:
+            self.save_screenshot(path)
+
+    def _about(self) -> None:
+        QMessageBox.about(
+            self, "About Darboux",
+            "<b>Darboux</b> — differential geometry of unorganized point clouds.<br>"
+            "Normal fitting and refinement after Cheng &amp; Zhang (2009).<br><br>"
+            "Bundled data: the Stanford Bunny, Stanford 3D Scanning Repository.",
+        )
+
+    # -- drag and drop ----------------------------------------------------------------
+    def dragEnterEvent(self, event) -> None:  # noqa: N802
+        urls = event.mimeData().urls() if event.mimeData().hasUrls() else []
+        if any(u.isLocalFile() for u in urls):
+            event.acceptProposedAction()
+        else:
+            event.ignore()
+
+    def dropEvent(self, event) -> None:  # noqa: N802
+        for url in event.mimeData().urls():
+            if url.isLocalFile():
+                event.acceptProposedAction()
+                self.open_file(url.toLocalFile())
+                return
