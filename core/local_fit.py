@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .point_types import TYPE_NAMES, ZERO, curvature_scale, point_types
+from .point_types import TYPE_NAMES, ZERO, classify, curvature_scale
 
 #: neighbours used when the result carries no neighbourhood (the paper's k)
 DEFAULT_K = 15
@@ -142,12 +142,13 @@ class LocalFit:
         return pieces
 
 
-def local_fit(res, index: int) -> LocalFit:
+def local_fit(res, index: int, *, scale: float | None = None) -> LocalFit:
     """The local picture at point ``index`` of a :class:`core.CurvatureResult`.
 
     The normal field is fitted, as NF does (eqs. 15-21), to the result's final normals over the
     point's own neighbourhood (``res.k_point[index]`` neighbours): it shows what one more NR
-    pass would fit.
+    pass would fit. ``scale`` is the cloud's curvature scale (computed when not given; pass
+    it to avoid an O(N) pass per pick).
     """
     n = len(res.points)
     if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or not 0 <= index < n:
@@ -166,8 +167,8 @@ def local_fit(res, index: int) -> LocalFit:
     ln *= np.where(ln[:, 2] < 0, -1.0, 1.0)[:, None]
     A = np.column_stack([np.ones(len(idx)), local[:, :2]])
     coef, *_ = np.linalg.lstsq(A, ln[:, :2], rcond=None)
-    scale = curvature_scale(res)
-    kind = TYPE_NAMES[point_types(res, scale=scale)[index]]
+    scale = curvature_scale(res) if scale is None else float(scale)
+    kind = TYPE_NAMES[classify(res.k1[index], res.k2[index], True, scale=scale)[0]]
     return LocalFit(index, p.copy(), e1, e2, nrm.copy(), float(res.k1[index]), float(res.k2[index]), kind,
                     idx, local, ln, coef[0], coef[1:].T.copy(), float(np.linalg.norm(local, axis=1).max()), scale)
 

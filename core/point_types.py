@@ -70,8 +70,13 @@ def point_types(res, *, zero: float = ZERO, equal: float = EQUAL, scale: float |
         scale = curvature_scale(res)
     elif not (np.isfinite(scale) and scale > 0):
         raise ValueError(f"scale={scale!r} is invalid; must be a finite number > 0")
-    k1, k2 = np.asarray(res.k1, float), np.asarray(res.k2, float)
-    ok = np.asarray(res.valid, bool) & np.isfinite(k1) & np.isfinite(k2)
+    return classify(res.k1, res.k2, res.valid, scale=scale, zero=zero, equal=equal)
+
+
+def classify(k1, k2, valid, *, scale: float, zero: float = ZERO, equal: float = EQUAL):
+    """Type codes for principal curvature arrays (see :func:`point_types`, which checks)."""
+    k1, k2 = np.atleast_1d(np.asarray(k1, float)), np.atleast_1d(np.asarray(k2, float))
+    ok = np.atleast_1d(np.asarray(valid, bool)) & np.isfinite(k1) & np.isfinite(k2)
     a1, a2 = np.abs(k1), np.abs(k2)
     flat1, flat2 = a1 < zero * scale, a2 < zero * scale
     out = np.where(k1 * k2 > 0, ELLIPTIC, HYPERBOLIC).astype(np.int8)
