@@ -14,10 +14,9 @@ from . import glyphs
 
 __all__ = ["CloudScene", "GLYPH_COLOURS", "FRAME_COLOURS"]
 
-#: Colours of the ± glyphs: dark enough to read over a diverging colormap.
-GLYPH_COLOURS = {"e1": "#111111", "e2": "#1a9850", "normals": "#7b3294"}
-#: Colours of the picked point's frame (the usual x/y/z = red/green/blue).
-FRAME_COLOURS = {"e1": "#e41a1c", "e2": "#4daf4a", "n": "#377eb8"}
+#: Colours of the ± glyphs and of the picked frame: the same everywhere (app/glyphs.py).
+FRAME_COLOURS = glyphs.FRAME_COLOURS
+GLYPH_COLOURS = {"e1": FRAME_COLOURS["e1"], "e2": FRAME_COLOURS["e2"], "normals": FRAME_COLOURS["n"]}
 NAN_COLOUR = "#b0b0b0"
 HIGHLIGHT_COLOUR = "#ffd92f"
 TEXT_COLOUR = "#222222"

@@ -36,6 +36,7 @@ from .presenter import ResultPresenter, status_line, summary_line
 from .scene import CloudScene
 from .source import CloudSource, load_file, make_shape
 from .state import ESTIMATE_KEYS, ViewerState
+from .teach import install_teach
 from .widgets import (
     CompareView,
     EstimateProgress,
@@ -152,6 +153,7 @@ class MainWindow(QMainWindow):
         self.estimator.cancelled.connect(self._on_cancelled)
         self.progress.cancel_requested.connect(self.estimator.cancel)
         self.notifier.notified.connect(self._show_notification)
+        self.teach = install_teach(self)
         if self.state.source is not None:
             self._on_source(self.state.source)
             self._debounce.start()
@@ -522,6 +524,7 @@ class MainWindow(QMainWindow):
             return
         self._closed = True
         self._debounce.stop()
+        self.teach.shutdown()
         self.estimator.shutdown()
         for box in list(self._boxes):
             box.close()

@@ -151,8 +151,9 @@ def curvature_lines(res, *, direction: str = "e1", seeds=None, separation: float
 
     Returns
     -------
-    list of (m, 3) arrays, one polyline per seed (traced both ways from it), lines of a
-    single point left out.
+    list of (m, 3) arrays, longest first, one polyline per seed (traced both ways from it);
+    lines of a single point, and lines running mostly within ``separation / 2`` of a longer
+    one (the same line of curvature from another seed), left out.
 
     Examples
     --------
@@ -189,4 +190,16 @@ def curvature_lines(res, *, direction: str = "e1", seeds=None, separation: float
         line = np.concatenate([b[::-1], fwd[i][1:]])
         if len(line) > 1:
             lines.append(line)
-    return lines
+    return _thin(lines, 0.5 * separation * field.spacing)
+
+
+def _thin(lines, gap):
+    """Keep lines longest first, dropping one whose points lie mostly (over half) within
+    ``gap`` of the lines kept (seeds along one line of curvature trace it again)."""
+    kept, tree = [], None
+    for line in sorted(lines, key=len, reverse=True):
+        if tree is not None and np.mean(tree.query(line, k=1)[0] < gap) > 0.5:
+            continue
+        kept.append(line)
+        tree = cKDTree(np.concatenate(kept))
+    return kept

@@ -98,18 +98,20 @@ class LocalFit:
         order = np.argsort(s[keep])
         return s[keep][order], self.local[keep, 2][order]
 
-    def osculating_circle(self, theta: float, n: int = 96) -> np.ndarray:
+    def osculating_circle(self, theta: float, n: int = 96, reach: float | None = None) -> np.ndarray:
         """World points of the osculating circle of the normal section at ``theta``: centre
         p - n / k_n, radius 1 / |k_n|; a straight segment across the neighbourhood where k_n
-        counts as zero (an infinite radius, :data:`core.point_types.ZERO`)."""
+        counts as zero (an infinite radius, :data:`core.point_types.ZERO`). With ``reach``,
+        only the arc within that distance of p (the segment within it, if straight)."""
         k = float(self.normal_curvature(theta))
         d = np.cos(theta) * self.e1 + np.sin(theta) * self.e2
         if abs(k) < ZERO * self.scale:
-            s = np.linspace(-1.5, 1.5, 2) * self.radius
+            s = np.linspace(-1.0, 1.0, 2) * (1.5 * self.radius if reach is None else reach)
             return self.origin + s[:, None] * d
-        t = np.linspace(0, 2 * np.pi, n)
         centre = self.origin - self.normal / k
         rad = 1.0 / abs(k)
+        half = np.pi if reach is None or reach >= 2 * rad else 2 * np.arcsin(reach / (2 * rad))
+        t = np.linspace(-half, half, n)
         return centre + rad * (np.cos(t)[:, None] * self.normal * np.sign(k) + np.sin(t)[:, None] * d)
 
     def dupin(self, size: float | None = None, n: int = 181) -> list:
