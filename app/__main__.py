@@ -38,6 +38,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--overlays", metavar="LIST", help="with --teach: comma-separated overlays: frame, surface, "
                    "sections, dupin, normal_fit, lines, types (default frame,sections,dupin)")
     p.add_argument("--theta", type=float, metavar="DEG", help="with --teach: direction of the swept normal section")
+    p.add_argument("--focus", action="store_true", help="with --teach and --pick: zoom to the picked point")
     p.add_argument("--example", metavar="NAME", help="a guided example (implies --teach): sphere, cylinder, torus, saddle")
     p.add_argument("--screenshot", metavar="PATH", help="save a PNG of the window once the result is shown, then exit")
     p.add_argument("--view-only", action="store_true",
@@ -106,8 +107,8 @@ def _teach_from_args(args, parser) -> dict:
     if args.example is not None and args.example not in EXAMPLES:
         parser.error(f"--example {args.example!r} is unknown; valid: {', '.join(EXAMPLES)}")
     if not (args.teach or args.example):
-        if args.overlays or args.theta is not None:
-            parser.error("--overlays and --theta need --teach")
+        if args.overlays or args.theta is not None or args.focus:
+            parser.error("--overlays, --theta and --focus need --teach")
         return {}
     out = {"enabled": True}
     if args.overlays:
@@ -193,8 +194,13 @@ def main(argv: list[str] | None = None) -> int:
             if pick is not None and window.state.picked is None:
                 window.state.set(picked=pick)
             if teach and not window.teach.controller.is_ready():  # wait for the cloud-wide overlays
-                window.teach.controller.ready.connect(lambda: QTimer.singleShot(400, save))
+                window.teach.controller.ready.connect(lambda: finish())
                 return
+            finish()
+
+        def finish() -> None:
+            if args.focus:
+                window.teach.controller.focus()
             QTimer.singleShot(400, save)  # let the event loop paint the new frame
 
         window.result_shown.connect(on_result)

@@ -30,9 +30,9 @@ class Teach:
         self.dock = QDockWidget("Teach", window)
         self.dock.setObjectName("teach")
         self.dock.setWidget(self.panel)
-        window.addDockWidget(Qt.DockWidgetArea.LeftDockWidgetArea, self.dock)
-        neighbour = getattr(window, "inspector_dock", None)
-        if neighbour is not None:  # share the left column with the picked-point table
+        window.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, self.dock)
+        neighbour = getattr(window, "controls_dock", None)
+        if neighbour is not None:  # a tab beside the controls: the whole column's height
             window.tabifyDockWidget(neighbour, self.dock)
         self.dock.hide()  # off by default
         self.controller = TeachController(window, self.panel, self.settings)
@@ -49,6 +49,10 @@ class Teach:
         self.toggle_action.setText("&Teaching mode")
         self.toggle_action.setShortcut("Ctrl+T")
         menu.addAction(self.toggle_action)
+        focus = QAction("&Zoom to the picked point", self.window)
+        focus.setShortcut("Ctrl+F")
+        focus.triggered.connect(self.controller.focus)
+        menu.addAction(focus)
         menu.addSeparator()
         examples = menu.addMenu("&Guided examples")
         for key, example in EXAMPLES.items():

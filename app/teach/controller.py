@@ -182,6 +182,24 @@ class TeachController(QObject):
             if name.endswith("theta") or name == "section-plane":
                 self.layer.show(name, mesh, style)
 
+    def focus(self) -> bool:
+        """Turn the camera to the picked point: seen from above its tangent plane and 50 degrees
+        off both normal sections' planes (so both osculating circles show as open ellipses),
+        its neighbourhood filling a third of the view (GUI thread). False without a fit."""
+        fit = self.fit
+        if fit is None or self._closed:
+            return False
+        cam = self.window.plotter.camera
+        direction = 0.65 * fit.normal + 0.5 * fit.e1 + 0.57 * fit.e2
+        direction /= np.linalg.norm(direction)
+        distance = 3.2 * fit.radius / np.tan(np.radians(cam.view_angle / 2))
+        cam.focal_point = tuple(fit.origin)
+        cam.position = tuple(fit.origin + distance * direction)
+        cam.up = tuple(fit.e2 - direction * np.dot(fit.e2, direction))
+        self.window.plotter.reset_camera_clipping_range()
+        self.window.render_all()
+        return True
+
     # -- the whole cloud ----------------------------------------------------------
     def _draw_cloud(self) -> None:
         maths, res, on = self.maths, self.result, self.settings.overlays
@@ -256,3 +274,4 @@ class TeachController(QObject):
             return
         self._closed = True
         self.worker.shutdown()
+        self.layer.close()

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 import pyvista as pv
+from vtkmodules.vtkRenderingCore import vtkRenderer
 
 from ..glyphs import FRAME_COLOURS, polylines
 
@@ -20,8 +21,9 @@ THETA_COLOUR = "#ff7f00"
 #: flat direction's circle (radius 1/k2 = 4.5 at the torus' outer equator) dwarfs the cloud
 CIRCLE_REACH = 2.5
 MEASURED_COLOUR = "#4d4d4d"
-#: point types (core.TYPE_NAMES order): warm for K > 0, cool for K < 0, neutral for K = 0
-TYPE_COLOURS = ("#d7301f", "#2b8cbe", "#fec44f", "#d9d9d9", "#ae017e")
+#: point types (core.TYPE_NAMES order): red K > 0, blue K < 0, light orange K = 0 (not the
+#: yellow of the picked neighbourhood), grey planar, magenta umbilic
+TYPE_COLOURS = ("#d7301f", "#2b8cbe", "#fdae61", "#d9d9d9", "#ae017e")
 
 
 def _size(fit) -> float:
@@ -36,7 +38,7 @@ def frame_meshes(fit) -> dict:
     for key, vec in (("e1", fit.e1), ("e2", fit.e2), ("n", fit.normal)):
         arrow = pv.Arrow(start=fit.origin, direction=vec, scale=0.9 * r, tip_length=0.18, tip_radius=0.06,
                          shaft_radius=0.022)
-        out[f"frame-{key}"] = (arrow, dict(color=FRAME_COLOURS[key], lighting=True))
+        out[f"frame-{key}"] = (arrow, dict(color=FRAME_COLOURS[key], lighting=True, on_top=True))
     disc = pv.Disc(center=fit.origin, inner=0.0, outer=r, normal=fit.normal, c_res=64)
     out["tangent-disc"] = (disc, dict(color="#9ecae1", opacity=0.35, lighting=False))
     labels = pv.PolyData(np.array([fit.origin + 1.0 * r * v for v in (fit.e1, fit.e2, fit.normal)]))
@@ -116,12 +118,40 @@ class OverlayLayer:
     """The overlay actors of one plotter, by name (GUI thread only).
 
     Every actor is named ``teach-<name>``; :meth:`show` replaces one, :meth:`clear` removes
-    the ones not listed in ``keep``.
+    the ones not listed in ``keep``. A style with ``on_top=True`` draws the mesh in a second
+    renderer layer that shares the camera, over the cloud and its highlighted neighbours.
     """
 
     def __init__(self, plotter):
         self.plotter = plotter
         self.names: set[str] = set()
+        self._top = None
+        self._top_actors: dict = {}
+
+    def _top_renderer(self):
+        if self._top is None:
+            main = self.plotter.renderer
+            top = vtkRenderer()
+            top.SetLayer(1)
+            top.InteractiveOff()
+            top.SetActiveCamera(main.GetActiveCamera())
+            top.SetViewport(main.GetViewport())
+            window = self.plotter.ren_win
+            window.SetNumberOfLayers(max(2, window.GetNumberOfLayers()))
+            window.AddRenderer(top)
+            self._top = top
+        return self._top
+
+    def _show_on_top(self, name, mesh, style):
+        self.remove(name)
+        actor = pv.Actor(mapper=pv.DataSetMapper(mesh))
+        actor.mapper.scalar_visibility = False
+        actor.prop.color = style.get("color", "black")
+        actor.prop.lighting = style.get("lighting", True)
+        self._top_renderer().AddActor(actor)
+        self._top_actors[name] = actor
+        self.names.add(name)
+        return actor
 
     def show(self, name: str, mesh, style: dict | None = None) -> None:
         style = dict(style or {})
@@ -129,6 +159,8 @@ class OverlayLayer:
         if mesh is None:
             self.remove(name)
             return
+        if style.pop("on_top", False):
+            return self._show_on_top(name, mesh, style)
         if "labels" in style:
             actor = self.plotter.add_point_labels(
                 mesh, style["labels"], name=full, font_size=18, bold=True, text_color="#222222",
@@ -141,10 +173,19 @@ class OverlayLayer:
         return actor
 
     def remove(self, name: str) -> None:
-        if name in self.names:
+        if name in self._top_actors:
+            self._top.RemoveActor(self._top_actors.pop(name))
+        elif name in self.names:
             self.plotter.remove_actor(f"teach-{name}", render=False)
-            self.names.discard(name)
+        self.names.discard(name)
 
     def clear(self, keep=()) -> None:
         for name in sorted(self.names - set(keep)):
             self.remove(name)
+
+    def close(self) -> None:
+        """Drop every actor and the top layer (before the plotter closes)."""
+        self.clear()
+        if self._top is not None:
+            self.plotter.ren_win.RemoveRenderer(self._top)
+            self._top = None
