@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .fields import FIELDS, colormap_for, curvature_floor, is_signed, robust_limits
+from .fields import FIELDS, colouring, curvature_floor
 
 __all__ = ["ResultPresenter", "method_title", "uses_passes", "summary_line", "status_line", "point_info"]
 
@@ -92,17 +92,11 @@ class ResultPresenter:
         spec = FIELDS[name]
         pairs = self._pairs()
         both = np.concatenate([fields[name] for _, _, fields in pairs if fields and name in fields])
-        signed = is_signed(spec, both)
-        if s.clim_auto or s.clim is None:
-            floor = curvature_floor(name, self.scene.radius())
-            clim = robust_limits(both, signed=signed, clip=s.clip_percent, floor=floor)
-            if not signed and (spec.unit == "deg" or spec.needs == "truth"):
-                clim = (0.0, max(clim[1], 1e-12))  # errors and angles start at 0
-        else:
-            clim = s.clim
-        cmap = colormap_for(spec, signed)
+        manual = None if (s.clim_auto or s.clim is None) else s.clim
+        look = colouring(spec, both, clip=s.clip_percent, floor=curvature_floor(name, self.scene.radius()), clim=manual)
+        clim, cmap = look.clim, look.cmap
         for scene, _res, fields in pairs:
-            scene.set_values(fields[name], title=spec.title, cmap=cmap, clim=clim)
+            scene.set_values(fields[name], title=spec.title, cmap=cmap, clim=clim, log=look.log)
         self.field_panel.show_limits(*clim)
         self.histogram.set_data(out.fields[name], clim=clim, cmap=cmap, label=spec.label)
         self.shown = {"field": name, "clim": clim, "cmap": cmap, "gen": out.gen}
