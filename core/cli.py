@@ -8,7 +8,7 @@ import time
 
 import numpy as np
 
-BENCHES = ("paper", "perf", "accuracy")
+BENCHES = ("paper", "perf", "accuracy", "teach")
 
 
 class _Bar:
@@ -141,7 +141,7 @@ def build_parser() -> argparse.ArgumentParser:
     i.add_argument("files", nargs="+")
     i.set_defaults(func=_cmd_info)
 
-    b = sub.add_parser("bench", help="benchmarks: paper (torus experiment), perf (speed/memory), accuracy")
+    b = sub.add_parser("bench", help="benchmarks: paper (torus experiment), perf (speed/memory), accuracy, teach")
     b.add_argument("which", choices=BENCHES)
     b.add_argument("rest", nargs=argparse.REMAINDER, help="options of the benchmark (see --help)")
     b.set_defaults(func=_cmd_bench)

@@ -37,6 +37,11 @@ LOG = logging.getLogger(__name__)
 _LOCAL = ("frame", "surface", "sections", "dupin", "normal_fit")
 
 
+def _share(mask) -> str:
+    share = float(np.mean(mask))
+    return f"{share:.0%}" if share >= 0.01 else "< 1%"
+
+
 class TeachController(QObject):
     """Teach mode of one window.
 
@@ -239,7 +244,7 @@ class TeachController(QObject):
             self._legend = False
         if on and types is not None:
             present = [i for i in range(len(core.TYPE_NAMES)) if np.any(types == i)]
-            labels = [[f"{core.TYPE_NAMES[i]} ({np.mean(types == i):.0%})", TYPE_COLOURS[i]] for i in present]
+            labels = [[f"{core.TYPE_NAMES[i]} ({_share(types == i)})", TYPE_COLOURS[i]] for i in present]
             plotter.add_legend(labels, bcolor="white", border=True, size=(0.2, 0.04 * (len(labels) + 1)),
                                loc="upper right", face="circle")
             self._legend = True
