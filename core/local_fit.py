@@ -14,6 +14,10 @@ from .point_types import TYPE_NAMES, ZERO, classify, curvature_scale
 
 #: neighbours used when the result carries no neighbourhood (the paper's k)
 DEFAULT_K = 15
+#: the Gauss map ratio is a limit for small neighbourhoods: over the 226 neighbours of an
+#: automatic k on the 5000-point torus it read 0.80 for |K| = 1.01; over the nearest 25,
+#: 1.00 (and 0.17, 0.22, 0.74 for |K| = 0.16, 0.23, 0.80)
+GAUSS_MAP_NEIGHBOURS = 25
 
 
 @dataclass(frozen=True, eq=False)
@@ -78,6 +82,21 @@ class LocalFit:
         ok = r2 > 1e-24
         theta = np.mod(np.arctan2(v[ok], u[ok]), np.pi)
         return theta, (X[ok] * u[ok] + Y[ok] * v[ok]) / r2[ok]
+
+    def gauss_map_ratio(self) -> float:
+        """Area of the neighbours' normals on the unit sphere over the area of the neighbours
+        on the surface (both convex hulls, in the tangent plane), over the ``GAUSS_MAP_NEIGHBOURS``
+        nearest: about |K| for a small neighbourhood, Gauss's own definition of the curvature.
+        NaN if either is degenerate."""
+        from scipy.spatial import ConvexHull, QhullError
+
+        m = GAUSS_MAP_NEIGHBOURS
+        try:
+            spread = ConvexHull(self.local_normals[:m, :2]).volume  # 2D "volume" is the area
+            patch = ConvexHull(self.local[:m, :2]).volume
+        except (QhullError, ValueError):
+            return float("nan")
+        return float(spread / patch) if patch > 0 else float("nan")
 
     def fitted_normals(self) -> np.ndarray:
         """The linear normal field evaluated at the neighbours, (m, 3) unit, in the frame."""

@@ -25,7 +25,9 @@ def point_text(fit, theta_deg: float, res, index) -> str:
             f"k1 = {fit.k1:.4g} (radius {radius(fit.k1)}), k2 = {fit.k2:.4g} (radius {radius(fit.k2)})<br>"
             f"K = k1·k2 = {fit.k1 * fit.k2:.4g}, H = (k1+k2)/2 = {0.5 * (fit.k1 + fit.k2):.4g}<br>"
             f"<span style='color:#d95f02'>k<sub>n</sub>({theta_deg:.0f}°) = k1 cos²θ + k2 sin²θ = {kt:.4g}</span>"
-            f" &nbsp;({len(fit.neighbours)} neighbours)")
+            f" &nbsp;({len(fit.neighbours)} neighbours)<br>"
+            f"Gauss map: area of the nearest normals on the sphere / their area on the surface = "
+            f"{fit.gauss_map_ratio():.3g} ≈ |K|")
 
 
 def cloud_text(maths) -> str:

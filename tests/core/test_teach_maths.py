@@ -217,6 +217,7 @@ def test_local_fit_on_a_sphere():
     r = np.linalg.norm(pieces[0] - fit.origin, axis=1)
     assert np.ptp(r) < 0.05 * r.mean()  # a circle
     assert np.allclose(fit.fitted_normals()[:, 2], fit.local_normals[:, 2], atol=1e-2)
+    assert fit.gauss_map_ratio() == pytest.approx(1.0, rel=0.1)  # |K| = 1 on the unit sphere
 
 
 def test_local_fit_euler_formula_at_a_torus_saddle_point():
@@ -231,6 +232,7 @@ def test_local_fit_euler_formula_at_a_torus_saddle_point():
     assert len(fit.dupin()) == 4  # two hyperbola pairs
     s_, w_ = fit.section(0.0)
     assert len(s_) >= 3 and np.all(np.diff(s_) >= 0)
+    assert fit.gauss_map_ratio() == pytest.approx(abs(fit.k1 * fit.k2), rel=0.1)
     flat = core.local_fit(res, int(np.argmin(np.abs(s.points[:, 2] + 1))))  # bottom: parabolic
     assert flat.kind == "parabolic" and len(flat.dupin()) == 2
     assert len(flat.osculating_circle(np.pi / 2)) == 2  # k_n ~ 0 along e2: a straight segment
