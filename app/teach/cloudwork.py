@@ -50,8 +50,16 @@ def _lift(lines, res, spacing):
     return out
 
 
-def cloud_maths(res, *, separation: float = SEED_SPACING) -> CloudMaths:
-    """Point types, lines of curvature (both families) and Gauss-Bonnet of one result (any thread)."""
+#: about this many seeds per family of lines: enough to cover a shape, few enough to read
+#: and to trace in seconds on a million points (the seed separation grows as sqrt(N))
+LINE_SEEDS = 200
+
+
+def cloud_maths(res, *, separation: float | None = None) -> CloudMaths:
+    """Point types, lines of curvature (both families) and Gauss-Bonnet of one result (any
+    thread). ``separation``: seed separation in spacings (default: about LINE_SEEDS seeds)."""
+    if separation is None:
+        separation = max(SEED_SPACING, float(np.sqrt(len(res.points) / LINE_SEEDS)))
     scale = core.curvature_scale(res)
     types = core.point_types(res, scale=scale)
     gb = core.gauss_bonnet(res)

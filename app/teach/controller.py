@@ -71,6 +71,7 @@ class TeachController(QObject):
         window.result_shown.connect(self._on_result)
         window.state.changed.connect(self._on_state)
         window.installEventFilter(self)
+        panel.tabs.currentChanged.connect(lambda _i: None if self._closed else self._draw_gauss_map())
 
     # -- inputs ---------------------------------------------------------------
     def eventFilter(self, obj, event):  # noqa: N802 - Qt API
@@ -250,8 +251,8 @@ class TeachController(QObject):
             self._legend = True
 
     def _draw_gauss_map(self) -> None:
-        if self.panel.tabs.currentWidget() is not self.panel.gauss_map and not self.panel.isVisible():
-            return
+        if self.panel.tabs.currentWidget() is not self.panel.gauss_map or not self.settings.enabled:
+            return  # drawn when its tab is shown (a scatter of thousands of normals)
         res = self.result
         if res is None:
             self.panel.gauss_map.show_map(None, None)

@@ -31,6 +31,10 @@ def test_every_overlay_follows_pick_theta_and_estimate(make_window, qtbot, torus
     fit = teach.controller.fit
     assert fit is not None and fit.index == 10
     assert "χ" in teach.panel.cloud_label.text()
+    assert "≈ |K|" in teach.panel.point_label.text()
+    assert len(teach.panel.euler.figure.axes) == 1
+    teach.panel.tabs.setCurrentWidget(teach.panel.gauss_map)  # drawn when shown
+    assert len(teach.panel.gauss_map.figure.axes) == 2
     _check_export(window, tmp_path)
     # theta moves the swept section and the Euler marker, not the rest
     before = np.array(teach.controller.layer.plotter.actors["teach-circle-theta"].mapper.dataset.points)
