@@ -12,6 +12,8 @@ from pathlib import Path
 
 from core.estimate import AUTO_PASSES
 
+from .teach import cli as teach_cli
+
 __all__ = ["main", "build_parser"]
 
 
@@ -34,12 +36,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--compare", metavar="METHOD", help="show a second method side by side")
     p.add_argument("--glyphs", metavar="LIST", help="comma-separated glyphs to show: e1,e2,normals")
     p.add_argument("--pick", type=int, metavar="INDEX", help="inspect this point (panel, neighbourhood, frame)")
-    p.add_argument("--teach", action="store_true", help="open the Teach panel (frame, sections, Dupin, Euler plot)")
-    p.add_argument("--overlays", metavar="LIST", help="with --teach: comma-separated overlays: frame, surface, "
-                   "sections, dupin, normal_fit, lines, types (default frame,sections,dupin)")
-    p.add_argument("--theta", type=float, metavar="DEG", help="with --teach: direction of the swept normal section")
-    p.add_argument("--focus", action="store_true", help="with --teach and --pick: zoom to the picked point")
-    p.add_argument("--example", metavar="NAME", help="a guided example (implies --teach): sphere, cylinder, torus, saddle")
+    teach_cli.add_arguments(p)
     p.add_argument("--screenshot", metavar="PATH", help="save a PNG of the window once the result is shown, then exit")
     p.add_argument("--view-only", action="store_true",
                    help="with --screenshot: hide the panels and save only the 3D view(s), at --size")
@@ -100,28 +97,6 @@ def _state_from_args(args, parser):
     return state
 
 
-def _teach_from_args(args, parser) -> dict:
-    """Teach settings from --teach/--overlays/--theta/--example (empty: teach mode off)."""
-    from .teach import EXAMPLES, OVERLAYS
-
-    if args.example is not None and args.example not in EXAMPLES:
-        parser.error(f"--example {args.example!r} is unknown; valid: {', '.join(EXAMPLES)}")
-    if not (args.teach or args.example):
-        if args.overlays or args.theta is not None or args.focus:
-            parser.error("--overlays, --theta and --focus need --teach")
-        return {}
-    out = {"enabled": True}
-    if args.overlays:
-        names = [x.strip().lower() for x in args.overlays.split(",") if x.strip()]
-        bad = [n for n in names if n not in OVERLAYS]
-        if bad:
-            parser.error(f"--overlays: {', '.join(bad)} unknown; valid: {', '.join(OVERLAYS)}")
-        out["overlays"] = names
-    if args.theta is not None:
-        out["theta"] = args.theta
-    return out
-
-
 def main(argv: list[str] | None = None) -> int:
     args_list = sys.argv[1:] if argv is None else list(argv)
     parser = build_parser()
@@ -138,7 +113,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.points < 10:
         parser.error(f"--points must be at least 10, got {args.points}")
     state = _state_from_args(args, parser)
-    teach = _teach_from_args(args, parser)
+    teach = teach_cli.settings_from_args(args, parser)
 
     from PySide6.QtCore import QTimer
     from PySide6.QtWidgets import QApplication
@@ -193,15 +168,8 @@ def main(argv: list[str] | None = None) -> int:
         def on_result(_out) -> None:
             if pick is not None and window.state.picked is None:
                 window.state.set(picked=pick)
-            if teach and not window.teach.controller.is_ready():  # wait for the cloud-wide overlays
-                window.teach.controller.ready.connect(lambda: finish())
-                return
-            finish()
-
-        def finish() -> None:
-            if args.focus:
-                window.teach.controller.focus()
-            QTimer.singleShot(400, save)  # let the event loop paint the new frame
+            # let the event loop paint the new frame (and the teaching overlays, if shown)
+            window.teach.when_ready(lambda: QTimer.singleShot(400, save))
 
         window.result_shown.connect(on_result)
         window.estimator.failed.connect(lambda msg: fail(f"the estimate failed: {msg}"))
@@ -210,8 +178,8 @@ def main(argv: list[str] | None = None) -> int:
 
     pick = state.picked  # loading a cloud clears the pick: restore it on the first result
     # load after the window exists so that a bad file is reported through the notifier
-    if args.example:
-        window.teach.run_example(args.example)
+    if teach.get("example"):
+        pass  # the example loads its shape
     elif args.shape:
         window.load_shape(args.shape, args.points)
     else:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import html
+
 import numpy as np
 
 import core
@@ -16,7 +18,7 @@ def point_text(fit, theta_deg: float, res, index) -> str:
             return f"Point {index} is invalid (degenerate neighbourhood): it has no frame."
         return "Pick a point (click on the cloud) to see its frame, sections and Euler plot."
     kt = float(fit.normal_curvature(np.radians(theta_deg)))
-    desc = TYPE_TEXT[fit.kind]
+    desc = html.escape(TYPE_TEXT[fit.kind])  # "K < 0" is not a tag
 
     def radius(k):
         return f"{1 / abs(k):.3g}" if k else "∞"

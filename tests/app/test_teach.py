@@ -32,6 +32,7 @@ def test_every_overlay_follows_pick_theta_and_estimate(make_window, qtbot, torus
     assert fit is not None and fit.index == 10
     assert "χ" in teach.panel.cloud_label.text()
     assert "≈ |K|" in teach.panel.point_label.text()
+    assert "&gt; 0" in teach.panel.point_label.text() or "&lt; 0" in teach.panel.point_label.text()
     assert len(teach.panel.euler.figure.axes) == 1
     teach.panel.tabs.setCurrentWidget(teach.panel.gauss_map)  # drawn when shown
     assert len(teach.panel.gauss_map.figure.axes) == 2
@@ -94,15 +95,18 @@ def _check_export(window, tmp_path):
 
 
 def test_teach_flags_are_validated():
-    from app.__main__ import _teach_from_args, build_parser
+    from app.__main__ import build_parser
+    from app.teach.cli import settings_from_args
 
     parser = build_parser()
-    args = parser.parse_args(["--teach", "--overlays", "frame,lines", "--theta", "30"])
-    assert _teach_from_args(args, parser) == {"enabled": True, "overlays": ["frame", "lines"], "theta": 30.0}
-    assert _teach_from_args(parser.parse_args([]), parser) == {}
+    args = parser.parse_args(["--teach", "--overlays", "frame,lines", "--theta", "30", "--focus"])
+    assert settings_from_args(args, parser) == {"enabled": True, "overlays": ["frame", "lines"], "theta": 30.0,
+                                                "focus": True}
+    assert settings_from_args(parser.parse_args([]), parser) == {}
+    assert settings_from_args(parser.parse_args(["--example", "torus"]), parser)["example"] == "torus"
     for bad in (["--teach", "--overlays", "frame,bogus"], ["--theta", "30"], ["--example", "klein"]):
         with pytest.raises(SystemExit):
-            _teach_from_args(parser.parse_args(bad), parser)
+            settings_from_args(parser.parse_args(bad), parser)
 
 
 def test_teach_settings_refuse_bad_values():
