@@ -23,6 +23,8 @@ from .fields import resolve_field
 from .persist import restore_layout, restore_state
 from .state import ViewerState
 
+from .teach import cli as teach_cli
+
 __all__ = ["main", "build_parser"]
 
 
@@ -45,6 +47,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--compare", metavar="METHOD", help="show a second method side by side")
     p.add_argument("--glyphs", metavar="LIST", help="comma-separated glyphs to show: e1,e2,normals")
     p.add_argument("--pick", type=int, metavar="INDEX", help="inspect this point (panel, neighbourhood, frame)")
+    teach_cli.add_arguments(p)
     p.add_argument("--screenshot", metavar="PATH", help="save a PNG of the window once the result is shown, then exit")
     p.add_argument("--view-only", action="store_true",
                    help="with --screenshot: hide the panels and save only the 3D view(s), at --size")
@@ -160,7 +163,8 @@ class _Screenshot:
     def on_result(self, _out) -> None:
         if self.pick is not None and self.window.state.picked is None:
             self.window.state.set(picked=self.pick)
-        QTimer.singleShot(400, self.save)  # let the event loop paint the new frame
+        # let the event loop paint the new frame (and the teaching overlays, if shown)
+        self.window.teach.when_ready(lambda: QTimer.singleShot(400, self.save))
 
     def save(self) -> None:
         if self.done:
@@ -180,10 +184,13 @@ class _Screenshot:
         self.window.close()
 
 
-def _open_first(window, args, pick) -> None:
-    """Load after the window exists, so that a bad file is reported through the notifier."""
+def _open_first(window, args, pick, *, example: bool = False) -> None:
+    """Load after the window exists, so that a bad file is reported through the notifier
+    (nothing when a guided example of the Teach menu loads its own shape)."""
     interactive = args.screenshot is None
-    if args.shape:
+    if example:
+        pass
+    elif args.shape:
         window.load_shape(args.shape, args.points)
     elif args.file:
         window.open_file(args.file, remember=interactive)
@@ -202,6 +209,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(args_list)
     width, height = _check_args(args, parser)
     state = _state_from_args(args, parser)
+    teach = teach_cli.settings_from_args(args, parser)
     from .window import MainWindow  # noqa: PLC0415 - pyvistaqt/VTK only once the arguments are valid
 
     app = QApplication.instance() or QApplication([sys.argv[0], *args_list])
@@ -222,9 +230,11 @@ def main(argv: list[str] | None = None) -> int:
             dock.hide()  # a figure: the 3D view(s) get the whole window
     window.resize(width, height)
     window.show()
+    if teach:
+        window.teach.configure(**teach)
     pick = state.picked  # loading a cloud clears the pick: restore it on the first result
     shot = None if interactive else _Screenshot(window, args, outcome, pick)
-    _open_first(window, args, pick)
+    _open_first(window, args, pick, example=bool(teach.get("example")))
     code = app.exec()
     del shot
     sigint_timer.stop()

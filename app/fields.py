@@ -11,28 +11,37 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ["FieldSpec", "FIELDS", "ALIASES", "resolve_field", "compute_fields", "robust_limits", "curvature_floor",
-           "is_signed", "colormap_for"]
+           "is_signed", "colormap_for", "Colouring", "colouring"]
 
 #: Colormaps: diverging centred on 0 for signed fields, sequential otherwise.
 DIVERGING = "RdBu_r"
 SEQUENTIAL = "viridis"
 ERROR = "magma"
+#: A field that may be signed (k1, k2) is drawn diverging only when over this share of its
+#: values lie on the minority side of 0: k1 on a convex shape (an ellipsoid: all > 0) gets
+#: a sequential map over its own range, k1 on a torus (29 % < 0... of k2) a diverging one.
+MINORITY_SIGN = 0.05
 
 
 @dataclass(frozen=True)
 class FieldSpec:
     """How to show one field.
 
-    ``signed`` fields get a diverging colormap with limits symmetric about 0.
-    ``needs`` is "" (always there), "truth" (synthetic shapes only) or "reference"
-    (needs reference normals: from the file or the shape).
+    ``signed`` fields (True) get a diverging colormap with limits symmetric about 0; None
+    means "signed if the data are" (k1, k2: see :data:`MINORITY_SIGN`). ``needs`` is ""
+    (always there), "truth" (synthetic shapes only) or "reference" (needs reference normals:
+    from the file or the shape). ``scale`` is "linear", "log" (sizes such as the chosen k)
+    or "threshold": a diverging map centred on ``threshold`` over [0, 2 x threshold] (the
+    outlier score: inliers blue, the threshold white, outliers red).
     """
 
     name: str
     label: str  # colour-bar title and combo text
-    signed: bool
+    signed: bool | None
     needs: str = ""
     unit: str = ""
+    scale: str = "linear"
+    threshold: float = 0.0
 
     @property
     def title(self) -> str:
@@ -44,12 +53,12 @@ FIELDS: dict[str, FieldSpec] = {
     for f in (
         FieldSpec("mean", "Mean curvature H", True),
         FieldSpec("gaussian", "Gaussian curvature K", True),
-        FieldSpec("k1", "Max. principal curvature k1", True),
-        FieldSpec("k2", "Min. principal curvature k2", True),
+        FieldSpec("k1", "Max. principal curvature k1", None),
+        FieldSpec("k2", "Min. principal curvature k2", None),
         FieldSpec("shape_index", "Shape index", True),
         FieldSpec("curvedness", "Curvedness", False),
-        FieldSpec("k_point", "Neighbourhood size k", False),
-        FieldSpec("outlier_score", "Outlier score", False),
+        FieldSpec("k_point", "Neighbourhood size k", False, scale="log"),
+        FieldSpec("outlier_score", "Outlier score", False, scale="threshold", threshold=4.0),
         FieldSpec("normal_dev", "Normal deviation", False, "reference", "deg"),
         FieldSpec("err_mean", "Error of H", False, "truth"),
         FieldSpec("err_gaussian", "Error of K", False, "truth"),
@@ -164,15 +173,57 @@ def curvature_floor(name: str, size: float) -> float:
     return {"mean": k, "k1": k, "k2": k, "curvedness": k, "gaussian": k * k}.get(name, 0.0)
 
 
-def is_signed(spec: FieldSpec, values: np.ndarray) -> bool:
-    """Signed if the spec says so, or if the data turn out to have negative values."""
+def is_signed(spec: FieldSpec, values: np.ndarray, floor: float = 0.0) -> bool:
+    """Signed if the spec says so; for a may-be-signed spec (None) if more than
+    :data:`MINORITY_SIGN` of the values beyond ``floor`` have the minority sign; otherwise if
+    the data turn out to have negative values."""
     if spec.signed:
         return True
-    with np.errstate(invalid="ignore"):
-        return bool(np.nanmin(values) < 0) if np.isfinite(values).any() else False
+    finite = np.asarray(values, dtype=float)
+    finite = finite[np.isfinite(finite)]
+    if not finite.size:
+        return False
+    if spec.signed is None:
+        pos, neg = np.mean(finite > floor), np.mean(finite < -floor)
+        return bool(min(pos, neg) > MINORITY_SIGN)
+    return bool(finite.min() < 0)
 
 
 def colormap_for(spec: FieldSpec, signed: bool) -> str:
-    if signed:
+    if signed or spec.scale == "threshold":
         return DIVERGING
     return ERROR if spec.needs == "truth" else SEQUENTIAL
+
+
+@dataclass(frozen=True)
+class Colouring:
+    """How a field is drawn: colour limits, colour map, logarithmic scale."""
+
+    clim: tuple
+    cmap: str
+    log: bool = False
+
+
+def colouring(spec: FieldSpec, values: np.ndarray, *, clip: float = 2.0, floor: float = 0.0,
+              clim=None) -> Colouring:
+    """Limits and map that fit the field (automatic limits unless ``clim`` is given):
+    diverging and centred on 0 for signed fields, sequential over their own range for
+    one-signed ones (errors and angles from 0), the outlier score around its threshold,
+    sizes on a log scale."""
+    signed = is_signed(spec, values, floor)
+    cmap = colormap_for(spec, signed)
+    log = spec.scale == "log"
+    if clim is not None:
+        lo, hi = clim
+        return Colouring((lo, hi), cmap, log and lo > 0)
+    if spec.scale == "threshold":
+        return Colouring((0.0, 2.0 * spec.threshold), cmap)
+    if log:
+        positive = values[np.isfinite(values) & (values > 0)]
+        if positive.size:
+            lo, hi = float(positive.min()), float(positive.max())
+            return Colouring((lo, hi if hi > lo else 2.0 * lo), cmap, True)
+    lo, hi = robust_limits(values, signed=signed, clip=clip, floor=floor)
+    if not signed and (spec.unit == "deg" or spec.needs == "truth"):
+        lo, hi = 0.0, max(hi, 1e-12)  # errors and angles start at 0
+    return Colouring((lo, hi), cmap)

@@ -1,4 +1,5 @@
-"""Line-segment glyphs for directions (numpy only, any thread).
+"""Line-segment glyphs for directions (numpy only, any thread), and the colours and sizes
+shared by every drawing of a frame: glyphs, the picked frame, lines of curvature, plots.
 
 Principal directions have no sign, so a direction d at p is drawn as the segment
 p - d*L/2 .. p + d*L/2 (a "±" glyph), never as an arrow.
@@ -8,7 +9,21 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["subsample", "segments"]
+__all__ = ["subsample", "segments", "FRAME_COLOURS", "LEGEND", "glyph_width"]
+
+#: One colour per frame vector, everywhere (glyphs, picked frame, curvature lines, plots):
+#: near-black e1 and green e2 read over both the diverging and the sequential colour maps;
+#: purple n is neither.
+FRAME_COLOURS = {"e1": "#111111", "e2": "#1a9850", "n": "#7b3294"}
+#: glyph legend entries (label, colour) for saved figures
+LEGEND = (("e1 (direction of k1)", FRAME_COLOURS["e1"]), ("e2 (direction of k2)", FRAME_COLOURS["e2"]),
+          ("normal n", FRAME_COLOURS["n"]))
+
+
+def glyph_width(n_points: int) -> float:
+    """Line width in pixels: 3 for sparse clouds (a few thousand points), down to 1.5 for dense
+    ones, where wider glyphs merge into a carpet."""
+    return float(np.clip(3.0 - 0.5 * np.log10(max(n_points, 1) / 5000.0), 1.5, 3.0))
 
 
 def subsample(n: int, density: float, *, seed: int = 0) -> np.ndarray:
@@ -50,3 +65,16 @@ def segments(points: np.ndarray, directions: np.ndarray, index: np.ndarray, leng
     lines[:, 1] = np.arange(0, 2 * m, 2)
     lines[:, 2] = lines[:, 1] + 1
     return vertices, lines.ravel()
+
+
+def polylines(lines) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices and VTK connectivity ``[m, i0, ..., i(m-1), ...]`` for a list of (m, 3) polylines."""
+    lines = [np.asarray(line, dtype=float) for line in lines if len(line) >= 2]
+    if not lines:
+        return np.empty((0, 3)), np.empty(0, dtype=np.int64)
+    vertices = np.concatenate(lines)
+    cells, start = [], 0
+    for line in lines:
+        cells.append(np.concatenate([[len(line)], np.arange(start, start + len(line))]))
+        start += len(line)
+    return vertices, np.concatenate(cells).astype(np.int64)

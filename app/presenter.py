@@ -12,7 +12,7 @@ import numpy as np
 
 import core
 
-from .fields import FIELDS, colormap_for, curvature_floor, is_signed, robust_limits
+from .fields import FIELDS, colouring, curvature_floor
 
 __all__ = ["ResultPresenter", "method_title", "uses_passes", "summary_line", "status_line", "preview_line",
            "point_info"]
@@ -75,15 +75,11 @@ class ResultPresenter:
         name = s.field if s.field in out.fields else "mean"
         spec = FIELDS[name]
         values = out.fields[name]
-        signed = is_signed(spec, values)
-        if s.clim_auto or s.clim is None:
-            clim = robust_limits(values, signed=signed, clip=s.clip_percent,
-                                 floor=curvature_floor(name, self.scene.radius()))
-        else:
-            clim = s.clim
-        cmap = colormap_for(spec, signed)
+        manual = None if (s.clim_auto or s.clim is None) else s.clim
+        look = colouring(spec, values, clip=s.clip_percent, floor=curvature_floor(name, self.scene.radius()), clim=manual)
+        clim, cmap = look.clim, look.cmap
         self.scene.set_cloud(out.points)
-        self.scene.set_values(values, title=spec.title, cmap=cmap, clim=clim)
+        self.scene.set_values(values, title=spec.title, cmap=cmap, clim=clim, log=look.log)
         self.scene.lod.hold(True)  # a big cloud shows its stand-in until the full result
         self.scene.set_title(f"{method_title(out.request.method)} — preview on {out.preview:,} points\n"
                              f"{out.request.source.name}\ncomputing the full result…")
@@ -115,17 +111,12 @@ class ResultPresenter:
         pairs = self._pairs()
         # border points (scan rims, holes) are drawn grey and kept out of the colour limits
         both = np.concatenate([_off_border(fields[name], res) for _, res, fields in pairs if fields and name in fields])
-        signed = is_signed(spec, both)
-        if s.clim_auto or s.clim is None:
-            floor = curvature_floor(name, self.scene.radius())
-            clim = robust_limits(both, signed=signed, clip=s.clip_percent, floor=floor)
-            if not signed and (spec.unit == "deg" or spec.needs == "truth"):
-                clim = (0.0, max(clim[1], 1e-12))  # errors and angles start at 0
-        else:
-            clim = s.clim
-        cmap = colormap_for(spec, signed)
+        manual = None if (s.clim_auto or s.clim is None) else s.clim
+        look = colouring(spec, both, clip=s.clip_percent, floor=curvature_floor(name, self.scene.radius()), clim=manual)
+        clim, cmap = look.clim, look.cmap
         for scene, res, fields in pairs:
-            scene.set_values(_off_border(fields[name], res, keep_shape=True), title=spec.title, cmap=cmap, clim=clim)
+            scene.set_values(_off_border(fields[name], res, keep_shape=True), title=spec.title, cmap=cmap, clim=clim,
+                             log=look.log)
         self.field_panel.show_limits(*clim)
         self.histogram.set_data(out.fields[name], clim=clim, cmap=cmap, label=spec.label)
         self.shown = {"field": name, "clim": clim, "cmap": cmap, "gen": out.gen}

@@ -16,10 +16,9 @@ from .theme import LIGHT, Theme
 
 __all__ = ["CloudScene", "GLYPH_COLOURS", "FRAME_COLOURS"]
 
-#: Colours of the ± glyphs: dark enough to read over a diverging colormap.
-GLYPH_COLOURS = {"e1": "#111111", "e2": "#1a9850", "normals": "#7b3294"}
-#: Colours of the picked point's frame (the usual x/y/z = red/green/blue).
-FRAME_COLOURS = {"e1": "#e41a1c", "e2": "#4daf4a", "n": "#377eb8"}
+#: Colours of the ± glyphs and of the picked frame: the same everywhere (app/glyphs.py).
+FRAME_COLOURS = glyphs.FRAME_COLOURS
+GLYPH_COLOURS = {"e1": FRAME_COLOURS["e1"], "e2": FRAME_COLOURS["e2"], "normals": FRAME_COLOURS["n"]}
 NAN_COLOUR = "#b0b0b0"
 HIGHLIGHT_COLOUR = "#ffd92f"
 TEXT_COLOUR = "#222222"
@@ -129,12 +128,15 @@ class CloudScene:
                     render=False,
                 )
                 self._bar.SetMaximumHeightInPixels(90)
+                # tick labels below the bar, the title above it: the title no longer
+                # sits on the middle tick label
+                self._bar.SetTextPositionToPrecedeScalarBar()
         self.points = points
         if reset_camera:
             self.reset_camera(reset_camera)
 
-    def set_values(self, values: np.ndarray, *, title: str, cmap: str, clim: tuple[float, float]):
-        """Colour the cloud by ``values`` (NaN drawn in a neutral grey)."""
+    def set_values(self, values: np.ndarray, *, title: str, cmap: str, clim: tuple[float, float], log: bool = False):
+        """Colour the cloud by ``values`` (NaN drawn in a neutral grey), on a log scale if ``log``."""
         if self._cloud is None:
             return
         self._cloud.point_data["values"] = np.asarray(values, dtype=float)
@@ -143,6 +145,7 @@ class CloudScene:
         if self._lut.cmap is None or getattr(self._lut.cmap, "name", None) != cmap:
             self._lut.cmap = cmap
             self._lut.nan_color = NAN_COLOUR
+        self._lut.log_scale = bool(log) and clim[0] > 0
         self._lut.scalar_range = (float(clim[0]), float(clim[1]))
         self._bar_title = title
         self.show_bar(True)
@@ -170,7 +173,9 @@ class CloudScene:
         if directions is None or self.points is None or density <= 0:
             if name in self._glyph_names:
                 self.plotter.remove_actor(name, render=False)
+                self.plotter.remove_actor(f"{name}-halo", render=False)
                 self._glyph_names.discard(name)
+            self._glyph_legend()
             return
         index = glyphs.subsample(len(self.points), density)
         base = self.points
@@ -182,11 +187,30 @@ class CloudScene:
             self.set_glyphs(kind, None, density=0, length=0)
             return
         mesh = pv.PolyData(vertices, lines=lines)
-        self.plotter.add_mesh(
-            mesh, color=GLYPH_COLOURS.get(kind, "black"), line_width=2, name=name,
-            pickable=False, reset_camera=False, render=False, lighting=False,
-        )
+        width = glyphs.glyph_width(len(self.points))
+        # a white halo under each glyph (drawn first; the glyph wins the depth tie) keeps
+        # the dark e1 readable over the dark end of any colour map
+        for suffix, colour, w in (("-halo", "white", width + 2.5), ("", GLYPH_COLOURS.get(kind, "black"), width)):
+            self.plotter.add_mesh(mesh, color=colour, line_width=w, name=name + suffix, pickable=False,
+                                  reset_camera=False, render=False, lighting=False)
         self._glyph_names.add(name)
+        self._glyph_legend()
+
+    def _glyph_legend(self) -> None:
+        """A legend of the glyphs shown, in the lower-left corner (saved figures carry it)."""
+        labels = dict(zip(("e1", "e2", "normals"), (text for text, _ in glyphs.LEGEND)))
+        row = 0
+        for kind in ("normals", "e2", "e1"):
+            name = f"glyph-legend-{kind}"
+            if f"glyph-{kind}" not in self._glyph_names:
+                self.plotter.remove_actor(name, render=False)
+                continue
+            actor = self.plotter.add_text(f"\u2014 {labels[kind]}", position=(0.012, 0.03 + 0.04 * row),
+                                          viewport=True, font_size=7, color=GLYPH_COLOURS[kind], name=name,
+                                          render=False)
+            actor.prop.font_size = 13
+            actor.prop.bold = True
+            row += 1
 
     # -- picked point ---------------------------------------------------------------
     def set_highlight(self, index: int | None, neighbours: np.ndarray | None = None, frame: dict | None = None):

@@ -34,6 +34,7 @@ from .request import ESTIMATE_KEYS, EstimateRequest
 from .scene import CloudScene
 from .source import CloudSource
 from .state import ViewerState
+from .teach import install_teach
 from .theme import current_theme
 from .widgets import CompareView, EstimateProgress
 from .worker import EstimateOutput
@@ -108,6 +109,7 @@ class MainWindow(WindowActions, QMainWindow):
         self._build_menus()
         self._connect()
         self.apply_theme()
+        self.teach = install_teach(self)
         if self.state.source is not None:
             self._on_source(self.state.source)
             self._debounce.start()
@@ -359,6 +361,7 @@ class MainWindow(WindowActions, QMainWindow):
         save_state(self.state, self.settings)
         save_layout(self, self.settings)
         self._debounce.stop()
+        self.teach.shutdown()
         self._render_timer.stop()
         self.compile_watch.close()
         self.loader.shutdown()

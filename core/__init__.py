@@ -15,9 +15,19 @@ from .methods import METHODS, Method, get_method  # noqa: E402
 from .neighbours import Neighbours, build_neighbours  # noqa: E402
 from .planning import EstimatePlan, plan  # noqa: E402
 from .result import SCALAR_FIELDS, CurvatureResult  # noqa: E402
+from .curvature_lines import curvature_lines  # noqa: E402
+from .gauss_bonnet import GaussBonnet, gauss_bonnet, point_areas, total_curvature  # noqa: E402
+from .local_fit import LocalFit, local_fit  # noqa: E402
+from .point_types import (  # noqa: E402
+    ELLIPTIC, HYPERBOLIC, PARABOLIC, PLANAR, TYPE_NAMES, UMBILIC, curvature_scale, point_types,
+)
 
 __all__ = [
     "estimate", "plan", "EstimatePlan", "build_neighbours", "Neighbours", "CurvatureResult", "METHODS", "Method",
     "get_method", "Cancelled", "SCALAR_FIELDS", "shapes", "noise", "metrics", "io",
+    # teaching: the mathematics around one estimate
+    "total_curvature", "gauss_bonnet", "GaussBonnet", "point_areas", "curvature_lines",
+    "point_types", "curvature_scale", "TYPE_NAMES", "ELLIPTIC", "HYPERBOLIC", "PARABOLIC",
+    "PLANAR", "UMBILIC", "local_fit", "LocalFit",
 ]
 __version__ = "0.1.0"

@@ -13,7 +13,7 @@ import sys
 from . import __version__, _cli_commands
 from .tiled import cli as tiled_cli
 
-BENCHES = ("paper", "perf", "accuracy", "tiled", "stability")
+BENCHES = ("paper", "perf", "accuracy", "tiled", "stability", "teach")
 PROG = "darboux-cli"
 _NONE = ("none", "null")
 _BOOLS = {"true": True, "false": False}

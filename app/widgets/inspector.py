@@ -6,6 +6,8 @@ import numpy as np
 from PySide6.QtGui import QFontDatabase
 from PySide6.QtWidgets import QAbstractItemView, QHeaderView, QLabel, QTableWidget, QTableWidgetItem, QVBoxLayout, QWidget
 
+from ..glyphs import FRAME_COLOURS
+
 #: Rows shown, in order: key in the info dict -> label.
 ROWS = (
     ("index", "index"),
@@ -72,8 +74,9 @@ class PointInspector(QWidget):
             self.table.setItem(r, 1, QTableWidgetItem(text))
         index = info.get("index")
         self.header.setText(
-            f"<b>Point {index:,}</b>: e1 <span style='color:#e41a1c'>red</span>, "
-            f"e2 <span style='color:#4daf4a'>green</span>, n <span style='color:#377eb8'>blue</span>; "
+            f"<b>Point {index:,}</b>: e1 <span style='color:{FRAME_COLOURS['e1']}'>black</span>, "
+            f"e2 <span style='color:{FRAME_COLOURS['e2']}'>green</span>, "
+            f"n <span style='color:{FRAME_COLOURS['n']}'>purple</span>; "
             f"its k neighbours in <span style='color:#c9a100'>yellow</span>."
             if isinstance(index, (int, np.integer)) else "Point"
         )

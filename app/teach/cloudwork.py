@@ -1,0 +1,130 @@
+"""The cloud-wide teaching maths of one result, computed off the GUI thread.
+
+:class:`CloudMathsWorker` runs :func:`cloud_maths` (lines of curvature, point types,
+Gauss-Bonnet) on a Python thread and delivers the numpy-only :class:`CloudMaths` to the GUI
+thread through a queued signal; a result of an older request is dropped.
+"""
+
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass
+
+import numpy as np
+from PySide6.QtCore import QObject, Signal
+from scipy.spatial import cKDTree
+
+import core
+from core.curvature_lines import SEED_SPACING
+
+__all__ = ["CloudMaths", "cloud_maths", "CloudMathsWorker"]
+
+#: lines of curvature are lifted off the surface by this many spacings, so that the point
+#: sprites (about one spacing wide) do not hide them
+LINE_LIFT = 0.7
+
+
+@dataclass(frozen=True)
+class CloudMaths:
+    """What the teaching overlays need about the whole cloud (numpy only)."""
+
+    scale: float
+    types: np.ndarray
+    lines: dict  # "e1" / "e2" -> list of (m, 3) polylines
+    gauss_bonnet: core.GaussBonnet
+    spacing: float
+
+
+def _lift(lines, res, spacing):
+    """Move every vertex along the normal of its nearest point by LINE_LIFT spacings."""
+    if not lines:
+        return lines
+    ok = res.valid & np.isfinite(res.normals).all(axis=1)
+    tree = cKDTree(res.points[ok])
+    _, idx = tree.query(np.concatenate(lines))
+    shift = res.normals[ok][idx] * (LINE_LIFT * spacing)
+    out, start = [], 0
+    for line in lines:
+        out.append(line + shift[start:start + len(line)])
+        start += len(line)
+    return out
+
+
+#: about this many seeds per family of lines: enough to cover a shape, few enough to read
+#: and to trace in seconds on a million points (the seed separation grows as sqrt(N))
+LINE_SEEDS = 200
+
+
+def cloud_maths(res, *, separation: float | None = None) -> CloudMaths:
+    """Point types, lines of curvature (both families) and Gauss-Bonnet of one result (any
+    thread). ``separation``: seed separation in spacings (default: about LINE_SEEDS seeds)."""
+    if separation is None:
+        separation = max(SEED_SPACING, float(np.sqrt(len(res.points) / LINE_SEEDS)))
+    scale = core.curvature_scale(res)
+    types = core.point_types(res, scale=scale)
+    gb = core.gauss_bonnet(res)
+    d, _ = cKDTree(res.points).query(res.points[:: max(1, len(res.points) // 2000)], k=2)
+    spacing = float(np.mean(d[:, 1])) or 1.0
+    lines = {}
+    for direction in ("e1", "e2"):
+        try:
+            traced = core.curvature_lines(res, direction=direction, separation=separation)
+        except ValueError:  # no valid point
+            traced = []
+        lines[direction] = _lift(traced, res, spacing)
+    return CloudMaths(scale=scale, types=types, lines=lines, gauss_bonnet=gb, spacing=spacing)
+
+
+class CloudMathsWorker(QObject):
+    """One job at a time on a Python thread; :meth:`shutdown` joins it (GUI thread API).
+
+    Signals
+    -------
+    done(int, object) : generation and :class:`CloudMaths` (queued to the GUI thread).
+    failed(int, str) : generation and the error message.
+    """
+
+    done = Signal(int, object)
+    failed = Signal(int, str)
+
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        self.generation = 0
+        self._thread: threading.Thread | None = None
+        self._pending = None
+        self._lock = threading.Lock()
+
+    def submit(self, res) -> int:
+        """Compute for ``res``; a newer submit supersedes a pending one (GUI thread)."""
+        self.generation += 1
+        with self._lock:
+            self._pending = (self.generation, res)
+            if self._thread is None or not self._thread.is_alive():
+                self._thread = threading.Thread(target=self._run, name="teach-maths", daemon=True)
+                self._thread.start()
+        return self.generation
+
+    def _run(self):  # worker thread
+        while True:
+            with self._lock:
+                job, self._pending = self._pending, None
+                if job is None:
+                    return
+            gen, res = job
+            try:
+                maths = cloud_maths(res)
+            except Exception as exc:  # noqa: BLE001 - reported to the GUI
+                self.failed.emit(gen, f"{type(exc).__name__}: {exc}")
+                continue
+            self.done.emit(gen, maths)
+
+    def busy(self) -> bool:
+        return self._thread is not None and self._thread.is_alive()
+
+    def shutdown(self) -> None:
+        """Drop pending work and wait for the running job (GUI thread)."""
+        with self._lock:
+            self._pending = None
+        if self._thread is not None:
+            self._thread.join()
+            self._thread = None
