@@ -97,3 +97,10 @@ def test_clouds_too_small_to_measure_the_noise_fall_back_to_nr(n):
     s = shapes.sphere(n, seed=4)
     r = core.estimate(s.points)
     assert r.params["jet_fraction"] == 0.0 and r.valid.any()
+
+
+@pytest.mark.parametrize("n", [30, 1000, 10_000, 400_000])
+def test_the_plan_searches_as_far_as_the_largest_jet(n):
+    p = core.plan(n, k="auto")
+    jks = [k for k in scale.jet_candidates(n) if k <= p.candidates[-1]]
+    assert jks and max(jks) <= p.k_search and p.k_search == p.candidates[-1]
