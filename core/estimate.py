@@ -15,7 +15,7 @@ from .planning import EstimatePlan
 from .result import CurvatureResult
 from .stages import (choose_scale, crease_reference, find_neighbours, flags, given_normals, initial_normals,
                      orient_signs, outlier_scores, refine)
-from .tuning import AUTO_PASSES, MAX_PASSES, OUTLIER_SCORE, PASS_DECAY, PCA_K
+from .tuning import AUTO_PASSES, JET_DEGREE, MAX_PASSES, OUTLIER_SCORE, PASS_DECAY, PCA_K
 
 __all__ = ["estimate", "AUTO_PASSES", "MAX_PASSES", "OUTLIER_SCORE", "PASS_DECAY", "PCA_K"]
 _PLANNED = dict(k="auto", method="nr", passes=None, tol=None, initial="auto", orientation="auto", options=None)
@@ -133,7 +133,7 @@ def estimate(
     if plan.auto:
         reference = crease_reference(pts, init.normals, init.has_normal, nb, plan, report.sub(0.45, 0.47))
     inliers = init.has_normal & ~outlier if plan.robust else init.has_normal  # outliers sit out the choice of k
-    kc = choose_scale(pts, init.normals, nb, inliers, plan, report.sub(0.47, 0.7))
+    kc = choose_scale(pts, init.normals, nb, inliers, plan, report.sub(0.47, 0.7), scores=scores, k_initial=init.k)
     best = refine(pts, init, outlier, nb, kc, plan, report.sub(0.7 if plan.auto else 0.45, 1.0))
     marks = flags(best.fit, scores, plan, reference, nb=nb, confidence=confidence)
     report(1.0, "done")
@@ -168,10 +168,12 @@ def _result(pts, kept, plan, *, stages, neighbours, repaired) -> CurvatureResult
         orientation=plan.orientation_label, options=dict(plan.options), n_points=len(pts),
         dropped=int(np.count_nonzero(~kept)), normals_given=normals_given,
         initial=None if normals_given else plan.initial, initial_k=init.k, noise=init.noise,
-        crease_typical=marks.crease_typical, normals_repaired=repaired,
+        crease_typical=marks.crease_typical, normals_repaired=repaired, jet_fraction=float(kc.on_jet.mean()),
     )
+    degree = np.where(kc.on_jet, JET_DEGREE, plan.options.get("degree", -1))
     return CurvatureResult(
         points=pts, normals=np.where(fit.valid[:, None], fit.normals, best.input_normals), k1=fit.k1, k2=fit.k2,
-        e1=fit.e1, e2=fit.e2, valid=fit.valid, k_point=kc, outlier_score=marks.outlier_score, crease=marks.crease,
-        border=marks.border, orientation_confidence=marks.orientation_confidence, method=plan.method.name, k=plan.k, passes=plan.passes, params=params, neighbours=neighbours,
+        e1=fit.e1, e2=fit.e2, valid=fit.valid, k_point=kc.k_point, degree_point=degree, outlier_score=marks.outlier_score,
+        crease=marks.crease, border=marks.border, orientation_confidence=marks.orientation_confidence,
+        method=plan.method.name, k=plan.k, passes=plan.passes, params=params, neighbours=neighbours,
     )

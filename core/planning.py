@@ -50,7 +50,9 @@ class EstimatePlan:
     auto : True when k is chosen per point (:mod:`core.scale`), False for the paper's
         pipeline at one k.
     k : the user's k (an int, or "auto").
-    candidates : the sizes the automatic choice picks from (``(k,)`` for an integer k).
+    candidates : the sizes NR's fits pick from with k="auto" (the NF rule and the floors of
+        :func:`core.stages.choose_scale`; ``(k,)`` for an integer k). The jet rule's sizes
+        (:func:`core.scale.jet_candidates`, which add 15) are those up to ``candidates[-1]``.
     k_search : neighbours to search per point (the largest candidate, or k).
     k_initial : neighbours of the outlier scores and the initial normals (PCA_K with
         k="auto", before the noise widens the latter; k otherwise).

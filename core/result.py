@@ -22,6 +22,9 @@ class CurvatureResult:
     valid : (N,) bool. Where False the neighbourhood was degenerate (duplicates,
         collinear, rank-deficient fit): k1, k2, e1, e2 are NaN there, never a made-up value.
     k_point : (N,) int, neighbourhood size used at each point (varies with ``k="auto"``).
+    degree_point : (N,) int, polynomial degree of the model fitted at each point: of the
+        normal field for NF/NR, of the position jet where ``k="auto"`` kept a jet (see
+        :mod:`core.scale`); -1 for methods without the option.
     outlier_score : (N,) distance of each point from its neighbours' plane in units of
         their spread; :attr:`outlier` is ``outlier_score > 4``.
     crease : (N,) bool, points where the linear normal model fails (RMS residual of the
@@ -50,6 +53,7 @@ class CurvatureResult:
     params: dict = field(default_factory=dict)
     neighbours: object = field(default=None, repr=False)
     k_point: np.ndarray = None
+    degree_point: np.ndarray = None
     outlier_score: np.ndarray = None
     crease: np.ndarray = None
     border: np.ndarray = None
@@ -59,6 +63,8 @@ class CurvatureResult:
         n = len(self.points)
         if self.k_point is None:
             object.__setattr__(self, "k_point", np.full(n, self.k if isinstance(self.k, int) else -1))
+        if self.degree_point is None:
+            object.__setattr__(self, "degree_point", np.full(n, -1))
         if self.outlier_score is None:
             object.__setattr__(self, "outlier_score", np.full(n, np.nan))
         for name in ("crease", "border"):
@@ -126,5 +132,6 @@ SCALAR_FIELDS = {
     "shape_index": "shape_index",
     "curvedness": "curvedness",
     "k_point": "k_point",
+    "degree_point": "degree_point",
     "outlier_score": "outlier_score",
 }

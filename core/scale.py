@@ -1,16 +1,39 @@
-"""Automatic neighbourhood size: ``k="auto"`` picks k per point by a bias–variance rule.
+"""Automatic scale: ``k="auto"`` picks, per point, the neighbourhood size and the model.
 
-Small neighbourhoods give unbiased but noisy normal derivatives; large ones average the
+**The rule (issue 15).** Fit osculating cubic jets of the *positions* (Cazals & Pouget) on
+nested neighbourhoods, 15, 20, 28, ... 226 neighbours, in one pass per point (the normal
+equations grow ring by ring, :mod:`core.kernels.jets`), and keep the largest size whose
+Hessian (f_uu, f_uv, f_vv) still lies within +-5 sigma of every smaller one (intersection of
+confidence intervals: Goldenshluger & Nemirovski 1997, Katkovnik 1999). What makes it see
+bias is where sigma comes from: not from each fit's own residual (a biased fit has a large
+residual, so its interval widens with its bias and the previous rule, on NF's normal fits,
+went to 226 neighbours everywhere, noise-free included), but from the **noise level
+measured apart** (:func:`noise_variance`): the residual variance of a cubic jet is the
+noise (the same at every size) plus its bias, which grows as k^4; the variances at 15 and
+28 neighbours, pooled over 20 neighbours, separate the two. Noise-free that is ~0, the
+intervals are narrow and a curved patch stops at 15; with noise a flat patch goes to 226,
+a bent one stops where the bias shows. Heights of points have independent noise, unlike
+estimated normals, so the intervals need no correction for correlation.
+
+**The model.** Where the measured noise is below :data:`JET_QUIET` (nearly noise-free) the
+cubic jet itself is the result: it inherits no error of estimated normals (on 7 stand-in
+surfaces 2-30x better than NR at the same k). Elsewhere NR fits a cubic normal field on the
+chosen k (at least the noise-set initial scale) and refines it: with noise it averages
+better than the jet (1.2-1.8x). Quiet but sparse points, whose 15 neighbours reach over
+0.4 of a radius of curvature (:data:`JET_REACH`), use NR with the NF rule below.
+``res.k_point`` and ``res.degree_point`` hold the choice. (Values and reasons of the
+constants: :mod:`core.tuning`.)
+
+**The NF rule** (:func:`choose_k`, issue 4; now only for those sparse points): small
+neighbourhoods give unbiased but noisy normal derivatives; large ones average the
 noise away but the model of the normal field bends over a curved patch: the bias of W
 is O(h) for the linear model of eq. 23 (O(h^2) on a symmetric neighbourhood) and O(h^3)
-for the cubic one "auto" uses, which is why "auto" can go up to 226 neighbours. The
-rule is the *intersection of confidence intervals* (ICI; Goldenshluger & Nemirovski 1997, Katkovnik 1999): fit NF at increasing k, each giving the
+for the cubic one "auto" uses. Fit NF at increasing k, each giving the
 Weingarten entries (W11, (W12 + W21)/2, W22) with their least-squares standard
 deviations s_k. While the intervals [W_k - G s_k, W_k + G s_k] of all scales so far
 still intersect, the larger k only removes noise; the first k whose interval leaves the
-common intersection shows bias, and the previous k is kept. Noise sets s_k, curvature
-sets the bias, and both are read from the data: nothing is tuned per shape. k also stops
-growing where a ring of new neighbours folds over (see :mod:`core.kernels.scale`): past the far
+common intersection shows bias, and the previous k is kept. k also stops growing, in
+both rules, where a ring of new neighbours folds over (see :mod:`core.kernels.scale`): past the far
 side of a thin part the residuals explode and would hide the bias from the intervals.
 A fold is judged against the smallest neighbourhood (its centroid, mean normal and noise
 height), not the centre alone, and must persist into the next ring: with noise of a whole
@@ -18,15 +41,22 @@ spacing, a test on the centre's own noisy normal stopped a quarter of the points
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from . import kernels
+from .frame import darboux_frame, height_field_derivatives
+from .kernels import jets as jet_kernels
+from .linalg import tangent_basis
 from .patch import Chunk
 from .tuning import (AUTO_DEGREE, AUTO_KS, FOLD_COS, FOLD_FRACTION, FOLD_MIN_BAD, FOLD_NOISE, GAMMA,
-                     INITIAL_K0, NEIGHBOUR_BUDGET, RCOND)
+                     INITIAL_K0, JET_DEGREE, JET_GAMMA, JET_KS, JET_QUIET, JET_REACH, JET_SCORE,
+                     NEIGHBOUR_BUDGET, NOISE_KS, NOISE_POOL, RCOND)
 
-__all__ = ["AUTO_DEGREE", "AUTO_KS", "GAMMA", "INITIAL_K0", "NEIGHBOUR_BUDGET", "candidates", "choose_k",
-           "noise_ratio", "initial_k"]
+__all__ = ["AUTO_DEGREE", "AUTO_KS", "GAMMA", "INITIAL_K0", "NEIGHBOUR_BUDGET", "JET_KS", "JET_DEGREE",
+           "JET_SCORE", "candidates", "choose_k", "noise_ratio", "initial_k", "jet_candidates",
+           "noise_variance", "choose_jets", "aligned_jets", "choose_model"]
 
 _CHUNK = 32_768
 
@@ -69,3 +99,120 @@ def initial_k(noise: float, k_min: int, k_max: int) -> int:
     """Neighbours for the initial normals at a measured ``noise_ratio`` (see :data:`core.tuning.INITIAL_K0`)."""
     k = int(round(INITIAL_K0 * np.sqrt(max(noise, 0.0))))
     return int(min(max(k, k_min), max(k_max, k_min)))
+
+
+# ----------------------------------------------------------------------------- jets (issue 15)
+def jet_candidates(n_points: int) -> tuple[int, ...]:
+    """The sizes of :data:`JET_KS` that a cloud of ``n_points`` allows within the budget."""
+    cap = min(n_points, max(JET_KS[1], NEIGHBOUR_BUDGET // max(n_points, 1)))
+    return tuple(k for k in JET_KS if k <= cap)
+
+
+def noise_variance(rss_a, rss_b, s, idx, ka=NOISE_KS[0], kb=NOISE_KS[1]):
+    """Per-point variance of the position noise along the normal (length units squared).
+
+    The residual variance of a cubic jet on k neighbours is sigma^2 (noise, the same at
+    every k) plus the model's bias, whose quartic terms grow as h^8, i.e. as k^4 on a
+    surface (h^2 ~ k). With the variances a at ka and b at kb, pooled over the point's
+    :data:`NOISE_POOL` nearest neighbours, sigma^2 = (rho a - b) / (rho - 1), rho =
+    (kb / ka)^4, clipped at 0. Noise-free this is ~0 (the residual is all bias), so the
+    intervals of :func:`choose_jets` are narrow and the smallest size wins; the plain
+    residual variance would let a biased fit pass for noise. Returns (sigma^2, a).
+    """
+    s2 = s * s
+    with np.errstate(invalid="ignore"):
+        va = rss_a * s2 / (ka - 10)
+        vb = rss_b * s2 / (kb - 10)
+    pool = idx[:, :min(NOISE_POOL, idx.shape[1])]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN pools (rank-deficient fits)
+        a = np.nanmean(va[pool], axis=1)
+        b = np.nanmean(vb[pool], axis=1)
+    rho = (kb / ka) ** 4
+    sigma2 = np.maximum((rho * a - b) / (rho - 1.0), 0.0)
+    return np.nan_to_num(sigma2, nan=0.0), np.nan_to_num(a, nan=np.inf)
+
+
+def _jet_frames(points, normals, idx, centres, s, t1, t2):
+    """The kernels' record of ``centres`` (frame z = their normal, lengths in units of s)."""
+    return kernels.Frames(points, normals, np.ascontiguousarray(idx), np.zeros(len(centres), dtype=np.int64),
+                          s[centres], centres, t1[centres], t2[centres], normals[centres])
+
+
+def _jet_rule():
+    return kernels.ScaleRule(JET_DEGREE, JET_GAMMA, RCOND, FOLD_FRACTION, FOLD_COS, FOLD_NOISE, FOLD_MIN_BAD)
+
+
+def choose_jets(points, normals, nb, has_normal, ks, report):
+    """Per point: the size of a cubic jet by ICI with an outside noise level (see module).
+
+    Returns ``(k, jet, noise)``: k (N,) int (0 where no fit), the chosen jets' frames
+    ``(normal, k1, k2, e1, e2, ok)`` as :func:`core.frame.darboux_frame` gives them,
+    and the noise over s: the larger of sigma and half the plain residual RMS at 15
+    (an outlier makes the separation of :func:`noise_variance` fail, not the residual).
+    """
+    n = len(points)
+    idx_all, dist_all = nb.take(ks[-1])
+    s = dist_all[:, ks[0] - 1].copy()
+    usable = np.flatnonzero(has_normal & (s > 0))
+    t1, t2 = tangent_basis(np.where(has_normal[:, None], normals, [0.0, 0.0, 1.0]))
+    rss = np.full((n, 2), np.nan)
+    out = np.empty((len(usable), 2))
+    f = _jet_frames(points, normals, idx_all[usable, :NOISE_KS[1]], usable, s, t1, t2)
+    jet_kernels.jet_residuals(f, np.asarray(NOISE_KS, dtype=np.int64), RCOND, out)
+    rss[usable] = out
+    sigma2, plain = noise_variance(rss[:, 0], rss[:, 1], s, idx_all)
+    report(0.2, "choosing k")
+    chosen = np.full(n, -1, dtype=np.int64)
+    coef = np.full((n, jet_kernels.P3), np.nan)
+    ks_arr, rule = np.asarray(ks, dtype=np.int64), _jet_rule()
+    for start in range(0, len(usable), _CHUNK):
+        c = usable[start:start + _CHUNK]
+        out_k, out_c = np.empty(len(c), dtype=np.int64), np.empty((len(c), jet_kernels.P3))
+        jet_kernels.jet_ici(_jet_frames(points, normals, idx_all[c], c, s, t1, t2), ks_arr, sigma2[c] / s[c] ** 2,
+                            rule, out_k, out_c)
+        chosen[c], coef[c] = out_k, out_c
+        report(0.2 + 0.8 * min(len(usable), start + _CHUNK) / max(len(usable), 1), "choosing k")
+    fitted = chosen >= 0
+    k = np.where(fitted, ks_arr[np.maximum(chosen, 0)], 0)
+    mu, W = height_field_derivatives(coef[:, 1], coef[:, 2], 2 * coef[:, 3], coef[:, 4], 2 * coef[:, 5])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        frame = darboux_frame(t1, t2, np.where(has_normal[:, None], normals, [0.0, 0.0, 1.0]),
+                              np.nan_to_num(mu), np.nan_to_num(W) / s[:, None, None])
+        noise = np.where(s > 0, np.maximum(np.sqrt(sigma2), 0.5 * np.sqrt(plain)) / s, np.inf)
+    return k, (*frame[:-1], frame[-1] & fitted), noise
+
+
+def aligned_jets(jets, normals):
+    """The jets' frames with their normals turned to agree with ``normals`` (k1, k2 change
+    sign and swap, and so do e1, e2: the SPEC conventions)."""
+    nrm, k1, k2, e1, e2, ok = jets
+    with np.errstate(invalid="ignore"):
+        flip = np.einsum("ij,ij->i", nrm, np.nan_to_num(normals)) < 0
+    f = flip[:, None]
+    return (np.where(f, -nrm, nrm), np.where(flip, -k2, k1), np.where(flip, -k1, k2),
+            np.where(f, e2, e1), np.where(f, e1, e2), ok)
+
+
+def choose_model(points, normals, nb, has_normal, ks, report):
+    """k per point by :func:`choose_jets`, and where the cubic jet itself is the result.
+
+    Returns ``(k, on_jet, quiet, jets)``: jets (aligned with ``normals``) are kept where the
+    noise is below :data:`JET_QUIET` and the jet does not reach too far (:data:`JET_REACH`);
+    elsewhere NR fits on k neighbours, k by the NF rule (:func:`choose_k`) where the data
+    are quiet but too sparse for the jet. A cloud too small for a cubic jet or for the
+    noise measurement (fewer than ``NOISE_KS[-1]`` neighbours) keeps NR on ``ks[0]`` everywhere.
+    """
+    n = len(points)
+    jks = tuple(k for k in jet_candidates(n) if k <= ks[-1])
+    if not jks or ks[-1] < NOISE_KS[-1]:
+        return np.full(n, ks[0], dtype=np.int64), np.zeros(n, dtype=bool), np.zeros(n, dtype=bool), None
+    k, jets, noise = choose_jets(points, normals, nb, has_normal, jks, report)
+    quiet = jets[-1] & (noise <= JET_QUIET)
+    reach = nb.take(jks[0])[1][:, -1] * np.maximum(np.abs(jets[1]), np.abs(jets[2]))
+    on_jet = quiet & (reach <= JET_REACH)
+    nf_rule = quiet & ~on_jet
+    if nf_rule.any():  # too few points per radius of curvature for a position jet: NF's own rule
+        k_nf = choose_k(points, normals, nb, nf_rule, ks, AUTO_DEGREE, lambda *a: None)
+        k = np.where(nf_rule, k_nf, k)
+    return k, on_jet, quiet, aligned_jets(jets, normals)

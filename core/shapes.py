@@ -9,6 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from ._validate import check_int
 from .linalg import symmetric_eig2
@@ -171,6 +172,11 @@ def _implicit_sample(name, F, grad, hess, n, rng, r_max, **params):
         out.append(p[keep])
         total += int(keep.sum())
     pts = np.concatenate(out)[:n]
+    return _implicit_frame(name, pts, grad, hess, **params)
+
+
+def _implicit_frame(name, pts, grad, hess, **params):
+    """Exact frame of points on F = 0 with normal grad F / |grad F|: dn = P Hess(F) P / |grad F|."""
     g = grad(pts)
     gn = np.linalg.norm(g, axis=1)
     nrm = g / gn[:, None]
@@ -225,6 +231,150 @@ def saddle(n=5000, *, a=1.0, b=1.2, seed=0):
     return _implicit_sample("saddle", F, grad, hess, n, rng, r_max, a=a, b=b)
 
 
+# ----------------------------------------------------------------------------- graphs z = f(x, y)
+def _graph_frame(name, xy, terrain, interior, **params):
+    """Exact frame on the graph of ``terrain`` (upward normal; F = z - f, see _implicit_frame)."""
+    f, fx, fy, fxx, fxy, fyy = terrain(xy[:, 0], xy[:, 1])
+    zeros, ones = np.zeros(len(xy)), np.ones(len(xy))
+    grad = lambda p: np.column_stack([-fx, -fy, ones])  # noqa: E731
+    hess = lambda p: -np.stack([np.column_stack([fxx, fxy, zeros]), np.column_stack([fxy, fyy, zeros]),  # noqa: E731
+                                np.zeros((len(p), 3))], axis=1)
+    return _implicit_frame(name, np.column_stack([xy, f]), grad, hess, interior=interior, **params)
+
+
+def _graph_sample(name, terrain, n, rng, margin=0.15, **params):
+    """Area-uniform points on the graph over [-1, 1]^2 (rejection by sqrt(1 + |grad f|^2)).
+
+    ``interior``: more than ``margin`` from the square's border (open-patch borders are
+    left out of the metrics, as for the plane).
+    """
+    grid = np.linspace(-1, 1, 201)
+    gx, gy = np.meshgrid(grid, grid)
+    _, fx, fy, *_ = terrain(gx.ravel(), gy.ravel())
+    top = 1.05 * np.sqrt(1 + fx**2 + fy**2).max()
+    kept = np.empty((0, 2))
+    while len(kept) < n:
+        xy = rng.uniform(-1, 1, (4 * n, 2))
+        _, fx, fy, *_ = terrain(xy[:, 0], xy[:, 1])
+        kept = np.concatenate([kept, xy[rng.random(4 * n) * top < np.sqrt(1 + fx**2 + fy**2)]])
+    xy = kept[:n]
+    return _graph_frame(name, xy, terrain, (np.abs(xy) < 1 - margin).all(axis=1), **params)
+
+
+def chirp(n=6000, *, amplitude=0.1, seed=0):
+    """Fast-varying curvature: z = A sin(phi(x)) cos(3 y), phi(x) = 2 (x+1) + 1.75 (x+1)^2.
+
+    The ridges tighten along x (wavelength ~3 at x = -1, ~0.7 at x = 1), so |k1| ranges
+    from 0 to about 8 over a patch of side 2: no single neighbourhood size suits it.
+    """
+    n, rng = _rng_n(n, seed)
+
+    def terrain(x, y):
+        s = x + 1
+        ph, d1, d2 = 2 * s + 1.75 * s * s, 2 + 3.5 * s, 3.5
+        sp, cp, cy, sy = np.sin(ph), np.cos(ph), np.cos(3 * y), np.sin(3 * y)
+        a = amplitude
+        return (a * sp * cy, a * cp * d1 * cy, -3 * a * sp * sy,
+                a * (cp * d2 - sp * d1 * d1) * cy, -3 * a * cp * d1 * sy, -9 * a * sp * cy)
+
+    return _graph_sample("chirp", terrain, n, rng, amplitude=amplitude)
+
+
+def graded(n=6000, *, ratio=10.0, width=0.1, seed=0):
+    """The saddle (Cassini peanut) sampled ``ratio``:1 more densely on its x > 0 lobe.
+
+    Density ∝ 1 + (ratio - 1) / (1 + exp(-x / width)) per unit area: a 10:1 change across
+    a band of a few ``width`` around the waist, where the K < 0 region is. Truth as for
+    :func:`saddle`; the k nearest neighbours of points in the sparse half next to the
+    dense one are lopsided.
+    """
+    n, rng = _rng_n(n, seed)
+    if not (ratio >= 1 and width > 0):
+        raise ValueError(f"graded needs ratio >= 1 and width > 0, got ratio={ratio}, width={width}")
+    m = 2 * n
+    while True:
+        base = saddle(m, seed=int(rng.integers(2**31)))
+        w = 1 + (ratio - 1) / (1 + np.exp(-base.points[:, 0] / width))
+        keep = np.flatnonzero(rng.random(m) * ratio < w)
+        if len(keep) >= n:
+            break
+        m *= 2
+    keep = np.sort(rng.choice(keep, n, replace=False))
+    pick = {f: getattr(base, f)[keep] for f in ("points", "normals", "k1", "k2", "e1", "e2", "interior")}
+    return Sample("graded", **pick, params=dict(base.params, ratio=ratio, width=width))
+
+
+def _bumps(x, y):
+    """Terrain of the range scan: three Gaussian bumps/dents on a gentle slope (f and derivatives)."""
+    out = [0.1 * x + 0 * y, 0.1 + 0 * x, 0 * y, 0 * x, 0 * x, 0 * x]
+    for a, cx, cy, s in ((0.35, -0.3, 0.2, 0.3), (-0.2, 0.4, -0.3, 0.22), (0.15, 0.35, 0.5, 0.15)):
+        dx, dy = x - cx, y - cy
+        g = a * np.exp(-(dx * dx + dy * dy) / (2 * s * s))
+        gx, gy = -dx / s**2, -dy / s**2
+        for i, v in enumerate((g, g * gx, g * gy, g * (gx * gx - 1 / s**2), g * gx * gy, g * (gy * gy - 1 / s**2))):
+            out[i] = out[i] + v
+    return tuple(out)
+
+
+def range_scan(n=6000, *, view=(-2.5, 0.4, 1.6), noise=0.0, seed=0):
+    """A single-view range scan of a bumpy terrain over [-1, 1]^2 from the point ``view``.
+
+    Rays are drawn uniformly in azimuth and elevation (a scanner's angular grid, jittered)
+    and stop at their first hit (occluded parts are missing), so the density falls with
+    range squared and with the obliquity of the surface. ``noise`` (a fraction of the mean
+    spacing) moves each point along its view ray; the truth is that of the hit point.
+    """
+    n, rng = _rng_n(n, seed)
+    eye = np.asarray(view, dtype=float)
+    if eye.shape != (3,) or not np.isfinite(eye).all() or eye[2] <= 1.0 or not (np.isfinite(noise) and noise >= 0):
+        raise ValueError(f"range_scan needs a finite view (x, y, z > 1) and noise >= 0, got {view}, {noise}")
+    corners = np.array([[x, y, 0.0] for x in (-1, 1) for y in (-1, 1)]) - eye
+    az, el = np.arctan2(corners[:, 1], corners[:, 0]), np.arctan2(corners[:, 2], np.hypot(*corners[:, :2].T))
+    hits = np.empty((0, 2))
+    rays = np.empty((0, 3))
+    while len(hits) < n:
+        m = 3 * n
+        a, e = rng.uniform(az.min(), az.max(), m), rng.uniform(el.min() - 0.1, el.max() + 0.05, m)
+        d = np.column_stack([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])
+        t = _first_hit(eye, d)
+        ok = np.isfinite(t)
+        hits = np.concatenate([hits, eye[:2] + t[ok, None] * d[ok, :2]])
+        rays = np.concatenate([rays, d[ok]])
+    xy, rays = hits[:n], rays[:n]
+    s = _graph_frame("range_scan", xy, _bumps, (np.abs(xy) < 0.85).all(axis=1), view=tuple(eye), noise=noise)
+    shift = rng.normal(size=(n, 1)) * noise * _mean_nn(s.points)
+    return Sample(s.name, s.points + shift * rays, s.normals, s.k1, s.k2, s.e1, s.e2, s.interior, s.params)
+
+
+def _first_hit(eye, d, step=0.005, t_max=8.0):
+    """Ray parameter of the first crossing of z = _bumps (extended beyond the square, so it
+    also occludes), kept where it lies over [-1, 1]^2 (inf: a miss)."""
+    t = np.full(len(d), np.inf)
+    todo = np.arange(len(d))
+    for t1 in np.arange(step, t_max, step):
+        p = eye + t1 * d[todo]
+        below = p[:, 2] < _bumps(p[:, 0], p[:, 1])[0]
+        t[todo[below]] = t1
+        todo = todo[~below & (p[:, 2] > -1.0)]
+        if not len(todo):
+            break
+    hit = np.flatnonzero(np.isfinite(t))
+    a, b = t[hit] - step, t[hit]
+    for _ in range(40):  # bisection on the bracket [t - step, t]
+        mid = 0.5 * (a + b)
+        p = eye + mid[:, None] * d[hit]
+        above = p[:, 2] > _bumps(p[:, 0], p[:, 1])[0]
+        a, b = np.where(above, mid, a), np.where(above, b, mid)
+    t[hit] = 0.5 * (a + b)
+    p = eye + t[:, None] * d
+    t[~(np.abs(p[:, :2]) <= 1).all(axis=1)] = np.inf
+    return t
+
+
+def _mean_nn(points):
+    return float(cKDTree(points).query(points, k=2)[0][:, 1].mean())
+
+
 #: shape name -> sampler(n, *, seed)
 SHAPES = {
     "torus": torus,
@@ -234,4 +384,7 @@ SHAPES = {
     "saddle": saddle,
     "ellipsoid": ellipsoid,
     "cube": cube,
+    "chirp": chirp,
+    "graded": graded,
+    "range_scan": range_scan,
 }

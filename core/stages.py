@@ -17,7 +17,8 @@ from .normal_repair import repair_normals
 from .normals import jet_normals, pca_normals
 from .orientation import orient
 from .patch import Chunk
-from .tuning import CREASE_NOISE, CREASE_RATIO, CREASE_SPREAD, OUTLIER_FLOOR, OUTLIER_SCORE, PASS_DECAY
+from .tuning import (CREASE_NOISE, CREASE_RATIO, CREASE_SPREAD, JET_SCORE, OUTLIER_FLOOR, OUTLIER_SCORE, PASS_DECAY,
+                     PASS_MIN_SHARE)
 
 _CHUNK = 32_768
 
@@ -143,13 +144,37 @@ def crease_reference(pts, nrm, has_normal, nb, plan, report) -> Fit:
     return fit_all(pts, nrm, idx_p, kc, dist_p[:, -1], has_normal, method=plan.method, options=linear, report=report)
 
 
-def choose_scale(pts, nrm, nb, inliers, plan, report) -> np.ndarray:
-    """(N,) neighbourhood size per point: chosen by :func:`core.scale.choose_k` among
-    ``plan.candidates`` with k="auto" (only ``inliers`` take part), else ``plan.k``."""
+class Scale(NamedTuple):
+    """The choice of scale and model per point: ``k`` (N,) the neighbours NR fits on,
+    ``k_point`` (N,) the size reported (the jet's where the jet is kept), ``on_jet`` (N,)
+    where the cubic position jet is the result, ``quiet`` (N,) where the measured noise is
+    nil (NF rule or jet), ``jets`` the jets' frames (None without k="auto")."""
+
+    k: np.ndarray
+    k_point: np.ndarray
+    on_jet: np.ndarray
+    quiet: np.ndarray
+    jets: tuple | None = None
+
+
+def choose_scale(pts, nrm, nb, inliers, plan, report, *, scores=None, k_initial=None) -> Scale:
+    """Neighbourhood size and model per point: with k="auto" by
+    :func:`core.scale.choose_model` (only ``inliers`` take part, and in robust mode not
+    the points whose outlier ``scores`` exceed :data:`core.tuning.JET_SCORE`), else ``plan.k``.
+    NR's own fits are at least ``plan.candidates[0]`` wide, and with noise at least the
+    candidate >= ``k_initial``: a jet stopped early by a noise tail or an outlier is no
+    reason to fit fewer points."""
+    n = len(pts)
     if not plan.auto:
-        return np.full(len(pts), plan.k, dtype=np.int64)
-    normals = np.where(inliers[:, None], nrm, np.nan)
-    return scale.choose_k(pts, normals, nb, inliers, plan.candidates, plan.options["degree"], report)
+        kc, none = np.full(n, plan.k, dtype=np.int64), np.zeros(n, dtype=bool)
+        return Scale(kc, kc, none, none)
+    ks = plan.candidates
+    suspect = scores > JET_SCORE if plan.robust and scores is not None else np.zeros(n, dtype=bool)
+    steady = inliers & ~suspect  # the jets are least squares: suspects sit out the choice of k
+    kc, on_jet, quiet, jets = scale.choose_model(pts, np.where(steady[:, None], nrm, np.nan), nb, steady, ks, report)
+    floor = ks[min(int(np.searchsorted(ks, k_initial or 0)), len(ks) - 1)]  # a candidate >= k_initial
+    fit_k = np.maximum(kc, np.where(quiet, ks[0], floor))
+    return Scale(fit_k, np.where(on_jet, kc, fit_k), on_jet, quiet, jets)
 
 
 def fit_all(pts, nrm, idx, kc, h, has_normal, *, method, options, report) -> Fit:
@@ -187,20 +212,23 @@ def _fit_chunk(chunk, method, opts, out: Fit) -> None:
     out.valid[sel] = True
 
 
-def refine(pts, initial: Initial, outlier, nb, kc, plan, report) -> Refined:
+def refine(pts, initial: Initial, outlier, nb, sc: Scale, plan, report) -> Refined:
     """Fit, then refine the normals (NR, §4.4) up to ``plan.passes`` times: stop below
     ``plan.tol``; with ``plan.adaptive`` undo a pass that turned the normals more than
     PASS_DECAY x the pass before (it smoothed the shape, not the noise). In robust mode
-    the outliers leave their neighbours' fits after the first one."""
+    the outliers leave their neighbours' fits after the first one. Where ``sc.on_jet``
+    the jet is the result (and its normal the neighbours' input); passes run only if NR
+    fits at least PASS_MIN_SHARE of the points with noise (the pass rule judges by mean
+    turns, meaningless on a handful of points)."""
+    kc = sc.k
     idx, dist = nb.take(int(kc.max()))
     h = dist[np.arange(len(pts)), kc - 1]
-    nrm, has_normal = initial.normals, initial.has_normal
-    n_fits = plan.passes + 1
+    nrm, has_normal, n_fits = _start(initial, sc, plan)
     opts = dict(plan.options)
     converged = False
     best = None
     for p in range(n_fits):
-        fit = fit_all(pts, nrm, idx, kc, h, has_normal, method=plan.method, options=opts,
+        fit = fit_all(pts, nrm, idx, kc, h, has_normal & ~sc.on_jet, method=plan.method, options=opts,
                       report=report.sub(p / n_fits, (p + 1) / n_fits))
         # mean turn of the normals in this fit: what the adaptive stop and tol compare
         change = _mean_angle_deg(fit.normals, nrm, fit.valid) if plan.adaptive or plan.tol is not None else None
@@ -215,7 +243,27 @@ def refine(pts, initial: Initial, outlier, nb, kc, plan, report) -> Refined:
             new[outlier] = np.nan
         converged = plan.tol is not None and change < plan.tol
         nrm = new
+    best = _with_jets(best, sc)
     return _drop_outliers(best, outlier) if plan.robust else best
+
+
+def _start(initial: Initial, sc: Scale, plan):
+    """The first fit's input normals (the jets' where kept), who has one, how many fits."""
+    nrm, has_normal = initial.normals, initial.has_normal
+    if sc.on_jet.any():
+        nrm = np.where(sc.on_jet[:, None], sc.jets[0], nrm)
+    few = plan.auto and (has_normal & ~sc.quiet).mean() < PASS_MIN_SHARE
+    return nrm, has_normal, 1 if few else plan.passes + 1
+
+
+def _with_jets(best: Refined, sc: Scale) -> Refined:
+    """The jets' frames merged into the kept fit where the jet is the result."""
+    if not sc.on_jet.any():
+        return best
+    on = sc.on_jet
+    merged = [np.where(on.reshape((-1,) + (1,) * (a.ndim - 1)), j, a)
+              for j, a in zip(sc.jets, best.fit[:6])]
+    return best._replace(fit=best.fit._replace(**dict(zip(Fit._fields[:6], merged))))
 
 
 def _drop_outliers(best: Refined, outlier) -> Refined:

@@ -69,6 +69,48 @@ FOLD_MIN_BAD = 3
 IRLS_ITERATIONS = 2
 #: most NR refinement passes a user may ask for
 MAX_PASSES = 20
+# ----------------------------------------------------------------------------- the jet rule (issue 15, core.scale)
+
+#: candidate sizes of the cubic-jet rule (about x1.4 apart; 15 = the paper's k, the
+#: smallest that determines a cubic jet with a few degrees of freedom to spare)
+JET_KS = (15, 20, 28, 40, 56, 80, 113, 160, 226)
+#: the two sizes whose residuals separate noise from model bias (see core.scale.noise_variance)
+NOISE_KS = (15, 28)
+#: neighbours over which the residual variances are pooled (a point's own 15-neighbour
+#: fit has 5 degrees of freedom; pooling over 20 of them gives about 100)
+NOISE_POOL = 20
+#: interval width of the jet rule, in standard deviations. 3 intervals are tested at up to
+#: 8 sizes, so a textbook 2 rejects a size by chance at many points of a noisy cloud:
+#: measured on 7 stand-in surfaces at 0.1-0.5 spacing of noise, 3 left 5-15 % of the points
+#: at small k (errors x1.5-15), 5 none; noise-free, 5 and 3 choose the same.
+JET_GAMMA = 5.0
+#: where the measured noise (sigma over the radius s of 15 neighbours) is below this, the
+#: data are nearly noise-free and the position jet (which inherits no error of estimated
+#: normals) is the result; elsewhere the cubic normal field of NR, refined, averages the
+#: noise better: measured on 7 stand-ins (noise-free the jet is 2-30x better than NR at
+#: the same k; at 0.1-0.5 spacing NR is 1.2-1.8x better than the jet at the same k).
+#: 0.1 spacing of noise measures 0.015-0.035 (median 0.024) on a 5000-point torus,
+#: noise-free data 0-0.003; an outlier that raises a point's neighbours' residuals keeps
+#: them off the jet (the jet is not robust).
+JET_QUIET = 0.006
+#: ... but only where the 15 neighbours reach less than this fraction of a radius of
+#: curvature (s |k|max): on 1000 points of a torus (15 neighbours span 0.65 of the tube's
+#: radius) NR's cubic normal field at the NF rule's k has a quarter of the jet's H error,
+#: while on the 6000-point stand-ins (s |k| < 0.3) the jet at 15 wins noise-free.
+JET_REACH = 0.4
+#: in robust mode, points whose outlier score exceeds this stay out of the jets (which are
+#: least squares): 42 % of 3 % outliers 2-8 spacings off a torus score below 4 (the
+#: flag) and, left in, stopped their neighbours' rule early: H error x2.4 their clean
+#: baseline; x1.28 with 2.5, x1.26 with 2.0 (together with the k_init floor), x1.2 with 1.5
+JET_SCORE = 1.5
+#: polynomial degree of the position jets (noise-free, degree 2 at its best k lost 1.1-1.5x
+#: to degree 3 on the stand-ins, and picking the degree per point by the smaller variance lost too)
+JET_DEGREE = 3
+#: with k="auto", refinement passes run only if NR (not the jet) fits at least this share of
+#: the points with noise (noise-free, 0.1 % of a 5000-point torus was left: 4 points whose
+#: mean turn let 2 passes through)
+PASS_MIN_SHARE = 0.02
+
 #: most NR refinement passes when k is chosen automatically (paper: 1). With the cubic
 #: normal fit the refined normals are nearly unbiased, so a pass averages noise further,
 #: and the change it makes to the normals decays geometrically. Once a pass changes them

@@ -33,11 +33,13 @@ def test_auto_k_beats_the_papers_k_on_a_noisy_torus(noisy_torus):
 
 
 def test_ici_kernel_matches_separate_fits():
-    """The one-pass nested-sums kernel picks what separate NF fits at each k would."""
+    """The one-pass nested-sums kernel picks what separate NF fits at each k would.
+    (k="auto" now chooses by the jet rule, tested in test_scale_jets; this is the NF rule.)"""
     s = core.shapes.saddle(3000, seed=2)
     p = core.noise.add_noise(s.points, 0.1, seed=1)
-    r = core.estimate(p, s.normals, k="auto", passes=0)
-    nb = r.neighbours
+    nb = core.build_neighbours(p, scale.AUTO_KS[-1])
+    chosen = scale.choose_k(p, s.normals, nb, np.ones(len(p), bool), scale.AUTO_KS, scale.AUTO_DEGREE,
+                            lambda *a: None)
     idx, dist = nb.take(scale.AUTO_KS[-1])
     from core.methods import get_method
     from core.patch import Chunk
@@ -56,7 +58,7 @@ def test_ici_kernel_matches_separate_fits():
         lo, hi = np.maximum(lo, est - scale.GAMMA * sd), np.minimum(hi, est + scale.GAMMA * sd)
         alive &= ok & (lo <= hi).all(axis=1)
         pick = np.where(alive, k, pick)
-    np.testing.assert_array_equal(r.k_point[:200], pick)
+    np.testing.assert_array_equal(chosen[:200], pick)
 
 
 def test_auto_k_only_for_normal_fitting():

@@ -1,0 +1,106 @@
+"""The jet scale rule of issue 15 (core.scale.choose_jets): noise level, bias, sizes chosen."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import core
+from core import kernels, metrics, noise, scale, shapes
+from core.kernels import jets
+from core.linalg import tangent_basis
+from core.neighbours import build_neighbours
+
+
+def _choose(sample, level, seed=1, k_max=226):
+    pts = noise.add_noise(sample.points, level, seed=seed) if level else sample.points
+    nb = build_neighbours(pts, k_max)
+    ks = scale.jet_candidates(len(pts))
+    k, frame, _ = scale.choose_jets(pts, sample.normals, nb, np.ones(len(pts), bool), ks, lambda *a: None)
+    return pts, k, frame
+
+
+def _noise_sd(sample, level):
+    """The rule's noise estimate (median over points) for noise along the normals."""
+    pts = sample.points
+    if level:
+        pts = noise.add_noise(pts, level, seed=1, direction="normal", normals=sample.normals)
+    idx, dist = build_neighbours(pts, 28).take(28)
+    t1, t2 = tangent_basis(sample.normals)
+    s = dist[:, 14].copy()
+    rss = np.empty((len(pts), 2))
+    n = len(pts)
+    f = kernels.Frames(pts, sample.normals, np.ascontiguousarray(idx), np.zeros(n, dtype=np.int64), s, np.arange(n),
+                       t1, t2, sample.normals.copy())
+    jets.jet_residuals(f, np.array(scale.NOISE_KS), 1e-10, rss)
+    return np.sqrt(np.median(scale.noise_variance(rss[:, 0], rss[:, 1], s, idx)[0]))
+
+
+@pytest.mark.parametrize("level", [0.1, 0.3, 1.0])
+def test_noise_variance_recovers_sigma(level):
+    s = shapes.plane(3000, seed=3)
+    sd = _noise_sd(s, level)
+    assert abs(sd / (level * noise.mean_spacing(s.points)) - 1) < 0.1
+
+
+def test_noise_variance_is_not_fooled_by_curvature():
+    """Noise-free, a cubic's residual on a curved patch is bias, not noise: ~0."""
+    s = shapes.torus(4000, R=1.0, r=0.4, seed=2)
+    assert _noise_sd(s, 0.0) < 0.01 * noise.mean_spacing(s.points)
+
+
+def test_noise_free_ends_small_where_it_bends_noisy_wide_where_flat():
+    torus = shapes.torus(4000, seed=2)
+    _, k, _ = _choose(torus, 0.0)
+    assert np.median(k) == scale.JET_KS[0]
+    plane = shapes.plane(4000, seed=2)
+    _, k_plane, _ = _choose(plane, 0.3)
+    assert np.median(k_plane[plane.interior]) == scale.JET_KS[-1]
+    small = shapes.torus(4000, R=1.0, r=0.35, seed=2)  # strongly curved: bias caps k
+    _, k_small, _ = _choose(small, 0.3)
+    assert np.median(k_small) < scale.JET_KS[-1]
+
+
+def test_noise_free_jets_as_accurate_as_the_best_fixed_jet():
+    s = shapes.chirp(4000, seed=4)
+    pts, k, (nrm, k1, k2, e1, e2, ok) = _choose(s, 0.0)
+    assert ok[s.interior].mean() > 0.99
+    res = core.estimate(pts, s.normals, k=15, method="jet", options={"degree": 3})
+    ours = np.abs(0.5 * (k1 + k2) - s.mean)[s.interior & ok].mean()
+    fixed = metrics.summary(res, s)["mean"]
+    assert ours < 1.2 * fixed
+
+
+def test_candidates_respect_the_budget():
+    assert scale.jet_candidates(1_000_000)[-1] <= scale.NEIGHBOUR_BUDGET // 1_000_000
+    assert scale.jet_candidates(5000) == scale.JET_KS
+    assert scale.jet_candidates(100)[-1] <= 100
+
+
+def test_default_keeps_the_jet_noise_free_and_nr_with_noise():
+    s = shapes.chirp(4000, seed=5)
+    r = core.estimate(s.points)
+    assert r.params["jet_fraction"] > 0.9 and np.median(r.k_point) == scale.JET_KS[0]
+    assert (r.degree_point[r.valid] == scale.JET_DEGREE).all()
+    jet = core.estimate(s.points, k=15, method="jet", options={"degree": 3})
+    for key in ("mean", "gaussian"):
+        assert metrics.summary(r, s)[key] < 1.2 * metrics.summary(jet, s)[key], key
+    noisy = core.estimate(noise.add_noise(s.points, 0.3, seed=6))
+    assert noisy.params["jet_fraction"] < 0.01 and np.median(noisy.k_point) >= 113
+    paper = core.estimate(s.points, k=15)
+    assert (paper.degree_point == 1).all() and paper.params["passes_run"] == 1
+
+
+@pytest.mark.parametrize("n", [16, 21, 27])
+def test_clouds_too_small_to_measure_the_noise_fall_back_to_nr(n):
+    """Fewer neighbours than NOISE_KS[-1]: no jets (they would read past the neighbours)."""
+    s = shapes.sphere(n, seed=4)
+    r = core.estimate(s.points)
+    assert r.params["jet_fraction"] == 0.0 and r.valid.any()
+
+
+@pytest.mark.parametrize("n", [30, 1000, 10_000, 400_000])
+def test_the_plan_searches_as_far_as_the_largest_jet(n):
+    p = core.plan(n, k="auto")
+    jks = [k for k in scale.jet_candidates(n) if k <= p.candidates[-1]]
+    assert jks and max(jks) <= p.k_search and p.k_search == p.candidates[-1]
