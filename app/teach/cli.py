@@ -29,15 +29,15 @@ def settings_from_args(args, parser) -> dict:
         return {}
     out = {"enabled": True}
     if args.overlays:
-        names = [x.strip().lower() for x in args.overlays.split(",") if x.strip()]
-        bad = [n for n in names if n not in OVERLAYS]
-        if bad:
-            parser.error(f"--overlays: {', '.join(bad)} unknown; valid: {', '.join(OVERLAYS)}")
-        out["overlays"] = names
-    if args.theta is not None:
-        out["theta"] = args.theta
-    if args.focus:
-        out["focus"] = True
-    if args.example:
-        out["example"] = args.example
+        out["overlays"] = _overlays(args.overlays, parser)
+    given = {"theta": args.theta, "focus": args.focus or None, "example": args.example}
+    out.update({key: value for key, value in given.items() if value is not None})
     return out
+
+
+def _overlays(text: str, parser) -> list[str]:
+    names = [x.strip().lower() for x in text.split(",") if x.strip()]
+    bad = [n for n in names if n not in OVERLAYS]
+    if bad:
+        parser.error(f"--overlays: {', '.join(bad)} unknown; valid: {', '.join(OVERLAYS)}")
+    return names

@@ -1,7 +1,7 @@
-"""The library's structure targets (issue 9), enforced on ``core/`` (benchmarks excepted):
+"""The structure targets (issue 9), enforced on ``core/`` (benchmarks excepted) and ``app/``:
 no function over 60 lines (docstring not counted) or cyclomatic complexity over 15, no
 compiled kernel with more than 12 parameters and no other function with more than 8
-positional ones, no file over 400 lines, no import cycle inside ``core``."""
+positional ones, no file over 400 lines, no import cycle inside either package."""
 
 from __future__ import annotations
 
@@ -11,6 +11,8 @@ from pathlib import Path
 import pytest
 
 CORE = Path(__file__).resolve().parents[2] / "core"
+APP = CORE.parent / "app"
+PACKAGES = pytest.mark.parametrize("root", [CORE, APP], ids=["core", "app"])
 MAX_FUNCTION_LINES = 60
 MAX_COMPLEXITY = 15
 MAX_KERNEL_PARAMS = 12
@@ -21,8 +23,8 @@ MAX_FILE_LINES = 400
 ALLOWED: dict = {}
 
 
-def _sources():
-    return sorted(p for p in CORE.rglob("*.py") if "bench" not in p.relative_to(CORE).parts)
+def _sources(root=CORE):
+    return sorted(p for p in root.rglob("*.py") if "bench" not in p.relative_to(root).parts)
 
 
 def _functions(tree):
@@ -71,10 +73,10 @@ def _is_kernel(func) -> bool:
     return False
 
 
-def _violations(allowed=ALLOWED):
+def _violations(allowed=ALLOWED, root=CORE):
     out = []
-    for path in _sources():
-        rel = path.relative_to(CORE).as_posix()
+    for path in _sources(root):
+        rel = path.relative_to(root).as_posix()
         text = path.read_text()
         if len(text.splitlines()) > MAX_FILE_LINES:
             out.append(f"{rel}: {len(text.splitlines())} lines > {MAX_FILE_LINES}")
@@ -96,8 +98,9 @@ def _violations(allowed=ALLOWED):
     return out
 
 
-def test_core_functions_files_and_kernels_are_small():
-    assert _violations() == []
+@PACKAGES
+def test_functions_files_and_kernels_are_small(root):
+    assert _violations(root=root) == []
 
 
 def test_the_allow_list_only_holds_functions_that_still_break_a_limit():
@@ -113,20 +116,20 @@ def _module_name(path: Path) -> str:
     return ".".join(parts)
 
 
-def _imports(path: Path, name: str, modules):
+def _imports(path: Path, name: str, modules, top="core"):
     """Modules of ``core`` that ``path`` imports (at any depth of the module): ``from
     pkg import sub`` depends on the submodule, ``from pkg import thing`` on the package."""
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     found = set()
     for node in ast.walk(ast.parse(path.read_text())):
         if isinstance(node, ast.Import):
-            found.update(a.name for a in node.names if a.name.split(".")[0] == "core")
+            found.update(a.name for a in node.names if a.name.split(".")[0] == top)
         elif isinstance(node, ast.ImportFrom):
             base = node.module or ""
             if node.level:
                 anchor = package.split(".")[: len(package.split(".")) - node.level + 1]
                 base = ".".join(anchor + ([base] if base else []))
-            if base.split(".")[0] != "core":
+            if base.split(".")[0] != top:
                 continue
             for alias in node.names:
                 sub = f"{base}.{alias.name}"
@@ -134,13 +137,13 @@ def _imports(path: Path, name: str, modules):
     return found
 
 
-def import_graph():
-    paths = {_module_name(p): p for p in CORE.rglob("*.py")}
+def import_graph(root=CORE):
+    paths = {_module_name(p): p for p in root.rglob("*.py")}
     graph = {}
     for name, path in paths.items():
         if ".bench" in name:
             continue
-        graph[name] = {t for t in _imports(path, name, paths) if t in paths and t != name and ".bench" not in t}
+        graph[name] = {t for t in _imports(path, name, paths, root.name) if t in paths and t != name and ".bench" not in t}
     return graph
 
 
@@ -169,8 +172,9 @@ def _cycle(graph):
     return None
 
 
-def test_no_import_cycles_inside_core():
-    graph = import_graph()
+@PACKAGES
+def test_no_import_cycles_inside(root):
+    graph = import_graph(root)
     assert _cycle(graph) is None, " -> ".join(_cycle(graph))
 
 
