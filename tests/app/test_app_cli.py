@@ -41,3 +41,26 @@ def test_screenshot_of_a_bad_file_fails_with_a_message(tmp_path):
     assert proc.returncode == 1
     assert "garbage.ply" in proc.stderr
     assert not out.exists()
+
+
+def test_ctrl_c_quits_the_viewer_with_130(tmp_path):
+    """Ctrl-C in the terminal ends an interactive viewer: exit status 130, no traceback
+    (Qt's event loop alone would never return to Python's signal handler)."""
+    import signal
+    import time
+
+    env = dict(os.environ, HOME=str(tmp_path), XDG_CONFIG_HOME=str(tmp_path / "config"))
+    env.pop("QT_QPA_PLATFORM", None)
+    env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
+    proc = subprocess.Popen([sys.executable, "-m", "app", "--shape", "sphere", "--points", "500"], cwd=ROOT, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        time.sleep(15)  # imports and the window; the handler is installed before the window
+        assert proc.poll() is None, proc.stderr.read()
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err, err
