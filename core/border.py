@@ -66,9 +66,9 @@ def border_flags(points, normals, idx):
 
 def border_of(points, normals, nb):
     """:func:`border_flags` with :data:`BORDER_K` neighbours from ``nb`` (a
-    :class:`core.Neighbours`), or from a search of their own when ``nb`` holds fewer."""
+    :class:`core.Neighbours`), or from a search of their own when ``nb`` holds fewer (or is None)."""
     k = min(BORDER_K, len(points))
-    if nb.k_max >= k:
+    if nb is not None and nb.k_max >= k:
         idx = nb.take(k)[0]
     else:  # e.g. an integer k < 30: one more search, the test is meaningless on fewer
         idx = build_neighbours(points, k).take(k)[0]

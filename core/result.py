@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .border import border_of
 from .tuning import OUTLIER_SCORE
 
 
@@ -30,9 +31,11 @@ class CurvatureResult:
     crease : (N,) bool, points where the linear normal model fails (RMS residual of the
         normal fit > 0.25 of the normals' spread, and > 3x the cloud's median residual, so
         that noise is not taken for edges): sharp edges and corners, flagged rather than trusted.
-    border : (N,) bool, points on a border of the sampled surface (scan rims, holes,
-        silhouettes; see :mod:`core.border`): their fits are one-sided, flagged rather
-        than trusted.
+    border : (N,) bool, valid points on a border of the sampled surface (scan rims,
+        holes, silhouettes; see :mod:`core.border`): their fits are one-sided, flagged
+        rather than trusted. The estimate computes it from its neighbours when they hold
+        enough (k="auto", or k >= 30); otherwise on first access (one more search), so
+        the paper's k = 15 pipeline does not pay for it unless it is used.
     orientation_confidence : (N,) float in [0, 1], the evidence-weighted share of a
         point's neighbours whose normal sign agrees with its own (1: all; 0 without a
         normal; see :mod:`core.orientation`).
@@ -56,8 +59,8 @@ class CurvatureResult:
     degree_point: np.ndarray = None
     outlier_score: np.ndarray = None
     crease: np.ndarray = None
-    border: np.ndarray = None
     orientation_confidence: np.ndarray = None
+    _border: np.ndarray = field(default=None, repr=False)
 
     def __post_init__(self):
         n = len(self.points)
@@ -67,11 +70,21 @@ class CurvatureResult:
             object.__setattr__(self, "degree_point", np.full(n, -1))
         if self.outlier_score is None:
             object.__setattr__(self, "outlier_score", np.full(n, np.nan))
-        for name in ("crease", "border"):
-            if getattr(self, name) is None:
-                object.__setattr__(self, name, np.zeros(n, dtype=bool))
+        if self.crease is None:
+            object.__setattr__(self, "crease", np.zeros(n, dtype=bool))
         if self.orientation_confidence is None:
             object.__setattr__(self, "orientation_confidence", np.full(n, np.nan))
+
+    @property
+    def border(self) -> np.ndarray:
+        """Valid points on a border of the sampled surface (see the class docstring)."""
+        if self._border is None:
+            flags = np.zeros(len(self), dtype=bool)
+            if self.valid.any():
+                normals = np.where(self.valid[:, None], self.normals, np.nan)
+                flags = self.valid & border_of(self.points, normals, self.neighbours)
+            object.__setattr__(self, "_border", flags)
+        return self._border
 
     def __len__(self) -> int:
         return len(self.points)
