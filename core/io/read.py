@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import pathlib
+import struct
 
 import numpy as np
 
@@ -112,3 +113,7 @@ def _read_raw(path, fmt) -> RawCloud:
         raise CloudFileError(path, f"reading .{fmt} files needs the Python package {exc.name!r}; {hint}") from None
     except OSError as exc:
         raise CloudFileError(path, f"cannot be read: {exc.strerror or exc}") from exc
+    except CloudFileError:
+        raise
+    except (ValueError, IndexError, OverflowError, struct.error) as exc:  # a reader's parse of damaged data
+        raise CloudFileError(path, f"malformed .{fmt} data: {exc}") from None

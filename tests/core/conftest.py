@@ -7,11 +7,20 @@ as fixtures (there is no ``__init__.py``, so test modules cannot import this fil
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
+from hypothesis import settings
 
 import core
 from core import noise, shapes
+
+# On CI the property tests draw the same examples every run (a red CI must be reproducible,
+# and must not depend on the luck of the draw); on a developer's machine they explore.
+settings.register_profile("ci", derandomize=True, database=None)
+if os.environ.get("CI"):
+    settings.load_profile("ci")
 
 # ----------------------------------------------------------------------------- helpers
 
