@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-__all__ = ["projection", "free_region", "fit_to_region", "cloud_spacing", "sprite_size", "FIT_SAMPLE"]
+__all__ = ["look_from", "VIEWS", "projection", "free_region", "fit_to_region", "cloud_spacing", "sprite_size", "FIT_SAMPLE"]
 
 #: Points projected per fitting step: the cloud's extreme points along 13 directions plus
 #: a random subset; 4000 projections cost < 1 ms.
@@ -28,9 +28,34 @@ SPRITE_OVERLAP = 1.5
 #: The "Point size" control's default: the user's size divided by this scales the sprites.
 DEFAULT_SIZE = 5.0
 SPRITE_MIN, SPRITE_MAX = 1.5, 48.0
-#: Points used for the spacing estimate of a big cloud (a subsample's nearest-neighbour
-#: distance times sqrt(m / N): on a surface the spacing goes as 1 / sqrt(density)).
-SPACING_SAMPLE = 50_000
+#: Spacing estimate: nearest-neighbour distances of SPACING_QUERIES random points against
+#: the whole cloud (tree build on 1M points 0.19 s, 20k queries 0.03 s on this VM). Above
+#: SPACING_TREE points the tree holds a random subset and the distance is scaled by
+#: sqrt(m / N): exact for a random (Poisson) sampling of a surface, ~2x small on a grid.
+SPACING_QUERIES, SPACING_TREE = 20_000, 2_000_000
+
+
+#: Preset views: direction from the cloud to the camera, and the up vector.
+VIEWS = {
+    "front": ([0.35, 0.25, 1.0], [0, 1, 0]),
+    "oblique": ([0.55, -1.0, 0.75], [0, 0, 1]),
+    "xy": ([0, 0, 1], [0, 1, 0]),
+    "xz": ([0, -1, 0], [0, 0, 1]),
+    "yz": ([1, 0, 0], [0, 0, 1]),
+}
+
+
+def look_from(renderer, points: np.ndarray, view: str) -> None:
+    """Point the camera at the cloud's box centre from the preset ``view`` (see VIEWS)."""
+    pts = points[np.isfinite(points).all(axis=1)]
+    centre = 0.5 * (pts.min(axis=0) + pts.max(axis=0))
+    radius = 0.5 * float(np.linalg.norm(np.ptp(pts, axis=0))) or 1.0
+    direction, up = (np.asarray(v, dtype=float) for v in VIEWS[view])
+    direction /= np.linalg.norm(direction)
+    cam = renderer.GetActiveCamera()
+    cam.SetFocalPoint(*centre)
+    cam.SetPosition(*(centre + direction * radius * 3.2))
+    cam.SetViewUp(*up)
 
 
 def projection(renderer, points: np.ndarray):
@@ -127,9 +152,11 @@ def cloud_spacing(points: np.ndarray) -> float:
     n = len(pts)
     if n < 2:
         return 0.0
-    m = min(n, SPACING_SAMPLE)
-    sub = pts if m == n else pts[np.random.default_rng(0).choice(n, size=m, replace=False)]
-    d, _ = cKDTree(sub).query(sub, k=2)
+    rng = np.random.default_rng(0)
+    m = min(n, SPACING_TREE)
+    tree = pts if m == n else pts[rng.choice(n, size=m, replace=False)]
+    query = tree if m <= SPACING_QUERIES else tree[rng.choice(m, size=SPACING_QUERIES, replace=False)]
+    d, _ = cKDTree(tree, balanced_tree=False, compact_nodes=False).query(query, k=2)
     nearest = d[:, 1][d[:, 1] > 0]
     return float(np.mean(nearest) * np.sqrt(m / n)) if len(nearest) else 0.0
 

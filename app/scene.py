@@ -318,25 +318,10 @@ class CloudScene:
         """
         if self.points is None or not len(self.points):
             return
-        pts = self.points[np.isfinite(self.points).all(axis=1)]
-        centre = 0.5 * (pts.min(axis=0) + pts.max(axis=0))
-        radius = 0.5 * float(np.linalg.norm(np.ptp(pts, axis=0))) or 1.0
-        presets = {
-            "front": ([0.35, 0.25, 1.0], [0, 1, 0]),
-            "oblique": ([0.55, -1.0, 0.75], [0, 0, 1]),
-            "xy": ([0, 0, 1], [0, 1, 0]),
-            "xz": ([0, -1, 0], [0, 0, 1]),
-            "yz": ([1, 0, 0], [0, 0, 1]),
-        }
-        direction, up = (np.asarray(v, dtype=float) for v in presets[view])
-        direction /= np.linalg.norm(direction)
         # pyvista's camera getter renders the whole scene once on a fresh renderer
         # (camera_set False): 6 s for 1M sprites with llvmpipe. We place it ourselves.
         self.plotter.renderer.camera_set = True
-        cam = self.plotter.camera
-        cam.focal_point = tuple(centre)
-        cam.position = tuple(centre + direction * radius * 3.2)
-        cam.up = tuple(up)
+        framing.look_from(self.plotter.renderer, self.points, view)
         self.plotter.renderer.reset_camera(render=False)  # Plotter.reset_camera renders regardless
         self._fit()
         self.view = view
