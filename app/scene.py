@@ -14,8 +14,6 @@ from . import framing, glyphs
 from .lod import LevelOfDetail
 from .theme import LIGHT, Theme
 
-_projection = framing.projection
-
 __all__ = ["CloudScene", "GLYPH_COLOURS", "FRAME_COLOURS"]
 
 #: Colours of the ± glyphs and of the picked frame: the same everywhere (app/glyphs.py).
@@ -24,6 +22,11 @@ GLYPH_COLOURS = {"e1": FRAME_COLOURS["e1"], "e2": FRAME_COLOURS["e2"], "normals"
 NAN_COLOUR = "#b0b0b0"
 HIGHLIGHT_COLOUR = "#ffd92f"
 TEXT_COLOUR = "#222222"
+
+
+def _camera_state(renderer) -> tuple:
+    cam = renderer.GetActiveCamera()
+    return cam.GetPosition(), cam.GetFocalPoint(), cam.GetViewUp(), cam.GetViewAngle()
 
 
 class CloudScene:
@@ -42,7 +45,9 @@ class CloudScene:
         self.point_size = 5.0  # the user's "Point size": the sprite size at the default density
         self.sprite_size = 5.0  # what is drawn: follows the point spacing on screen (app/framing.py)
         self._sprite_spacing = 0.0
-        self._fit_pending: tuple | None = None  # viewport size the last fit was made for
+        #: actor name -> size factor: point layers drawn over the cloud, resized with its sprites
+        self.sprite_layers = {"pick-neighbours": 1.6}
+        self._fit_pending: tuple | None = None  # (window size, camera) the last fit left
         self.view = "front"
         self._cloud: pv.PolyData | None = None
         self._actor = None
@@ -60,11 +65,6 @@ class CloudScene:
         self.lod = LevelOfDetail(plotter, self._lut)
         self.lod.attach()
         self._render_tag = plotter.renderer.AddObserver("StartEvent", self._before_render)
-        iren = getattr(plotter, "iren", None)
-        if iren is not None:  # the user took the camera: stop refitting on resize
-            self._observers.append(iren.add_observer("StartInteractionEvent", self._user_camera))
-            self._observers.append(iren.add_observer("MouseWheelForwardEvent", self._user_camera))
-            self._observers.append(iren.add_observer("MouseWheelBackwardEvent", self._user_camera))
         plotter.set_background(self.theme.background)
         # pyvista's key bindings that would fight the viewer's own state (point size,
         # picking mode, a screenshot on "q"); r (reset camera) and v (isometric) stay
@@ -160,22 +160,21 @@ class CloudScene:
         """Sprite size from the point spacing seen at the current camera distance."""
         if self._actor is None or self.points is None or not len(self.points):
             return
-        centre = self._cloud.center if self._cloud is not None else self.points.mean(axis=0)
-        size = framing.sprite_size(self.plotter.renderer, np.asarray(centre), self._sprite_spacing, self.point_size)
-        if abs(size - self.sprite_size) > 0.05 or self._actor.prop.point_size != size:
-            self.sprite_size = size
-            self._actor.prop.point_size = size
-            self.lod.set_point_size(max(size, 2.0))
+        size = framing.sprite_size(self.plotter.renderer, np.asarray(self._cloud.center), self._sprite_spacing,
+                                   self.point_size)
+        self.sprite_size = self._actor.prop.point_size = size  # VTK ignores a set to the same value
+        self.lod.set_point_size(max(size, 2.0))
+        for name, factor in self.sprite_layers.items():
+            if name in self.plotter.actors:
+                self.plotter.actors[name].prop.point_size = size * factor
 
     def _before_render(self, *_args) -> None:
         """Every render: refit a camera nobody moved if the view was resized, then size sprites."""
         window = self.plotter.renderer.GetRenderWindow()
-        if self._fit_pending is not None and window is not None and tuple(window.GetSize()) != self._fit_pending:
-            self._fit()
+        if self._fit_pending is not None and window is not None and self._fit_pending[0] != tuple(window.GetSize()):
+            if self._fit_pending[1] == _camera_state(self.plotter.renderer):  # nobody moved it since
+                self._fit()
         self._update_sprites()
-
-    def _user_camera(self, *_args) -> None:
-        self._fit_pending = None
 
     # -- glyphs -------------------------------------------------------------------
     def set_glyphs(self, kind: str, directions: np.ndarray | None, *, density: float, length: float,
@@ -306,7 +305,7 @@ class CloudScene:
         size = framing.sprite_size(renderer, sample.mean(axis=0), self._sprite_spacing, self.point_size)
         framing.fit_to_region(renderer, sample, framing.free_region(renderer, inset=0.5 * size), steps=3)
         window = renderer.GetRenderWindow()
-        self._fit_pending = tuple(window.GetSize()) if window is not None else None
+        self._fit_pending = (tuple(window.GetSize()), _camera_state(renderer)) if window is not None else None
 
     def reset_camera(self, view: str = "front"):
         """Frame the cloud.
@@ -332,14 +331,14 @@ class CloudScene:
     # -- picking ---------------------------------------------------------------------
     def display_coords(self, index) -> tuple[np.ndarray, np.ndarray]:
         """Display (x, y) pixel coordinates of cloud points (origin bottom-left)."""
-        x, y, _ = _projection(self.plotter.renderer, self.points[np.atleast_1d(index)])
+        x, y, _ = framing.projection(self.plotter.renderer, self.points[np.atleast_1d(index)])
         return x, y
 
     def pick(self, x: float, y: float, radius: float | None = None) -> int | None:
         """Index of the front-most cloud point within ``radius`` px of display (x, y)."""
         if self.points is None or not len(self.points):
             return None
-        px, py, depth = _projection(self.plotter.renderer, self.points)
+        px, py, depth = framing.projection(self.plotter.renderer, self.points)
         r = radius if radius is not None else max(4.0, 0.5 * self.sprite_size)
         d2 = (px - x) ** 2 + (py - y) ** 2
         near = np.flatnonzero((d2 <= r * r) & np.isfinite(depth) & (np.abs(depth) <= 1.0))

@@ -80,6 +80,11 @@ def test_fit_view_and_a_resize_keep_the_frame(scene):
     _render(scene)
     x0, x1, y0, _ = _sprite_bounds(scene)
     assert x0 >= 0 and x1 <= 500 and y0 > _bar_top(scene)
+    cam.azimuth = 30.0  # the user turned the camera: a resize leaves it alone
+    moved = cam.position
+    scene.plotter.window_size = (900, 700)
+    _render(scene)
+    assert cam.position == moved
 
 
 def test_sprite_size_follows_the_spacing_and_the_user_factor(scene):
