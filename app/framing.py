@@ -21,17 +21,20 @@ FIT_PAD = 0.04
 #: Top of the colour bar: position_y + height in the scene (0.03 + 0.075 of the view),
 #: its height capped at the bar's SetMaximumHeightInPixels (90 px).
 BAR_BOTTOM, BAR_HEIGHT, BAR_MAX_PX = 0.03, 0.075, 90.0
-#: Sprite diameter over the mean nearest-neighbour spacing on screen: at 1.0 about a
-#: third of the gaps stay open on a random sampling (gaps exceed the mean spacing);
-#: 1.5 closes them on the bunny and the sphere without blurring detail (looked at).
-SPRITE_OVERLAP = 1.5
+#: Sprite diameter over the point spacing on screen. The spacing is the mean distance to
+#: the 3rd nearest neighbour, about 1 / sqrt(density) for a grid (1.0) and for a random
+#: sampling (0.94) alike, whereas the nearest-neighbour distance is 1.0 vs 0.5. Discs of
+#: diameter 1.7 / sqrt(density) cover a grid and 90 % of a random sampling (1 - exp(-pi
+#: 1.7^2 / 4)); the back of a closed surface fills most of the rest (looked at: cube,
+#: torus, 300-point sphere, bunny).
+SPRITE_OVERLAP = 1.7
 #: The "Point size" control's default: the user's size divided by this scales the sprites.
 DEFAULT_SIZE = 5.0
 SPRITE_MIN, SPRITE_MAX = 1.5, 48.0
-#: Spacing estimate: nearest-neighbour distances of SPACING_QUERIES random points against
+#: Spacing estimate: 3rd-neighbour distances of SPACING_QUERIES random points against
 #: the whole cloud (tree build on 1M points 0.19 s, 20k queries 0.03 s on this VM). Above
 #: SPACING_TREE points the tree holds a random subset and the distance is scaled by
-#: sqrt(m / N): exact for a random (Poisson) sampling of a surface, ~2x small on a grid.
+#: sqrt(m / N) (a surface's spacing goes as 1 / sqrt(density)).
 SPACING_QUERIES, SPACING_TREE = 20_000, 2_000_000
 
 
@@ -147,7 +150,8 @@ def _pan(renderer, dx: float, dy: float) -> None:
 
 
 def cloud_spacing(points: np.ndarray) -> float:
-    """Mean nearest-neighbour distance (estimated on a subsample for a big cloud); 0 if unknown."""
+    """Mean distance to the 3rd nearest neighbour, ~1 / sqrt(density) on a surface whether
+    sampled on a grid or at random (on a subsample for a huge cloud); 0 if unknown."""
     pts = points[np.isfinite(points).all(axis=1)]
     n = len(pts)
     if n < 2:
@@ -156,8 +160,8 @@ def cloud_spacing(points: np.ndarray) -> float:
     m = min(n, SPACING_TREE)
     tree = pts if m == n else pts[rng.choice(n, size=m, replace=False)]
     query = tree if m <= SPACING_QUERIES else tree[rng.choice(m, size=SPACING_QUERIES, replace=False)]
-    d, _ = cKDTree(tree, balanced_tree=False, compact_nodes=False).query(query, k=2)
-    nearest = d[:, 1][d[:, 1] > 0]
+    d, _ = cKDTree(tree, balanced_tree=False, compact_nodes=False).query(query, k=min(4, m))
+    nearest = d[:, -1][np.isfinite(d[:, -1]) & (d[:, -1] > 0)]
     return float(np.mean(nearest) * np.sqrt(m / n)) if len(nearest) else 0.0
 
 
