@@ -58,6 +58,13 @@ class LevelOfDetail:
         self._actor.mapper.SetUseLookupTableScalarRange(True)
         self._actor.SetVisibility(False)
 
+    def set_point_size(self, size: float) -> None:
+        """The full cloud's sprite size, grown for the subset's wider spacing (sqrt of the
+        density ratio on a surface) so the stand-in has no more holes than the cloud."""
+        if self._actor is not None and self._full is not None:
+            n_full = self._full.GetMapper().GetInput().GetNumberOfPoints()
+            self._actor.prop.point_size = min(float(size) * np.sqrt(max(n_full, 1) / self.limit), 48.0)
+
     def set_values(self, values: np.ndarray) -> None:
         if self._mesh is not None:
             self._mesh.point_data["values"] = np.asarray(values, dtype=float)[self.index]

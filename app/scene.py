@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pyvista as pv
 
-from . import glyphs
+from . import framing, glyphs
 from .lod import LevelOfDetail
 from .theme import LIGHT, Theme
 
@@ -24,21 +24,9 @@ HIGHLIGHT_COLOUR = "#ffd92f"
 TEXT_COLOUR = "#222222"
 
 
-def _projection(renderer, points: np.ndarray):
-    """Display coordinates (x, y in pixels, origin bottom-left) and depth of points."""
+def _camera_state(renderer) -> tuple:
     cam = renderer.GetActiveCamera()
-    aspect = renderer.GetTiledAspectRatio()
-    vtk_m = cam.GetCompositeProjectionTransformMatrix(aspect, -1.0, 1.0)
-    m = np.array([[vtk_m.GetElement(i, j) for j in range(4)] for i in range(4)])
-    hom = np.c_[points, np.ones(len(points))] @ m.T
-    w = hom[:, 3:4]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ndc = hom[:, :3] / w
-    vx0, vy0, vx1, vy1 = renderer.GetViewport()
-    width, height = renderer.GetRenderWindow().GetSize()
-    x = (vx0 + (ndc[:, 0] + 1.0) * 0.5 * (vx1 - vx0)) * width
-    y = (vy0 + (ndc[:, 1] + 1.0) * 0.5 * (vy1 - vy0)) * height
-    return x, y, ndc[:, 2]
+    return cam.GetPosition(), cam.GetFocalPoint(), cam.GetViewUp(), cam.GetViewAngle()
 
 
 class CloudScene:
@@ -54,7 +42,12 @@ class CloudScene:
         self.plotter = plotter
         self.points: np.ndarray | None = None
         self.spacing = 1.0
-        self.point_size = 5.0
+        self.point_size = 5.0  # the user's "Point size": the sprite size at the default density
+        self.sprite_size = 5.0  # what is drawn: follows the point spacing on screen (app/framing.py)
+        self._sprite_spacing = 0.0
+        #: actor name -> size factor: point layers drawn over the cloud, resized with its sprites
+        self.sprite_layers = {"pick-neighbours": 1.6}
+        self._fit_pending: tuple | None = None  # (window size, camera) the last fit left
         self.view = "front"
         self._cloud: pv.PolyData | None = None
         self._actor = None
@@ -71,6 +64,7 @@ class CloudScene:
         self._title_actor = None
         self.lod = LevelOfDetail(plotter, self._lut)
         self.lod.attach()
+        self._render_tag = plotter.renderer.AddObserver("StartEvent", self._before_render)
         plotter.set_background(self.theme.background)
         # pyvista's key bindings that would fight the viewer's own state (point size,
         # picking mode, a screenshot on "q"); r (reset camera) and v (isometric) stay
@@ -94,6 +88,7 @@ class CloudScene:
             if self._actor is not None:
                 self.plotter.remove_actor(self._actor, render=False)
             self._cloud = pv.PolyData(points.copy())
+            self._sprite_spacing = framing.cloud_spacing(points)
             self._cloud.point_data["values"] = vals
             self._actor = self.plotter.add_mesh(
                 self._cloud,
@@ -157,9 +152,29 @@ class CloudScene:
             self._bar.SetVisibility(bool(on))
 
     def set_point_size(self, size: float):
+        """The user's point size: the sprite size at the default density, a factor otherwise."""
         self.point_size = float(size)
-        if self._actor is not None:
-            self._actor.prop.point_size = self.point_size
+        self._update_sprites()
+
+    def _update_sprites(self) -> None:
+        """Sprite size from the point spacing seen at the current camera distance."""
+        if self._actor is None or self.points is None or not len(self.points):
+            return
+        size = framing.sprite_size(self.plotter.renderer, np.asarray(self._cloud.center), self._sprite_spacing,
+                                   self.point_size)
+        self.sprite_size = self._actor.prop.point_size = size  # VTK ignores a set to the same value
+        self.lod.set_point_size(max(size, 2.0))
+        for name, factor in self.sprite_layers.items():
+            if name in self.plotter.actors:
+                self.plotter.actors[name].prop.point_size = size * factor
+
+    def _before_render(self, *_args) -> None:
+        """Every render: refit a camera nobody moved if the view was resized, then size sprites."""
+        window = self.plotter.renderer.GetRenderWindow()
+        if self._fit_pending is not None and window is not None and self._fit_pending[0] != tuple(window.GetSize()):
+            if self._fit_pending[1] == _camera_state(self.plotter.renderer):  # nobody moved it since
+                self._fit()
+        self._update_sprites()
 
     # -- glyphs -------------------------------------------------------------------
     def set_glyphs(self, kind: str, directions: np.ndarray | None, *, density: float, length: float,
@@ -222,12 +237,12 @@ class CloudScene:
         if neighbours is not None and len(neighbours):
             nb = pv.PolyData(self.points[np.asarray(neighbours)])
             self.plotter.add_mesh(
-                nb, color=HIGHLIGHT_COLOUR, point_size=self.point_size * 1.6, render_points_as_spheres=True,
+                nb, color=HIGHLIGHT_COLOUR, point_size=self.sprite_size * 1.6, render_points_as_spheres=True,
                 name="pick-neighbours", pickable=False, reset_camera=False, render=False,
             )
         centre = self.points[index]
         self.plotter.add_mesh(
-            pv.PolyData(centre[None, :]), color="#e7298a", point_size=self.point_size * 2.6,
+            pv.PolyData(centre[None, :]), color="#e7298a", point_size=max(self.sprite_size * 1.8, 10.0),
             render_points_as_spheres=True, name="pick-point", pickable=False, reset_camera=False, render=False,
         )
         length = max(8.0 * self.spacing, 0.1 * self.radius())
@@ -277,6 +292,21 @@ class CloudScene:
     def fit_view(self) -> None:
         """Frame the whole cloud, keeping the viewing direction."""
         self.plotter.renderer.reset_camera(render=False)  # Plotter.reset_camera renders regardless
+        self._fit()
+
+    def _fit(self) -> None:
+        """Fill the view above the colour bar with the cloud's projection (app/framing.py)."""
+        if self.points is None or not len(self.points):
+            return
+        renderer = self.plotter.renderer
+        sample = framing.fit_sample(self.points)
+        framing.fit_to_region(renderer, sample)
+        # the sprites' size depends on the fit: fit again with half a sprite of room
+        size = framing.sprite_size(renderer, sample.mean(axis=0), self._sprite_spacing, self.point_size)
+        framing.fit_to_region(renderer, sample, framing.free_region(renderer, inset=0.5 * size), steps=3)
+        window = renderer.GetRenderWindow()
+        self._fit_pending = (tuple(window.GetSize()), _camera_state(renderer)) if window is not None else None
+
     def reset_camera(self, view: str = "front"):
         """Frame the cloud.
 
@@ -287,27 +317,12 @@ class CloudScene:
         """
         if self.points is None or not len(self.points):
             return
-        pts = self.points[np.isfinite(self.points).all(axis=1)]
-        centre = 0.5 * (pts.min(axis=0) + pts.max(axis=0))
-        radius = 0.5 * float(np.linalg.norm(np.ptp(pts, axis=0))) or 1.0
-        presets = {
-            "front": ([0.35, 0.25, 1.0], [0, 1, 0]),
-            "oblique": ([0.55, -1.0, 0.75], [0, 0, 1]),
-            "xy": ([0, 0, 1], [0, 1, 0]),
-            "xz": ([0, -1, 0], [0, 0, 1]),
-            "yz": ([1, 0, 0], [0, 0, 1]),
-        }
-        direction, up = (np.asarray(v, dtype=float) for v in presets[view])
-        direction /= np.linalg.norm(direction)
         # pyvista's camera getter renders the whole scene once on a fresh renderer
         # (camera_set False): 6 s for 1M sprites with llvmpipe. We place it ourselves.
         self.plotter.renderer.camera_set = True
-        cam = self.plotter.camera
-        cam.focal_point = tuple(centre)
-        cam.position = tuple(centre + direction * radius * 3.2)
-        cam.up = tuple(up)
+        framing.look_from(self.plotter.renderer, self.points, view)
         self.plotter.renderer.reset_camera(render=False)  # Plotter.reset_camera renders regardless
-        cam.zoom(1.1)
+        self._fit()
         self.view = view
 
     def render(self):
@@ -316,15 +331,15 @@ class CloudScene:
     # -- picking ---------------------------------------------------------------------
     def display_coords(self, index) -> tuple[np.ndarray, np.ndarray]:
         """Display (x, y) pixel coordinates of cloud points (origin bottom-left)."""
-        x, y, _ = _projection(self.plotter.renderer, self.points[np.atleast_1d(index)])
+        x, y, _ = framing.projection(self.plotter.renderer, self.points[np.atleast_1d(index)])
         return x, y
 
     def pick(self, x: float, y: float, radius: float | None = None) -> int | None:
         """Index of the front-most cloud point within ``radius`` px of display (x, y)."""
         if self.points is None or not len(self.points):
             return None
-        px, py, depth = _projection(self.plotter.renderer, self.points)
-        r = radius if radius is not None else max(4.0, self.point_size)
+        px, py, depth = framing.projection(self.plotter.renderer, self.points)
+        r = radius if radius is not None else max(4.0, 0.5 * self.sprite_size)
         d2 = (px - x) ** 2 + (py - y) ** 2
         near = np.flatnonzero((d2 <= r * r) & np.isfinite(depth) & (np.abs(depth) <= 1.0))
         if not len(near):
@@ -373,6 +388,9 @@ class CloudScene:
                 if style is not None:
                     style.RemoveObserver(tag)
         self._observers = []
+        if self._render_tag is not None:
+            self.plotter.renderer.RemoveObserver(self._render_tag)
+            self._render_tag = None
         self.lod.close()
         self._pick_callback = None
         self._cloud = None

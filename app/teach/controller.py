@@ -233,7 +233,9 @@ class TeachController(QObject):
         rgb = np.array([[int(c[i:i + 2], 16) for i in (1, 3, 5)] for c in (*TYPE_COLOURS, "#b0b0b0")], np.uint8)
         cloud = pv.PolyData(np.asarray(res.points, dtype=float))
         cloud["type"] = rgb[np.where(types < 0, len(TYPE_COLOURS), types)]
-        size = getattr(self.window.scene, "point_size", 5.0) * 1.08
+        scene = self.window.scene  # the layer covers the cloud's sprites as they follow the zoom
+        scene.sprite_layers["teach-types"] = 1.08
+        size = scene.sprite_size * 1.08
         self.layer.show("types", cloud, dict(scalars="type", rgb=True, point_size=size,
                                              render_points_as_spheres=True, lighting=True))
         self._set_legend(True, types)
