@@ -119,7 +119,7 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("-q", "--quiet", action="store_true")
     w.set_defaults(func=_cli_commands.cmd_warmup)
 
-    b = sub.add_parser("bench", help="benchmarks: paper (torus experiment), perf (speed/memory), accuracy")
+    b = sub.add_parser("bench", help="benchmarks: paper (torus experiment), perf (speed/memory), accuracy, tiled, stability, teach")
     b.add_argument("which", choices=BENCHES)
     b.add_argument("rest", nargs=argparse.REMAINDER, help="options of the benchmark (see --help)")
     b.set_defaults(func=_cmd_bench)
