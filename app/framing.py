@@ -165,8 +165,12 @@ def cloud_spacing(points: np.ndarray) -> float:
     return float(np.mean(nearest) * np.sqrt(m / n)) if len(nearest) else 0.0
 
 
-def sprite_size(renderer, centre: np.ndarray, spacing: float, user_size: float) -> float:
-    """Sprite diameter in pixels: the spacing seen at ``centre``, times the user's factor."""
+def sprite_size(renderer, centre: np.ndarray, spacing: float, user_size: float, ceiling: float | None = None) -> float:
+    """Sprite diameter in pixels: the spacing seen at ``centre``, times the user's factor.
+
+    ``ceiling`` (px at the default factor) is the size the fitted view gave: zooming in past
+    the fit spreads the points apart instead of growing them, so close-ups (a picked point's
+    frame, normal sections) show individual points, not a wall of spheres over the overlays."""
     if spacing <= 0:
         return float(user_size)
     cam = renderer.GetActiveCamera()
@@ -177,7 +181,8 @@ def sprite_size(renderer, centre: np.ndarray, spacing: float, user_size: float) 
         depth = float(np.dot(np.asarray(centre) - np.array(cam.GetPosition()), _forward(cam)))
         world_height = 2.0 * max(depth, 1e-12) * np.tan(np.radians(cam.GetViewAngle()) / 2.0)
     px = SPRITE_OVERLAP * spacing * h / world_height * (user_size / DEFAULT_SIZE)
-    return float(np.clip(px, SPRITE_MIN, SPRITE_MAX * user_size / DEFAULT_SIZE))
+    top = SPRITE_MAX if ceiling is None else min(SPRITE_MAX, max(ceiling, SPRITE_MIN))
+    return float(np.clip(px, SPRITE_MIN, top * user_size / DEFAULT_SIZE))
 
 
 def _forward(cam) -> np.ndarray:

@@ -44,7 +44,7 @@ class CloudScene:
         self.spacing = 1.0
         self.point_size = 5.0  # the user's "Point size": the sprite size at the default density
         self.sprite_size = 5.0  # what is drawn: follows the point spacing on screen (app/framing.py)
-        self._sprite_spacing = 0.0
+        self._sprite_spacing, self._fit_sprite = 0.0, None  # spacing; sprite px the last fit gave
         #: actor name -> size factor: point layers drawn over the cloud, resized with its sprites
         self.sprite_layers = {"pick-neighbours": 1.6}
         self._fit_pending: tuple | None = None  # (window size, camera) the last fit left
@@ -161,7 +161,7 @@ class CloudScene:
         if self._actor is None or self.points is None or not len(self.points):
             return
         size = framing.sprite_size(self.plotter.renderer, np.asarray(self._cloud.center), self._sprite_spacing,
-                                   self.point_size)
+                                   self.point_size, self._fit_sprite)
         self.sprite_size = self._actor.prop.point_size = size  # VTK ignores a set to the same value
         self.lod.set_point_size(max(size, 2.0))
         for name, factor in self.sprite_layers.items():
@@ -304,6 +304,7 @@ class CloudScene:
         # the sprites' size depends on the fit: fit again with half a sprite of room
         size = framing.sprite_size(renderer, sample.mean(axis=0), self._sprite_spacing, self.point_size)
         framing.fit_to_region(renderer, sample, framing.free_region(renderer, inset=0.5 * size), steps=3)
+        self._fit_sprite = framing.sprite_size(renderer, sample.mean(axis=0), self._sprite_spacing, framing.DEFAULT_SIZE)
         window = renderer.GetRenderWindow()
         self._fit_pending = (tuple(window.GetSize()), _camera_state(renderer)) if window is not None else None
 

@@ -105,9 +105,12 @@ def test_sprite_size_follows_the_spacing_and_the_user_factor(scene):
     _render(scene)
     assert scene.sprite_size == pytest.approx(2.0 * sizes[20000], rel=1e-3)
     cam = scene.plotter.camera
-    cam.zoom(2.0)  # closer: the points spread out on screen, the sprites grow with them
+    cam.zoom(0.5)  # farther (a wider view angle): the points crowd together, the sprites shrink with them
     _render(scene)
-    assert scene.sprite_size == pytest.approx(4.0 * sizes[20000], rel=0.05)
+    assert 0.4 * 2.0 * sizes[20000] < scene.sprite_size < 0.6 * 2.0 * sizes[20000]
+    cam.zoom(4.0)  # closer than the fit: the points spread apart, the sprites keep the fitted size
+    _render(scene)
+    assert scene.sprite_size == pytest.approx(2.0 * sizes[20000], rel=0.01)
 
 
 def test_cloud_spacing_of_a_grid():
