@@ -3,6 +3,9 @@ unit, the seeding, and the checks of a run's arguments."""
 
 from __future__ import annotations
 
+import threading
+import time
+
 import numpy as np
 
 #: (key of metrics.summary, short name, axis label)
@@ -33,3 +36,29 @@ def check_run(levels, count, count_name, names, valid, what) -> tuple:
     if unknown:
         raise ValueError(f"unknown {what}(s) {unknown}; valid: {list(valid)}")
     return levels
+
+
+class Sampler:
+    """A context manager that calls :meth:`sample` every ``interval`` seconds in a thread
+    (and once more on exit): the memory samplers of the perf and tiled benchmarks."""
+
+    interval = 0.1
+
+    def sample(self) -> None:
+        raise NotImplementedError
+
+    def __enter__(self):
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+        return self
+
+    def _run(self):
+        while not self._stop.is_set():
+            self.sample()
+            time.sleep(self.interval)
+
+    def __exit__(self, *exc):
+        self._stop.set()
+        self._thread.join()
+        self.sample()

@@ -12,7 +12,6 @@ at k = 15 is printed too.
 from __future__ import annotations
 
 import argparse
-import threading
 import time
 
 import numpy as np
@@ -23,10 +22,11 @@ from .._progress import Progress
 from ..methods import get_method
 from ..normals import orient_normals, pca_normals
 from ..stages import fit_all
+from ._common import Sampler
 from ._table import fmt, text_table
 
 
-class _PeakRSS:
+class _PeakRSS(Sampler):
     """Sample the resident set size (Linux /proc) in a thread; peak above the start."""
 
     def __init__(self, interval=0.002):
@@ -42,19 +42,9 @@ class _PeakRSS:
 
     def __enter__(self):
         self.start = self.peak = self.rss()
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, daemon=True)
-        self._thread.start()
-        return self
+        return super().__enter__()
 
-    def _run(self):
-        while not self._stop.is_set():
-            self.peak = max(self.peak, self.rss())
-            time.sleep(self.interval)
-
-    def __exit__(self, *exc):
-        self._stop.set()
-        self._thread.join()
+    def sample(self) -> None:
         self.peak = max(self.peak, self.rss())
 
     @property

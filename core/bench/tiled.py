@@ -18,12 +18,12 @@ import pathlib
 import subprocess
 import sys
 import tempfile
-import threading
 import time
 
 import numpy as np
 
 from ._args import positive
+from ._common import Sampler
 from ._table import fmt, text_table
 
 _CHUNK = 1_000_000
@@ -48,7 +48,7 @@ def write_scan(path, n: int, seed: int = 0) -> None:
             w.write_points(rec)
 
 
-class _WorkerPeaks:
+class _WorkerPeaks(Sampler):
     """Peak RSS of every child process (the Dask workers), sampled in a thread."""
 
     def __init__(self):
@@ -58,25 +58,13 @@ class _WorkerPeaks:
         self.peaks = {}
         self.own = 0
 
-    def __enter__(self):
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, daemon=True)
-        self._thread.start()
-        return self
-
-    def _run(self):
-        while not self._stop.is_set():
-            self.own = max(self.own, self.me.memory_info().rss)
-            for child in self.me.children(recursive=True):
-                try:
-                    self.peaks[child.pid] = max(self.peaks.get(child.pid, 0), child.memory_info().rss)
-                except Exception:  # the process ended between listing and reading  # noqa: BLE001
-                    pass
-            time.sleep(0.1)
-
-    def __exit__(self, *exc):
-        self._stop.set()
-        self._thread.join()
+    def sample(self) -> None:
+        self.own = max(self.own, self.me.memory_info().rss)
+        for child in self.me.children(recursive=True):
+            try:
+                self.peaks[child.pid] = max(self.peaks.get(child.pid, 0), child.memory_info().rss)
+            except Exception:  # the process ended between listing and reading  # noqa: BLE001
+                pass
 
 
 _IN_MEMORY = """
