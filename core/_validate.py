@@ -48,18 +48,27 @@ def as_normals(normals, n_points: int, *, name: str = "normals", repair: bool = 
         return arr
     if not np.isfinite(arr).all():
         raise ValueError(f"{name} contains NaN or inf values")
-    # scaled by the largest component first: the norm of (1e300, 0, 0) would overflow to inf
-    # (and the normal become 0) and that of (1e-300, 0, 0) underflow to 0
-    big = np.abs(arr).max(axis=1) if len(arr) else np.zeros(0)
-    unit = arr / np.where(big > 0, big, 1.0)[:, None]
-    length = np.linalg.norm(unit, axis=1) * big
+    unit, length = unit_rows(arr)
     tiny = length < 1e-12
     if tiny.any():
         raise ValueError(
             f"{name} has {int(tiny.sum())} zero-length vector(s) (first at row {int(np.flatnonzero(tiny)[0])}); "
             "pass normals=None to estimate them"
         )
-    return unit / np.linalg.norm(unit, axis=1)[:, None]
+    return unit
+
+
+def unit_rows(arr):
+    """``(unit, length)`` of the finite rows of an (N, 3) array: unit vectors (NaN rows
+    where the length is 0) and lengths, without overflow or underflow. Each row is scaled
+    by its largest component first: the norm of (1e300, 0, 0) would overflow to inf (and the
+    vector become 0) and that of (1e-300, 0, 0) underflow to 0."""
+    big = np.abs(arr).max(axis=1) if len(arr) else np.zeros(0)
+    scaled = arr / np.where(big > 0, big, 1.0)[:, None]
+    norm = np.linalg.norm(scaled, axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        unit = scaled / np.where(norm > 0, norm, np.nan)[:, None]
+    return unit, norm * big
 
 
 def check_int(value, *, name: str, low: int, high: int | None = None) -> int:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._validate import unit_rows
 from .normals import pca_normals
 
 #: shorter than this share of the file's median normal length a row has no direction
@@ -33,18 +34,11 @@ def split_normals(normals):
     arr = np.array(normals, dtype=np.float64, copy=True)
     finite = np.isfinite(arr).all(axis=1)
     arr[~finite] = 0.0
-    # scaled by the largest component first: the norm of (1e300, 0, 0) would overflow to
-    # inf and that of (1e-300, 0, 0) underflow to 0
-    big = np.abs(arr).max(axis=1) if len(arr) else np.zeros(0)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        scaled = arr / np.where(big > 0, big, 1.0)[:, None]
-    norm = np.linalg.norm(scaled, axis=1)
-    length = norm * big
+    unit, length = unit_rows(arr)
     typical = np.median(length[length > 0]) if (length > 0).any() else 0.0
     usable = finite & (length > 0) & (length > MIN_LENGTH * typical)
     unscaled = usable & (np.abs(length - 1.0) > UNIT_TOL)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        unit = np.where(usable[:, None], scaled / norm[:, None], np.nan)
+    unit = np.where(usable[:, None], unit, np.nan)
     counts = {"unusable": int(np.count_nonzero(~usable)), "renormalised": int(np.count_nonzero(unscaled))}
     return unit, usable, counts
 
