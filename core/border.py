@@ -68,8 +68,21 @@ def border_of(points, normals, nb):
     """:func:`border_flags` with :data:`BORDER_K` neighbours from ``nb`` (a
     :class:`core.Neighbours`), or from a search of their own when ``nb`` holds fewer (or is None)."""
     k = min(BORDER_K, len(points))
-    if nb is not None and nb.k_max >= k:
+    if served_by(nb, len(points)):
         idx = nb.take(k)[0]
     else:  # e.g. an integer k < 30: one more search, the test is meaningless on fewer
         idx = build_neighbours(points, k).take(k)[0]
     return border_flags(points, normals, idx)[0]
+
+
+def served_by(nb, n_points: int) -> bool:
+    """Whether the neighbours ``nb`` (or None) hold enough for the test, without a search."""
+    return nb is not None and nb.k_max >= min(BORDER_K, n_points)
+
+
+def border_of_valid(points, normals, valid, nb):
+    """:func:`border_of` judged on the valid points' normals; False where not valid (what
+    :attr:`core.CurvatureResult.border` holds)."""
+    if not valid.any():
+        return np.zeros(len(points), dtype=bool)
+    return valid & border_of(points, np.where(valid[:, None], normals, np.nan), nb)

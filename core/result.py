@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .border import border_of
+from .border import border_of_valid
 from .tuning import OUTLIER_SCORE
 
 
@@ -79,11 +79,7 @@ class CurvatureResult:
     def border(self) -> np.ndarray:
         """Valid points on a border of the sampled surface (see the class docstring)."""
         if self._border is None:
-            flags = np.zeros(len(self), dtype=bool)
-            if self.valid.any():
-                normals = np.where(self.valid[:, None], self.normals, np.nan)
-                flags = self.valid & border_of(self.points, normals, self.neighbours)
-            object.__setattr__(self, "_border", flags)
+            object.__setattr__(self, "_border", border_of_valid(self.points, self.normals, self.valid, self.neighbours))
         return self._border
 
     def __len__(self) -> int:

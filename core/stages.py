@@ -11,7 +11,7 @@ import numpy as np
 
 from . import kernels, scale
 from .frame import darboux_frame
-from .border import BORDER_K, border_of
+from .border import border_of_valid, served_by
 from .neighbours import Neighbours, search_neighbours
 from .normal_repair import repair_normals
 from .normals import jet_normals, pca_normals
@@ -290,8 +290,8 @@ def flags(fit: Fit, scores, plan, reference: Fit | None, *, nb=None, confidence=
     judged = fit if reference is None else reference
     crease, typical = _creases(judged.valid, judged.rms, judged.spread, plan.crease_typical)
     border = None  # without enough cached neighbours: computed on first use (CurvatureResult.border)
-    if nb is not None and nb.k_max >= min(BORDER_K, len(nb.points)):
-        border = fit.valid & border_of(nb.points, np.where(fit.valid[:, None], fit.normals, np.nan), nb)
+    if served_by(nb, len(fit.valid)):
+        border = border_of_valid(nb.points, fit.normals, fit.valid, nb)
     return Flags(outlier_score=scores, crease=fit.valid & crease, crease_typical=typical, border=border,
                  orientation_confidence=confidence)
 
