@@ -69,14 +69,20 @@ class ResultPresenter:
         self.histogram.clear()
         self.inspector.clear()
 
+    def _look(self, name: str, values):
+        """Colour limits and map of field ``name`` over ``values``, from the state's settings."""
+        s = self.state
+        manual = None if (s.clim_auto or s.clim is None) else s.clim
+        return colouring(FIELDS[name], values, clip=s.clip_percent, floor=curvature_floor(name, self.scene.radius()),
+                         clim=manual)
+
     def show_preview(self, out) -> None:
         """Colour the cloud by a preview (:mod:`app.preview`); glyphs and pick wait for the full result."""
         s = self.state
         name = s.field if s.field in out.fields else "mean"
         spec = FIELDS[name]
         values = out.fields[name]
-        manual = None if (s.clim_auto or s.clim is None) else s.clim
-        look = colouring(spec, values, clip=s.clip_percent, floor=curvature_floor(name, self.scene.radius()), clim=manual)
+        look = self._look(name, values)
         clim, cmap = look.clim, look.cmap
         self.scene.set_cloud(out.points)
         self.scene.set_values(values, title=spec.title, cmap=cmap, clim=clim, log=look.log)
@@ -111,8 +117,7 @@ class ResultPresenter:
         pairs = self._pairs()
         # border points (scan rims, holes) are drawn grey and kept out of the colour limits
         both = np.concatenate([_off_border(fields[name], res) for _, res, fields in pairs if fields and name in fields])
-        manual = None if (s.clim_auto or s.clim is None) else s.clim
-        look = colouring(spec, both, clip=s.clip_percent, floor=curvature_floor(name, self.scene.radius()), clim=manual)
+        look = self._look(name, both)
         clim, cmap = look.clim, look.cmap
         for scene, res, fields in pairs:
             scene.set_values(_off_border(fields[name], res, keep_shape=True), title=spec.title, cmap=cmap, clim=clim,
