@@ -114,13 +114,23 @@ def _global_signs(points, normals, labels, mode, sign):
         vote[lab[first]] = normals[have[first], 2]
     else:
         rel = points[have] - points[have].mean(axis=0)
-        dist = np.linalg.norm(rel, axis=1)
-        rms = np.sqrt(np.bincount(lab, dist**2, n_comp) / np.maximum(np.bincount(lab, minlength=n_comp), 1))
-        far = np.flatnonzero(dist >= FAR_SHARE * rms[lab])
-        with np.errstate(invalid="ignore", divide="ignore"):
-            facing = np.einsum("ij,ij->i", normals[have[far]], rel[far]) / dist[far]
-        vote = np.bincount(lab[far], np.nan_to_num(facing), n_comp)
+        square = np.einsum("ij,ij->i", rel, rel)
+        rms = np.sqrt(np.bincount(lab, square, n_comp) / np.maximum(np.bincount(lab, minlength=n_comp), 1))
+        far, facing = far_facing(rel, normals[have], rms[lab])
+        vote = np.bincount(lab[far], facing, n_comp)
     sign[have[vote[lab] < 0]] *= -1.0
+
+
+def far_facing(rel, normals, rms):
+    """The outward vote's voters and their votes: which points lie beyond FAR_SHARE x their
+    component's RMS distance ``rms`` from the cloud's centre (``rel``: positions relative to
+    it), and how squarely each one's normal faces away from the centre (cosine, NaN-free).
+    Shared by :func:`orient` and the tiled engine (:mod:`core.tiled.signs`)."""
+    dist = np.linalg.norm(rel, axis=1)
+    far = dist >= FAR_SHARE * rms
+    with np.errstate(invalid="ignore", divide="ignore"):
+        facing = np.einsum("ij,ij->i", normals[far], rel[far]) / dist[far]
+    return far, np.nan_to_num(facing)
 
 
 def _evidence(points, normals, graph, ok):

@@ -16,7 +16,7 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import breadth_first_order, connected_components, minimum_spanning_tree
 
-from ..orientation import FAR_SHARE
+from ..orientation import far_facing
 from .store import TileStore
 
 _CHUNK = 1_000_000
@@ -114,7 +114,7 @@ def _upward(flat, part, parity) -> np.ndarray:
 
 def _outward(store, nodes, offset, flat, part, parity) -> np.ndarray:
     """Flip each part as :func:`core.orientation.orient` does in memory: a vote of its
-    points farthest from the cloud's centre (beyond FAR_SHARE x its RMS distance), each
+    points farthest from the cloud's centre (:func:`core.orientation.far_facing`), each
     weighted by how squarely its normal faces away from the centre."""
     n_parts = int(part.max()) + 1
     centre = flat["sum"].sum(axis=0) / max(float(flat["count"].sum()), 1.0)
@@ -124,12 +124,8 @@ def _outward(store, nodes, offset, flat, part, parity) -> np.ndarray:
     reach = np.sqrt(square / np.maximum(np.bincount(part, flat["count"], n_parts), 1))
     vote = np.zeros(n_parts)
     for chunk, node in _own_chunks(store, nodes, offset):
-        rel = chunk["xyz"] - centre
-        dist = np.linalg.norm(rel, axis=1)
-        far = dist >= FAR_SHARE * reach[part[node]]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            facing = np.einsum("ij,ij->i", chunk["n"][far], rel[far]) / dist[far]
-        vote += np.bincount(part[node[far]], np.nan_to_num(facing) * parity[node[far]], n_parts)
+        far, facing = far_facing(chunk["xyz"] - centre, chunk["n"], reach[part[node]])
+        vote += np.bincount(part[node[far]], facing * parity[node[far]], n_parts)
     return np.where(vote[part] < 0, -1.0, 1.0)
 
 
