@@ -17,7 +17,7 @@ from .normal_repair import repair_normals
 from .normals import jet_normals, pca_normals
 from .orientation import orient
 from .patch import Chunk
-from .tuning import (CREASE_NOISE, CREASE_RATIO, CREASE_SPREAD, JET_SCORE, OUTLIER_FLOOR, OUTLIER_SCORE, PASS_DECAY,
+from .tuning import (CREASE_NOISE, CREASE_RATIO, CREASE_SPREAD, JET_SCORE, OUTLIER_FLOOR, PASS_DECAY,
                      PASS_MIN_SHARE)
 
 _CHUNK = 32_768

@@ -14,7 +14,7 @@ def plan_tiles(source, store: TileStore, tile_points: int, progress) -> TilePlan
     if store.plan_path.exists():
         return TilePlan.load(store.plan_path)
     stride = max(1, source.count // SAMPLE)
-    parts, lo, hi = [], np.full(3, np.inf), np.full(3, -np.inf)
+    parts = []
     seen = 0
     for start, pts, *_ in source.chunks():
         first = (-start) % stride
