@@ -13,7 +13,7 @@ import sys
 from . import __version__, _cli_commands
 from .tiled import cli as tiled_cli
 
-BENCHES = ("paper", "perf", "accuracy", "tiled", "stability", "teach")
+BENCHES = ("paper", "perf", "accuracy", "tiled", "stability", "teach", "holdout")
 PROG = "darboux-cli"
 _NONE = ("none", "null")
 _BOOLS = {"true": True, "false": False}
@@ -119,7 +119,7 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("-q", "--quiet", action="store_true")
     w.set_defaults(func=_cli_commands.cmd_warmup)
 
-    b = sub.add_parser("bench", help="benchmarks: paper (torus experiment), perf (speed/memory), accuracy, tiled, stability, teach")
+    b = sub.add_parser("bench", help="benchmarks: paper (torus experiment), perf (speed/memory), accuracy, tiled, stability, teach, holdout (auto scale on unseen surfaces)")
     b.add_argument("which", choices=BENCHES)
     b.add_argument("rest", nargs=argparse.REMAINDER, help="options of the benchmark (see --help)")
     b.set_defaults(func=_cmd_bench)
