@@ -10,7 +10,7 @@ import numpy as np
 from ... import metrics, noise
 from ...neighbours import build_neighbours
 from ...normals import orient_normals, pca_normals
-from .config import QUANTITIES, SHAPES, _nanmean, _seed
+from .config import NOISE_BUILT_IN, QUANTITIES, SHAPES, _nanmean, _seed
 
 
 @dataclass
@@ -122,10 +122,15 @@ def _make_cases(name, points, level, seeds, base_seed, evaluate, k_max):
     s_i = list(SHAPES).index(name)
     cases = []
     for r in range(seeds):
-        sample = make(points, _seed(base_seed, s_i, r))
-        spacing = noise.mean_spacing(sample.points)
-        pts = noise.add_noise(sample.points, level, relative=True, spacing=spacing,
-                              seed=_seed(base_seed, s_i, r, int(round(level * 1000)) + 1))
+        if name in NOISE_BUILT_IN:  # e.g. along a scanner's view rays; the truth is the clean sample's
+            sample = NOISE_BUILT_IN[name](points, _seed(base_seed, s_i, r), level)
+            pts = sample.points
+            spacing = noise.mean_spacing(pts)
+        else:
+            sample = make(points, _seed(base_seed, s_i, r))
+            spacing = noise.mean_spacing(sample.points)
+            pts = noise.add_noise(sample.points, level, relative=True, spacing=spacing,
+                                  seed=_seed(base_seed, s_i, r, int(round(level * 1000)) + 1))
         rng = np.random.default_rng(_seed(base_seed, s_i, r, 99))
         ev = np.zeros(len(pts), dtype=bool)
         pool = np.flatnonzero(sample.interior)

@@ -12,11 +12,19 @@ SHAPES = {
     "torus": ("torus (R = 2, r = 1)", lambda n, seed: shapes.torus(n, R=2.0, r=1.0, seed=seed)),
     "saddle": ("saddle surface", lambda n, seed: shapes.saddle(n, seed=seed)),
     "ellipsoid": ("ellipsoid (1.5, 1, 0.75; four umbilics)", lambda n, seed: shapes.ellipsoid(n, seed=seed)),
+    "chirp": ("chirp (ridges tightening 4x across the patch)", lambda n, seed: shapes.chirp(n, seed=seed)),
+    "graded": ("graded (the saddle, 10:1 density across its waist)", lambda n, seed: shapes.graded(n, seed=seed)),
+    "range_scan": ("range scan (one viewpoint; noise along the rays)",
+                   lambda n, seed: shapes.range_scan(n, seed=seed)),
 }
+#: shapes whose sampler adds the noise itself (level, as a fraction of the mean spacing):
+#: a scanner's noise runs along its view rays, not isotropically
+NOISE_BUILT_IN = {"range_scan": lambda n, seed, level: shapes.range_scan(n, noise=level, seed=seed)}
 DEFAULT_LEVELS = (0.0, 0.05, 0.1, 0.2, 0.5, 1.0)
 PAPER_K = 15
-#: k grid of the oracle columns (NR, jet): about x1.4 apart
-K_GRID = (15, 20, 30, 45, 60, 90, 130, 180)
+#: k grid of the oracle columns (NR, jet): about x1.4 apart, up to 240 (issue 15: the
+#: default's widest neighbourhood is 226, so the jets get at least as wide a choice)
+K_GRID = (15, 20, 30, 45, 60, 90, 130, 180, 240)
 #: APSS: MeshLab filter scales (x local spacing; MeshLab's default is 2) and PCA k of its normals
 APSS_SCALES = (4.0, 6.0, 8.0, 11.0, 16.0)
 APSS_PCA_K = (15, 30)

@@ -28,14 +28,16 @@ def markdown(run_: AccuracyRun, *, command: str, images: dict) -> str:
     lines += [
         "## Setup",
         "",
-        f"- Shapes: {', '.join(t.title for t in run_.tables.values())}; {s['points']} area-uniform random points, "
+        f"- Shapes: {', '.join(t.title for t in run_.tables.values())}; {s['points']} random points (area-uniform, "
+        "but graded 10:1 across the waist of `graded` and falling with range and obliquity on `range_scan`), "
         f"{s['seeds']} seed(s) per entry (base seed {s['seed']}). Gaussian curvature K of the samples: "
         + ", ".join(f"{t.shape} {fmt(t.k_range[0], 2)} to {fmt(t.k_range[1], 2)}" for t in run_.tables.values())
         + "."
         + (" Note: despite its name the 'saddle surface' of `core.shapes` is convex at its default c = 0.22 "
            "(K > 0 everywhere, a known core issue); negative K is covered by the inner half of the torus."
            if "saddle" in run_.tables and run_.tables["saddle"].k_range[0] > 0 else ""),
-        f"- Noise: {NOISE_UNIT} of the clean sample; levels {', '.join(f'{x:g}' for x in s['levels'])}.",
+        f"- Noise: {NOISE_UNIT} of the clean sample (on `range_scan`: Gaussian along each view ray, like a "
+        f"scanner's range noise); levels {', '.join(f'{x:g}' for x in s['levels'])}.",
         f"- Errors: mean absolute error of K, H = (k1 + k2)/2 and the angle of e1 (sign-free, skipping near-umbilic "
         f"points) from `core.metrics.summary`, over the same {s['evaluate'] or 'all'} random points of each cloud for "
         "every method, averaged over the seeds. Bold: the smallest in the row.",
