@@ -170,7 +170,7 @@ def _result(pts, kept, plan, *, stages, neighbours, repaired) -> CurvatureResult
         initial=None if normals_given else plan.initial, initial_k=init.k, noise=init.noise,
         crease_typical=marks.crease_typical, normals_repaired=repaired, jet_fraction=float(kc.on_jet.mean()),
     )
-    degree = np.where(kc.on_jet, JET_DEGREE, plan.options.get("degree", -1))
+    degree = np.where(kc.on_jet, JET_DEGREE if kc.jet_degree is None else kc.jet_degree, plan.options.get("degree", -1))
     return CurvatureResult(
         points=pts, normals=np.where(fit.valid[:, None], fit.normals, best.input_normals), k1=fit.k1, k2=fit.k2,
         e1=fit.e1, e2=fit.e2, valid=fit.valid, k_point=kc.k_point, degree_point=degree, outlier_score=marks.outlier_score,

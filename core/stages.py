@@ -148,13 +148,15 @@ class Scale(NamedTuple):
     """The choice of scale and model per point: ``k`` (N,) the neighbours NR fits on,
     ``k_point`` (N,) the size reported (the jet's where the jet is kept), ``on_jet`` (N,)
     where the cubic position jet is the result, ``quiet`` (N,) where the measured noise is
-    nil (NF rule or jet), ``jets`` the jets' frames (None without k="auto")."""
+    nil (NF rule or jet), ``jets`` the jets' frames (None without k="auto") and
+    ``jet_degree`` (N,) their polynomial degree where kept (-1 elsewhere)."""
 
     k: np.ndarray
     k_point: np.ndarray
     on_jet: np.ndarray
     quiet: np.ndarray
     jets: tuple | None = None
+    jet_degree: np.ndarray | None = None
 
 
 def choose_scale(pts, nrm, nb, inliers, plan, report, *, scores=None, k_initial=None) -> Scale:
@@ -171,10 +173,11 @@ def choose_scale(pts, nrm, nb, inliers, plan, report, *, scores=None, k_initial=
     ks = plan.candidates
     suspect = scores > JET_SCORE if plan.robust and scores is not None else np.zeros(n, dtype=bool)
     steady = inliers & ~suspect  # the jets are least squares: suspects sit out the choice of k
-    kc, on_jet, quiet, jets = scale.choose_model(pts, np.where(steady[:, None], nrm, np.nan), nb, steady, ks, report)
+    kc, on_jet, quiet, jets, degree = scale.choose_model(pts, np.where(steady[:, None], nrm, np.nan), nb, steady, ks,
+                                                         report)
     floor = ks[min(int(np.searchsorted(ks, k_initial or 0)), len(ks) - 1)]  # a candidate >= k_initial
     fit_k = np.maximum(kc, np.where(quiet, ks[0], floor))
-    return Scale(fit_k, np.where(on_jet, kc, fit_k), on_jet, quiet, jets)
+    return Scale(fit_k, np.where(on_jet, kc, fit_k), on_jet, quiet, jets, np.where(on_jet, degree, -1))
 
 
 def fit_all(pts, nrm, idx, kc, h, has_normal, *, method, options, report) -> Fit:

@@ -186,3 +186,112 @@ def _ici_point(f, ks, sigma2, rule, r, uvw, vecs, G, L, bounds, ref, acc):
         chosen = c
         vecs[5, :] = x
     return chosen
+
+
+# ----------------------------------------------------------------------------- the degree (issue 15)
+#: terms of the largest jet the degree rule fits (degree 5)
+P5 = 21
+
+
+@njit(**OPTS)
+def _fit_degree(uvw, k, degree, rcond, sigma2, mats, vecs, out):
+    """Jet of ``degree`` on the first k neighbours (offsets in ``uvw``): out = (f_uu, f_uv,
+    f_vv, their sd at noise sigma2, residual variance per degree of freedom); False if
+    rank deficient. The coefficients stay in vecs[2] (x), the first p of them used."""
+    p = (degree + 1) * (degree + 2) // 2
+    G, L = mats[0], mats[1]
+    row, b, x, d, tmp = vecs[0], vecs[1], vecs[2], vecs[3], vecs[5]
+    G[:p, :p] = 0.0
+    b[:p] = 0.0
+    ww, n = 0.0, 0
+    for j in range(k):
+        w = uvw[2, j]
+        if not math.isfinite(w):
+            continue
+        n += 1
+        poly_row(uvw[0, j], uvw[1, j], degree, row)
+        ww += w * w
+        for a in range(p):
+            b[a] += row[a] * w
+            for c in range(a + 1):
+                G[a, c] += row[a] * row[c]
+    if n <= p or not cholesky(G, p, rcond, d, L):
+        return False
+    chol_solve(L, d, p, b, x)
+    rss = ww
+    for a in range(p):
+        rss -= x[a] * b[a]
+    for t in range(3):  # (G^-1)_ii = |L^-1 e_i|^2 / d_i^2, L^-1 e_i zero above i: a short forward pass
+        i = 3 + t
+        var = 0.0
+        for a in range(i, p):
+            acc = 1.0 if a == i else 0.0
+            for c in range(i, a):
+                acc -= L[a, c] * tmp[c]
+            tmp[a] = acc / L[a, a]
+            var += tmp[a] * tmp[a]
+        out[3 + t] = (2.0 if t != 1 else 1.0) * math.sqrt(var * sigma2) / d[i]
+    out[0], out[1], out[2] = 2.0 * x[3], x[4], 2.0 * x[5]
+    out[6] = max(rss, 0.0) / (n - p)
+    return True
+
+
+@njit(**OPTS, parallel=True)
+def jet_degrees(f, degrees, kd, k3, sigma2, rule, chosen, coef):
+    """Per centre: the degree of its jet by intersection of confidence intervals.
+
+    Models, from the least biased down: degree ``degrees[m]`` on ``kd[m]`` neighbours,
+    then the cubic on ``k3[r]`` (the size :func:`jet_ici` chose). Walking down, a model is
+    taken while its Hessian's interval (``rule.gamma`` sd at the outside noise
+    ``sigma2[r]``) meets those of all the models before it; a higher-degree model must
+    also leave a residual variance per degree of freedom no larger than the cubic's (if
+    it fits its wider neighbourhood worse, that neighbourhood holds something no
+    polynomial of the point's patch describes: an edge, a fold, an outlier). ``chosen[r]``
+    gets the model index (len(degrees) for the cubic; -1: none), ``coef[r]`` its 6 terms
+    up to degree 2.
+    """
+    m = len(f.centres)
+    for blk in prange((m + BLOCK - 1) // BLOCK):
+        _degrees_block(f, degrees, kd, k3, sigma2, rule, chosen, coef, blk * BLOCK, min(m, (blk + 1) * BLOCK))
+
+
+@njit(**OPTS)
+def _degrees_block(f, degrees, kd, k3, sigma2, rule, chosen, coef, start, stop):
+    kmax = max(kd.max(), k3.max())
+    uvw = np.empty((3, kmax))
+    mats, vecs = np.empty((2, P5, P5)), np.empty((6, P5))
+    nm = len(degrees) + 1
+    fits, ok = np.empty((nm, 7)), np.empty(nm, dtype=np.bool_)
+    keep = np.empty((nm, 6))
+    for r in range(start, stop):
+        _offsets(f, r, 0, max(kd.max(), k3[r]), uvw)
+        for mi in range(nm):
+            deg, k = (degrees[mi], kd[mi]) if mi < nm - 1 else (3, k3[r])
+            ok[mi] = _fit_degree(uvw, k, deg, rule.rcond, sigma2[r], mats, vecs, fits[mi])
+            keep[mi, :] = vecs[2, :6]
+        chosen[r] = _walk_down(fits, ok, rule.gamma)
+        if chosen[r] >= 0:
+            coef[r, :] = keep[chosen[r]]
+        else:
+            coef[r, :] = math.nan
+
+
+@njit(**OPTS)
+def _walk_down(fits, ok, gamma):
+    """The last model of the walk (see :func:`jet_degrees`), -1 if none fits."""
+    nm = len(ok)
+    cubic_var = fits[nm - 1, 6] if ok[nm - 1] else math.inf
+    lo, hi = np.full(3, -math.inf), np.full(3, math.inf)
+    chosen = -1
+    for mi in range(nm):
+        if not ok[mi] or (mi < nm - 1 and fits[mi, 6] > cubic_var):
+            continue
+        meet = True
+        for t in range(3):
+            lo[t] = max(lo[t], fits[mi, t] - gamma * fits[mi, 3 + t])
+            hi[t] = min(hi[t], fits[mi, t] + gamma * fits[mi, 3 + t])
+            meet = meet and lo[t] <= hi[t]
+        if not meet and chosen >= 0:
+            break
+        chosen = mi
+    return chosen
