@@ -32,7 +32,7 @@ ORIENT_K = 10
 #: far from a torus was the only voter and set the sign of the whole torus.
 FAR_SHARE = 1.0
 #: an offset along a normal counts in the chord test only beyond this many times the
-#: pair's spread (RMS offset of their neighbours from their planes): below it, it is noise
+#: pair's spread (median offset of their neighbours from their planes): below it, it is noise
 GATE = 2.0
 #: edges are taken strongest first to within 1/SORT_LEVELS of evidence (ties below that
 #: make no measurable difference; a counting sort is 5x faster than argsort at 10^7 edges)
@@ -139,7 +139,7 @@ def _evidence(points, normals, graph, ok):
     packed = np.zeros((n, 8))  # one cache line per point for the random reads
     packed[:, :3] = points
     packed[:, 3:6] = normals
-    kern.plane_spread(points, normals, graph, ok, packed[:, 6])
+    kern.offset_spread(points, normals, graph, ok, packed[:, 6])
     ev = np.empty(graph.shape)
     first = np.empty(graph.shape, dtype=np.bool_)
     kern.sign_evidence(packed, graph, ok, GATE, ev, first)

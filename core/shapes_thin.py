@@ -4,13 +4,19 @@ Each sampler returns a :class:`core.shapes.Sample` whose size is set in units of
 sampling ``spacing`` (sqrt(area / n), stored in ``params["spacing"]``), because what makes
 a part "thin" is its thickness against the spacing, not in absolute units. Normals are
 the outward normals of the solid (k = +1/R on a convex part). ``params["parts"]``, where
-present, labels separate surfaces (their relative sign is a convention, not a fact).
+present, labels separate surfaces (their relative sign is a convention, not a fact);
+``params["faces"]`` labels the faces of one closed surface (their signs are facts).
+
+At a sharp edge (the plate's rim, the bowl's lip) the surface has no single normal but a
+cone of them, and an estimate there is a blend that may lie almost across the face's own
+normal: :func:`cone_normals` gives the outward side of that cone to judge orientation by.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from .neighbours import build_neighbours
 from .shapes import Sample, _ordered, _rng_n, _unit, torus
 
 
@@ -102,7 +108,7 @@ def thin_shell(n=20000, *, thickness_spacings=3.0, radius=1.0, seed=0):
     ea = _unit(np.cross(nrm, np.where(np.abs(nrm[:, :1]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]])))
     interior = (part != 2) & (pts[:, 2] < -2 * spacing)
     return _ordered(nrm, k, k, ea, np.cross(nrm, ea), pts, "thin_shell", interior, spacing=spacing,
-                    parts=part)
+                    faces=part)
 
 
 def range_scan(n=20000, *, radius=1.0, seed=0):
@@ -139,6 +145,16 @@ def orientation_agreement(normals, truth, parts=None):
         d = dots[parts == p]
         good += max(np.count_nonzero(d > 0), np.count_nonzero(d < 0))
     return good / len(dots)
+
+
+def cone_normals(sample, k=15):
+    """The true normals averaged over each point's ``k`` nearest sample points: the
+    outward direction of the normal cone at a sharp edge (the mean of the faces' normals
+    met there), the normal itself on a smooth part (up to O(spacing^2 k) on a curved one).
+    An oriented estimate on the right side faces it (dot > 0) even where its blended
+    normal is across the face's own one."""
+    idx = build_neighbours(sample.points, k).take(k)[0]
+    return _unit(sample.normals[idx].sum(axis=1))
 
 
 #: thin-part shape name -> sampler(n, *, seed)
