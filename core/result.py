@@ -8,6 +8,7 @@ import numpy as np
 
 from .anisotropy import anisotropy_of, striped
 from .border import border_of_valid
+from .point_types import point_types
 from .tuning import OUTLIER_SCORE
 
 
@@ -99,6 +100,11 @@ class CurvatureResult:
     def striped(self) -> np.ndarray:
         """Points sampled much more densely one way than the other (scan lines)."""
         return striped(self.anisotropy)
+
+    @property
+    def point_type(self) -> np.ndarray:
+        """Type code per point (:func:`core.point_types` with its defaults; -1 where invalid)."""
+        return point_types(self)
 
     def __len__(self) -> int:
         return len(self.points)
