@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .kernels import anisotropy as kern
 from .neighbours import build_neighbours
 
 #: neighbours per point (the point itself included) whose nearest-neighbour directions are
@@ -33,7 +34,6 @@ TIE = 0.2
 #: above (96 % for 3x at noise 0.2 spacing, 37 % for 1.2x); a square grid with 5 % jitter
 #: (near ties between its four nearest): 7 % above
 STRIPED = 0.8
-_CHUNK = 65_536
 
 
 def anisotropy(points, normals, idx):
@@ -43,25 +43,22 @@ def anisotropy(points, normals, idx):
     ----------
     points : (N, 3) float array.
     normals : (N, 3) unit normals (sign irrelevant); NaN rows give NaN.
-    idx : (N, K) int neighbour indices sorted by distance, the point first (K >= 3); the
+    idx : (N, K) int neighbour indices sorted by distance, the point first (K > NEAREST); the
         first :data:`ANISO_K` are pooled.
 
     Returns
     -------
     (N,) float array, NaN where there is no normal.
     """
-    pts = np.asarray(points, dtype=np.float64)
-    nrm = np.asarray(normals, dtype=np.float64)
+    pts = np.ascontiguousarray(points, dtype=np.float64)
+    nrm = np.ascontiguousarray(normals, dtype=np.float64)
     idx = np.asarray(idx)
     if idx.ndim != 2 or idx.shape[1] < NEAREST + 1:
         raise ValueError(f"idx must hold at least {NEAREST + 1} neighbours per point (the point first), "
                          f"got shape {idx.shape}")
     nearest = _nearest_directions(pts, idx)
-    graph = idx[:, :ANISO_K]
-    out = np.full(len(pts), np.nan)
-    for start in range(0, len(pts), _CHUNK):
-        rows = slice(start, min(len(pts), start + _CHUNK))
-        out[rows] = _chunk(nearest, nrm[rows], graph[rows])
+    out = np.empty(len(pts))
+    kern.direction_anisotropy(nearest, nrm, np.ascontiguousarray(idx[:, :ANISO_K]), out)
     return out
 
 
@@ -70,27 +67,9 @@ def _nearest_directions(pts, idx):
     scaled by the square root of its tie weight exp(-((d / d_1 - 1) / TIE)^2) (so that the
     tensor counts the weight once): on a square grid the four equally near neighbours
     count alike, on scan lines the across-line ones, farther, hardly count."""
-    off = pts[idx[:, 1:NEAREST + 1]] - pts[:, None, :]
-    d = np.linalg.norm(off, axis=2)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        w = np.exp(-(((d / d[:, :1]) - 1.0) / TIE) ** 2)
-        u = off / d[:, :, None]
-    return np.nan_to_num(u * np.sqrt(w)[:, :, None])  # duplicates: no direction, no vote
-
-
-def _chunk(nearest, nrm, graph):
-    """Anisotropy of one chunk: eigenvalues of the tangent-plane tensor of the pooled
-    nearest-neighbour directions."""
-    u = nearest[graph].reshape(len(graph), -1, 3)  # (m, K x NEAREST, 3)
-    u = u - np.einsum("ikj,ij->ik", u, np.nan_to_num(nrm))[:, :, None] * np.nan_to_num(nrm)[:, None, :]
-    t = np.einsum("ikj,ikl->ijl", u, u)  # 3x3, rank 2 (in the tangent plane)
-    # its two eigenvalues from the trace and the Frobenius norm: l_max - l_min = disc
-    trace = np.einsum("ijj->i", t)
-    disc = np.sqrt(np.maximum(2.0 * np.einsum("ijk,ijk->i", t, t) - trace**2, 0.0))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        a = 2.0 * disc / (trace + disc)  # 1 - l_min / l_max
-    a[~np.isfinite(nrm).all(axis=1) | ~(trace > 0)] = np.nan
-    return np.clip(a, 0.0, 1.0)
+    out = np.empty((len(pts), NEAREST, 3))
+    kern.nearest_directions(pts, np.ascontiguousarray(idx), TIE, out)
+    return out
 
 
 def striped(values):
