@@ -40,3 +40,12 @@ def test_measure_counts_border_and_file_normal_repairs():
     out = stability.measure(s.points, given, estimate_kw=dict(k=15, method="nf"))
     assert out["repaired"] == 10
     assert 0.02 < out["border"] < 0.5  # an open square: its rim, not its inside
+    assert out["striped"] < 0.01  # a random sampling
+
+
+def test_measure_reads_scan_lines_as_stripes():
+    from core import shapes_thin
+
+    s = shapes_thin.stripe_scan(3000, ratio=3.0)
+    out = stability.measure(s.points, estimate_kw=dict(k=15, method="nf"))
+    assert out["striped"] > 0.9
