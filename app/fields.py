@@ -10,6 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from core.anisotropy import STRIPED
+
 __all__ = ["FieldSpec", "FIELDS", "ALIASES", "resolve_field", "compute_fields", "robust_limits", "curvature_floor",
            "is_signed", "colormap_for", "Colouring", "colouring"]
 
@@ -32,7 +34,8 @@ class FieldSpec:
     (always there), "truth" (synthetic shapes only) or "reference" (needs reference normals:
     from the file or the shape). ``scale`` is "linear", "log" (sizes such as the chosen k)
     or "threshold": a diverging map centred on ``threshold`` over [0, 2 x threshold] (the
-    outlier score: inliers blue, the threshold white, outliers red).
+    outlier score: inliers blue, the threshold white, outliers red). ``span``, where set,
+    is the fixed range of a bounded field (the sampling anisotropy, [0, 1]).
     """
 
     name: str
@@ -42,6 +45,7 @@ class FieldSpec:
     unit: str = ""
     scale: str = "linear"
     threshold: float = 0.0
+    span: tuple | None = None
 
     @property
     def title(self) -> str:
@@ -59,6 +63,7 @@ FIELDS: dict[str, FieldSpec] = {
         FieldSpec("curvedness", "Curvedness", False),
         FieldSpec("k_point", "Neighbourhood size k", False, scale="log"),
         FieldSpec("outlier_score", "Outlier score", False, scale="threshold", threshold=4.0),
+        FieldSpec("anisotropy", f"Anisotropy (> {STRIPED:g}: stripes)", False, span=(0.0, 1.0)),
         FieldSpec("normal_dev", "Normal deviation", False, "reference", "deg"),
         FieldSpec("err_mean", "Error of H", False, "truth"),
         FieldSpec("err_gaussian", "Error of K", False, "truth"),
@@ -121,6 +126,7 @@ def compute_fields(result, *, reference_normals=None, sample=None) -> dict[str, 
         "curvedness": result.curvedness,
         "k_point": result.k_point,
         "outlier_score": result.outlier_score,
+        "anisotropy": result.anisotropy,
     }
     if reference_normals is not None:
         out["normal_dev"] = _angle_deg(result.normals, np.asarray(reference_normals, dtype=float))
@@ -218,6 +224,8 @@ def colouring(spec: FieldSpec, values: np.ndarray, *, clip: float = 2.0, floor: 
         return Colouring((lo, hi), cmap, log and lo > 0)
     if spec.scale == "threshold":
         return Colouring((0.0, 2.0 * spec.threshold), cmap)
+    if spec.span is not None:
+        return Colouring(spec.span, cmap)
     if log:
         positive = values[np.isfinite(values) & (values > 0)]
         if positive.size:

@@ -10,7 +10,8 @@ gap, a thin part or a crease it is the side of the chord each normal faces. Sign
 fixed along the maximum spanning forest of |evidence| (Kruskal with a parity
 union-find), then every component is turned outward by its points farthest from the
 cloud's centre (on a closed surface the point farthest from any centre has its normal
-pointing away from it). Each point's ``confidence`` is the evidence-weighted share of
+pointing away from it). A point that most of its evidence disagrees with is then flipped
+(a local majority, a few sweeps). Each point's ``confidence`` is the evidence-weighted share of
 its neighbours that agree with its final sign.
 """
 
@@ -32,11 +33,15 @@ ORIENT_K = 10
 #: far from a torus was the only voter and set the sign of the whole torus.
 FAR_SHARE = 1.0
 #: an offset along a normal counts in the chord test only beyond this many times the
-#: pair's spread (RMS offset of their neighbours from their planes): below it, it is noise
+#: pair's spread (median offset of their neighbours from their planes): below it, it is noise
 GATE = 2.0
 #: edges are taken strongest first to within 1/SORT_LEVELS of evidence (ties below that
 #: make no measurable difference; a counting sort is 5x faster than argsort at 10^7 edges)
 SORT_LEVELS = 4096
+#: local-majority sweeps after the spanning forest (:func:`_settle`). Measured on the thin
+#: shapes at noise 0.2 spacing (20k points, k = 15, seeds 0-2): +0.03-0.10 % of the points
+#: agree with the truth after 3 sweeps; later sweeps flip almost nothing
+SETTLE_SWEEPS = 3
 MODES = ("outward", "propagate", "keep")
 
 
@@ -89,7 +94,22 @@ def orient(points, normals, idx, mode="outward", *, ok=None) -> Orientation:
         _global_signs(pts, nrm * sign[:, None], labels, mode, sign)
     confidence = np.empty(n)
     kern.agreement(ev, graph, (sign < 0).astype(np.int8), ok, confidence)
+    if mode != "keep" and isinstance(mode, str):
+        _settle(ev, graph, ok, sign, confidence)
     return Orientation(nrm * sign[:, None], confidence, labels)
+
+
+def _settle(ev, graph, ok, sign, confidence):
+    """Flip (in ``sign``, updating ``confidence``) the points whose evidence-weighted
+    neighbours mostly disagree with them (confidence < 0.5), up to :data:`SETTLE_SWEEPS`
+    times: the spanning forest fixed each sign by one edge, and a point hung on a wrong
+    one (a noisy normal, a blended rim normal) is outvoted by the rest of its edges."""
+    for _ in range(SETTLE_SWEEPS):
+        outvoted = ok & (confidence < 0.5)
+        if not outvoted.any():
+            return
+        sign[outvoted] *= -1.0
+        kern.agreement(ev, graph, (sign < 0).astype(np.int8), ok, confidence)
 
 
 def orient_normals(points, normals, idx, mode, *, ok=None):
@@ -139,7 +159,7 @@ def _evidence(points, normals, graph, ok):
     packed = np.zeros((n, 8))  # one cache line per point for the random reads
     packed[:, :3] = points
     packed[:, 3:6] = normals
-    kern.plane_spread(points, normals, graph, ok, packed[:, 6])
+    kern.offset_spread(points, normals, graph, ok, packed[:, 6])
     ev = np.empty(graph.shape)
     first = np.empty(graph.shape, dtype=np.bool_)
     kern.sign_evidence(packed, graph, ok, GATE, ev, first)

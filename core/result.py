@@ -6,7 +6,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .anisotropy import anisotropy_of, striped
 from .border import border_of_valid
+from .point_types import point_types
 from .tuning import OUTLIER_SCORE
 
 
@@ -39,6 +41,10 @@ class CurvatureResult:
     orientation_confidence : (N,) float in [0, 1], the evidence-weighted share of a
         point's neighbours whose normal sign agrees with its own (1: all; 0 without a
         normal; see :mod:`core.orientation`).
+    anisotropy : (N,) float in [0, 1], the sampling anisotropy of :mod:`core.anisotropy`
+        (near 0 where nearest neighbours lie in every direction, near 1 along scan lines);
+        :attr:`striped` is ``anisotropy > 0.8``: H there may show the scan pattern. Computed
+        on first access.
     method, k, passes, params : what was run (``k`` is an int or "auto").
     neighbours : the :class:`core.Neighbours` used, to pass back for a fast re-estimate.
     """
@@ -61,6 +67,7 @@ class CurvatureResult:
     crease: np.ndarray = None
     orientation_confidence: np.ndarray = None
     _border: np.ndarray = field(default=None, repr=False)
+    _anisotropy: np.ndarray = field(default=None, repr=False)
 
     def __post_init__(self):
         n = len(self.points)
@@ -81,6 +88,23 @@ class CurvatureResult:
         if self._border is None:
             object.__setattr__(self, "_border", border_of_valid(self.points, self.normals, self.valid, self.neighbours))
         return self._border
+
+    @property
+    def anisotropy(self) -> np.ndarray:
+        """Sampling anisotropy per point (see the class docstring)."""
+        if self._anisotropy is None:
+            object.__setattr__(self, "_anisotropy", anisotropy_of(self.points, self.normals, self.neighbours))
+        return self._anisotropy
+
+    @property
+    def striped(self) -> np.ndarray:
+        """Points sampled much more densely one way than the other (scan lines)."""
+        return striped(self.anisotropy)
+
+    @property
+    def point_type(self) -> np.ndarray:
+        """Type code per point (:func:`core.point_types` with its defaults; -1 where invalid)."""
+        return point_types(self)
 
     def __len__(self) -> int:
         return len(self.points)
@@ -143,4 +167,5 @@ SCALAR_FIELDS = {
     "k_point": "k_point",
     "degree_point": "degree_point",
     "outlier_score": "outlier_score",
+    "anisotropy": "anisotropy",
 }

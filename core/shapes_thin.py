@@ -4,13 +4,19 @@ Each sampler returns a :class:`core.shapes.Sample` whose size is set in units of
 sampling ``spacing`` (sqrt(area / n), stored in ``params["spacing"]``), because what makes
 a part "thin" is its thickness against the spacing, not in absolute units. Normals are
 the outward normals of the solid (k = +1/R on a convex part). ``params["parts"]``, where
-present, labels separate surfaces (their relative sign is a convention, not a fact).
+present, labels separate surfaces (their relative sign is a convention, not a fact);
+``params["faces"]`` labels the faces of one closed surface (their signs are facts).
+
+At a sharp edge (the plate's rim, the bowl's lip) the surface has no single normal but a
+cone of them, and an estimate there is a blend that may lie almost across the face's own
+normal: :func:`cone_normals` gives the outward side of that cone to judge orientation by.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from .neighbours import build_neighbours
 from .shapes import Sample, _ordered, _rng_n, _unit, torus
 
 
@@ -102,7 +108,7 @@ def thin_shell(n=20000, *, thickness_spacings=3.0, radius=1.0, seed=0):
     ea = _unit(np.cross(nrm, np.where(np.abs(nrm[:, :1]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]])))
     interior = (part != 2) & (pts[:, 2] < -2 * spacing)
     return _ordered(nrm, k, k, ea, np.cross(nrm, ea), pts, "thin_shell", interior, spacing=spacing,
-                    parts=part)
+                    faces=part)
 
 
 def range_scan(n=20000, *, radius=1.0, seed=0):
@@ -127,6 +133,41 @@ def range_scan(n=20000, *, radius=1.0, seed=0):
                     spacing=pixel, radius=radius)
 
 
+def stripe_scan(n=20000, *, ratio=3.0, size=1.0, amplitude=0.1, seed=0):
+    """A line scanner's sample of a gently waved square: scan lines ``ratio`` times farther
+    apart than the samples along each line (``ratio=1``: a square grid), with 5 % jitter.
+    The surface z = amplitude sin(3x) cos(2y) is smooth: any stripe its estimate shows is
+    the sampling's. ``params["spacing"]`` is the along-line spacing.
+    """
+    _, rng = _rng_n(n, seed)
+    along = size * np.sqrt(1.0 / (n * ratio))
+    x, y = (a.ravel() for a in np.meshgrid(np.arange(0, size, along), np.arange(0, size, ratio * along)))
+    x = x + rng.normal(scale=0.05 * along, size=x.shape)
+    y = y + rng.normal(scale=0.05 * along, size=y.shape)
+    pts, nrm, k, e = _monge(x, y, amplitude)
+    edge = np.minimum(np.minimum(x, size - x), np.minimum(y, size - y))
+    return _ordered(nrm, k[:, 0], k[:, 1], e[:, 0], e[:, 1], pts, "stripe_scan", edge > 3 * ratio * along,
+                    spacing=along, ratio=ratio)
+
+
+def _monge(x, y, a):
+    """z = a sin(3x) cos(2y): points, upward normals, principal curvatures (N, 2) and
+    directions (N, 2, 3) from the fundamental forms (k = -eigenvalues of I^-1 II with n up,
+    so that a cap under an upward normal has k > 0, as a sphere's outside)."""
+    s3, c3, s2, c2 = np.sin(3 * x), np.cos(3 * x), np.sin(2 * y), np.cos(2 * y)
+    fx, fy = 3 * a * c3 * c2, -2 * a * s3 * s2
+    fxx, fxy, fyy = -9 * a * s3 * c2, -6 * a * c3 * s2, -4 * a * s3 * c2
+    w = np.sqrt(1 + fx**2 + fy**2)
+    first = np.stack([np.stack([1 + fx**2, fx * fy], -1), np.stack([fx * fy, 1 + fy**2], -1)], -2)
+    second = np.stack([np.stack([fxx, fxy], -1), np.stack([fxy, fyy], -1)], -2) / w[:, None, None]
+    lam, vec = np.linalg.eig(np.linalg.solve(first, second))
+    lam, vec = lam.real, vec.real
+    tangents = np.stack([np.column_stack([np.ones_like(x), 0 * x, fx]), np.column_stack([0 * x, np.ones_like(x), fy])], 1)
+    e = _unit(np.einsum("nij,nik->njk", vec, tangents).reshape(-1, 3)).reshape(-1, 2, 3)
+    nrm = np.column_stack([-fx, -fy, np.ones_like(x)]) / w[:, None]
+    return np.column_stack([x, y, a * s3 * c2]), nrm, -lam, e
+
+
 def orientation_agreement(normals, truth, parts=None):
     """Fraction of rows whose normal points the same way as ``truth`` (NaN rows count as
     wrong). With ``parts``, each part may be flipped as a whole (its sign is a convention).
@@ -139,6 +180,16 @@ def orientation_agreement(normals, truth, parts=None):
         d = dots[parts == p]
         good += max(np.count_nonzero(d > 0), np.count_nonzero(d < 0))
     return good / len(dots)
+
+
+def cone_normals(sample, k=15):
+    """The true normals averaged over each point's ``k`` nearest sample points: the
+    outward direction of the normal cone at a sharp edge (the mean of the faces' normals
+    met there), the normal itself on a smooth part (up to O(spacing^2 k) on a curved one).
+    An oriented estimate on the right side faces it (dot > 0) even where its blended
+    normal is across the face's own one."""
+    idx = build_neighbours(sample.points, k).take(k)[0]
+    return _unit(sample.normals[idx].sum(axis=1))
 
 
 #: thin-part shape name -> sampler(n, *, seed)

@@ -9,9 +9,9 @@ whose message names the file.
 from .cloud import Cloud, CloudFileError
 from .formats import READ_FORMATS, WRITE_FORMATS
 from .read import describe, read_cloud
-from .write import RESULT_FIELDS, write_cloud, write_result
+from .write import RESULT_FIELDS, RESULT_FLAGS, write_cloud, write_result
 
 __all__ = [
-    "Cloud", "CloudFileError", "READ_FORMATS", "WRITE_FORMATS", "RESULT_FIELDS",
+    "Cloud", "CloudFileError", "READ_FORMATS", "WRITE_FORMATS", "RESULT_FIELDS", "RESULT_FLAGS",
     "read_cloud", "write_cloud", "write_result", "describe",
 ]

@@ -20,10 +20,14 @@ from .cloud import CloudFileError, find_normals
 
 #: points per chunk read or written (about 30 MB of float64 coordinates)
 CHUNK = 1_000_000
-#: result dimensions in file order; all float64 except ``valid`` (uint8) and ``k`` (int32)
+#: result dimensions in file order (the flags named as :data:`core.io.write.RESULT_FLAGS`);
+#: float64 except the flags' types in _TYPES
 RESULT_DIMS = ("nx", "ny", "nz", "k1", "k2", "e1_x", "e1_y", "e1_z", "e2_x", "e2_y", "e2_z",
-               "gaussian", "mean", "valid", "k")
-_TYPES = {"valid": np.uint8, "k": np.int32}
+               "gaussian", "mean", "valid", "k", "degree", "border", "orientation_confidence", "outlier",
+               "outlier_score", "crease", "anisotropy", "striped")
+_TYPES = {"valid": np.uint8, "k": np.int32, "degree": np.int8, "border": np.uint8, "outlier": np.uint8,
+          "crease": np.uint8, "striped": np.uint8, "orientation_confidence": np.float32,
+          "outlier_score": np.float32, "anisotropy": np.float32}
 
 
 @dataclass(frozen=True)

@@ -29,6 +29,14 @@ _RESERVED = ("x", "y", "z", "nx", "ny", "nz")
 _NAME = re.compile(r'^[^\s,;"#]+$')
 #: the per-point attributes of a curvature result written by :func:`write_result`, in order
 RESULT_FIELDS = ("k1", "k2", "e1", "e2", "gaussian", "mean", "valid")
+#: the per-point flags written after them, where the result has them: name in the file ->
+#: attribute (the neighbourhood size and model degree chosen, the border of the sampled
+#: surface, the orientation's confidence, outliers, creases, the sampling anisotropy and
+#: its stripe flag, the point type code of :data:`core.TYPE_NAMES`, -1 where invalid)
+RESULT_FLAGS = {"k": "k_point", "degree": "degree_point", "border": "border",
+                "orientation_confidence": "orientation_confidence", "outlier": "outlier",
+                "outlier_score": "outlier_score", "crease": "crease", "anisotropy": "anisotropy",
+                "striped": "striped", "point_type": "point_type"}
 
 
 def write_cloud(path: str | os.PathLike | BinaryIO, points: ArrayLike, *, normals: ArrayLike | None = None,
@@ -80,17 +88,21 @@ def write_cloud(path: str | os.PathLike | BinaryIO, points: ArrayLike, *, normal
 
 
 def write_result(path: str | os.PathLike | BinaryIO, result, *, format: str | None = None) -> pathlib.Path | BinaryIO:
-    """Write a curvature result: x y z nx ny nz k1 k2 e1_x e1_y e1_z e2_x e2_y e2_z gaussian mean valid.
+    """Write a curvature result: x y z nx ny nz k1 k2 e1_x e1_y e1_z e2_x e2_y e2_z gaussian mean valid,
+    then its flags (:data:`RESULT_FLAGS`: k degree border orientation_confidence outlier
+    outlier_score crease anisotropy striped point_type; booleans as 0/1).
 
     ``result`` is anything with the attributes ``points``, ``normals`` and
-    :data:`RESULT_FIELDS` (e.g. :class:`core.CurvatureResult`); see :func:`write_cloud`
-    for ``path`` and ``format``.
+    :data:`RESULT_FIELDS` (e.g. :class:`core.CurvatureResult`); of the flags, those it has
+    are written. See :func:`write_cloud` for ``path`` and ``format``.
     """
     missing = [name for name in ("points", "normals", *RESULT_FIELDS) if not hasattr(result, name)]
     if missing:
         raise TypeError(f"result must have attributes points, normals, {', '.join(RESULT_FIELDS)}; "
                         f"{type(result).__name__} lacks {', '.join(missing)}")
     fields = {name: getattr(result, name) for name in RESULT_FIELDS}
+    fields.update({name: getattr(result, attr) for name, attr in RESULT_FLAGS.items()
+                   if getattr(result, attr, None) is not None})
     return write_cloud(path, result.points, normals=result.normals, fields=fields, format=format)
 
 

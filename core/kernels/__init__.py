@@ -6,7 +6,8 @@ per algorithm.
   squares) and :mod:`.robust` (IRLS weights, median);
 - :mod:`.scale` the per-point choice of k (ICI) and the fold test that bounds it;
 - :mod:`.sign_evidence` the signed chord evidence and Kruskal signs of :mod:`core.orientation`;
-  :mod:`.border` the angular-gap border test; :mod:`.outliers` scores;
+  :mod:`.border` the angular-gap border test; :mod:`.outliers` scores; :mod:`.anisotropy` the
+  sampling anisotropy of :mod:`core.anisotropy`;
 - :mod:`.algebra` small dense linear algebra shared by them.
 
 Each kernel is a plain loop over points doing what its docstring's numpy reference says;

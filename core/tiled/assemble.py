@@ -14,10 +14,13 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from ..anisotropy import striped
 from ..io import write_result
 from ..io.atomic import atomic_write
 from ..io.cloud import CloudFileError
 from ..io.las_stream import CHUNK, LasResultWriter, quantisation
+from ..tuning import OUTLIER_SCORE
+from .task import ROW_DTYPE, ROW_FLAGS
 
 _LAS = (".las", ".laz")
 #: largest result assembled in memory for PLY/text output (~250 bytes a point)
@@ -45,8 +48,10 @@ def assemble(store, n_tiles: int, n_points: int, signs, output, source) -> pathl
     normals = np.stack([c["nx"], c["ny"], c["nz"]], axis=1)
     e1 = np.stack([c["e1_x"], c["e1_y"], c["e1_z"]], axis=1)
     e2 = np.stack([c["e2_x"], c["e2_y"], c["e2_z"]], axis=1)
+    flags = {attr: c[name] for name, attr in ROW_FLAGS.items()}
+    flags.update(k_point=c["k"], outlier=c["outlier"].astype(bool), striped=c["striped"].astype(bool))
     res = SimpleNamespace(points=c["xyz"], normals=normals, k1=c["k1"], k2=c["k2"], e1=e1, e2=e2,
-                          gaussian=c["gaussian"], mean=c["mean"], valid=c["valid"].astype(bool))
+                          gaussian=c["gaussian"], mean=c["mean"], valid=c["valid"].astype(bool), **flags)
     return write_result(output, res)
 
 
@@ -55,7 +60,7 @@ def _gather(store, n_tiles, signs, start, stop) -> dict:
     m = stop - start
     out = {"xyz": np.empty((m, 3)), "n": np.empty((m, 3)), "k1": np.empty(m), "k2": np.empty(m),
            "e1": np.empty((m, 3)), "e2": np.empty((m, 3)), "valid": np.zeros(m, np.uint8),
-           "k": np.zeros(m, np.int32)}
+           "k": np.zeros(m, np.int32), **{name: np.zeros(m, ROW_DTYPE[name]) for name in ROW_FLAGS}}
     filled = 0
     for t in range(n_tiles):
         rows = store.load_result(t)
@@ -75,12 +80,17 @@ def _gather(store, n_tiles, signs, start, stop) -> dict:
         out["e1"][at] = np.where(flip[:, None], part["e2"], part["e1"])  # ... and e1 <-> e2
         out["e2"][at] = np.where(flip[:, None], part["e1"], part["e2"])
         out["valid"][at], out["k"][at] = part["valid"], part["k"]
+        for name in ROW_FLAGS:
+            out[name][at] = part[name]
         filled += len(part)
     if filled != m:
         raise ValueError(f"tile results cover {filled} of input rows {start}..{stop - 1}; the work directory "
                          f"{store.root} is inconsistent: delete it and run again")
     cols = {"xyz": out["xyz"], "k1": out["k1"], "k2": out["k2"], "valid": out["valid"], "k": out["k"],
-            "gaussian": out["k1"] * out["k2"], "mean": 0.5 * (out["k1"] + out["k2"])}
+            "gaussian": out["k1"] * out["k2"], "mean": 0.5 * (out["k1"] + out["k2"]),
+            **{name: out[name] for name in ROW_FLAGS},
+            "outlier": (np.nan_to_num(out["outlier_score"]) > OUTLIER_SCORE).astype(np.uint8),
+            "striped": striped(out["anisotropy"]).astype(np.uint8)}
     for name, arr in (("n", out["n"]), ("e1", out["e1"]), ("e2", out["e2"])):
         for j, c in enumerate("xyz"):
             cols[f"{name}{c}" if name == "n" else f"{name}_{c}"] = arr[:, j]

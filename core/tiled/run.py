@@ -32,7 +32,7 @@ HALO_ALLOWANCE = 1.5
 #: kernels, Dask (measured 210 MB after a first estimate), with room to spare
 RUNTIME_BYTES = 300_000_000
 DEFAULT_MEMORY = "1.5GB"
-_VERSION = 2  # bumped when the work directory's layout changes: old ones are cleared
+_VERSION = 3  # bumped when the work directory's layout changes: old ones are cleared
 
 
 @dataclass(frozen=True)

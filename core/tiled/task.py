@@ -24,7 +24,15 @@ from .store import TileStore
 MAX_GROWTHS = 12
 
 ROW_DTYPE = np.dtype([("index", "<i8"), ("xyz", "<f8", 3), ("n", "<f8", 3), ("k1", "<f8"), ("k2", "<f8"),
-                      ("e1", "<f8", 3), ("e2", "<f8", 3), ("valid", "u1"), ("k", "<i4"), ("comp", "<i4")])
+                      ("e1", "<f8", 3), ("e2", "<f8", 3), ("valid", "u1"), ("k", "<i4"), ("comp", "<i4"),
+                      ("degree", "i1"), ("border", "u1"), ("orientation_confidence", "<f4"),
+                      ("outlier_score", "<f4"), ("crease", "u1"), ("anisotropy", "<f4")])
+#: the result's per-point flags a tile keeps (row field -> CurvatureResult attribute); the border
+#: and the anisotropy are judged on the tile's points and its halo (>= 2 k-th-neighbour
+#: distances wide: the border's 30 neighbours reach ~1.4, the anisotropy's 15 + 4 nearest
+#: lie within the exact rings)
+ROW_FLAGS = {"degree": "degree_point", "border": "border", "orientation_confidence": "orientation_confidence",
+             "outlier_score": "outlier_score", "crease": "crease", "anisotropy": "anisotropy"}
 #: a halo point near the tile: how this tile orients it (for sign agreement with its owner)
 LINK_DTYPE = np.dtype([("index", "<i8"), ("owner", "<i4"), ("comp", "<i4"), ("n", "<f8", 3)])
 #: one connected part of the tile's own points: what the final orientation needs
@@ -121,6 +129,8 @@ def _rows(rec, res, comp, own) -> np.ndarray:
     rows["index"], rows["xyz"], rows["n"] = rec["index"][own], rec["xyz"][own], res.normals[own]
     rows["k1"], rows["k2"], rows["e1"], rows["e2"] = res.k1[own], res.k2[own], res.e1[own], res.e2[own]
     rows["valid"], rows["k"], rows["comp"] = res.valid[own], res.k_point[own], comp[own]
+    for field, attr in ROW_FLAGS.items():
+        rows[field] = getattr(res, attr)[own]
     return rows
 
 

@@ -134,7 +134,8 @@ def test_laz_in_laz_out_on_a_local_dask_cluster(tmp_path):
     las = laspy.read(tmp_path / "out.laz")
     assert list(las.point_format.extra_dimension_names) == [
         "nx", "ny", "nz", "k1", "k2", "e1_x", "e1_y", "e1_z", "e2_x", "e2_y", "e2_z", "gaussian", "mean",
-        "valid", "k"]
+        "valid", "k", "degree", "border", "orientation_confidence", "outlier", "outlier_score", "crease",
+        "anisotropy", "striped"]
     np.testing.assert_array_equal(np.asarray(las.xyz), pts)
     np.testing.assert_array_equal(np.asarray(las.k), 15)
     diff, agree = _compare(tmp_path / "out.laz", mem)
