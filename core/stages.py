@@ -231,7 +231,7 @@ def refine(pts, initial: Initial, outlier, nb, sc: Scale, plan, report) -> Refin
     the jet is the result (and its normal the neighbours' input); passes run only if NR
     fits at least PASS_MIN_SHARE of the points with noise (the pass rule judges by mean
     turns, meaningless on a handful of points)."""
-    rule = PassRule(plan, few_fits(initial.has_normal, sc, plan))
+    rule = PassRule(plan, few_fits(float((initial.has_normal & ~sc.quiet).mean()), plan))
     best = None
     for p, fit, nrm in fit_passes(pts, initial, outlier, nb, sc, plan, report, rule.n_fits):
         change = _mean_angle_deg(fit.normals, nrm, fit.valid) if rule.measures else None
@@ -264,9 +264,10 @@ class PassRule:
         return True, more
 
 
-def few_fits(has_normal, sc: Scale, plan) -> bool:
-    """Whether NR fits too few points with noise for refinement passes (PASS_MIN_SHARE)."""
-    return bool(plan.auto and (has_normal & ~sc.quiet).mean() < PASS_MIN_SHARE)
+def few_fits(share: float, plan) -> bool:
+    """Whether NR fits too few points with noise for refinement passes: ``share`` of all
+    points have a normal and noise (not ``Scale.quiet``), below PASS_MIN_SHARE."""
+    return bool(plan.auto and share < PASS_MIN_SHARE)
 
 
 def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, n_fits):
@@ -320,8 +321,14 @@ def _drop_outliers(best: Refined, outlier) -> Refined:
 def _mean_angle_deg(a, b, mask):
     if not mask.any():
         return 0.0
+    return float(turn_angles(a, b, mask).mean())
+
+
+def turn_angles(a, b, mask) -> np.ndarray:
+    """Angles (degrees, sign-blind) between unit rows of ``a`` and ``b`` where ``mask``:
+    their mean over the cloud is a pass's change (:class:`PassRule`)."""
     cos = np.abs(np.einsum("ij,ij->i", a[mask], b[mask]))
-    return float(np.degrees(np.arccos(np.clip(cos, 0.0, 1.0))).mean())
+    return np.degrees(np.arccos(np.clip(cos, 0.0, 1.0)))
 
 
 def flags(fit: Fit, scores, plan, reference: Fit | None, *, nb=None, confidence=None) -> Flags:
