@@ -18,7 +18,7 @@ from .task import run_tile
 
 
 def run_tasks(root, tiles, sizes, spec, *, client=None, scheduler=None, workers=None, memory=None,
-              label="input", progress=None, fn=run_tile, stage="tiles") -> list:
+              label="input", progress=None, fn=None, stage="tiles") -> list:
     """Run ``fn(root, tile, spec)`` (default :func:`run_tile`) for every tile id in
     ``tiles``; returns their summaries. ``stage`` names the round in the progress.
 
@@ -27,6 +27,7 @@ def run_tasks(root, tiles, sizes, spec, *, client=None, scheduler=None, workers=
     ``label`` (the input file) and the tile.
     """
     tiles = list(tiles)
+    fn = fn or run_tile
     if not tiles:
         return []
     clock = _Clock(sum(sizes[t] for t in tiles), progress, stage)

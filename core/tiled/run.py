@@ -20,7 +20,7 @@ from .source import open_source
 from .store import TileStore, directory_for
 from . import wholecloud
 from .auto import PassView, kept_pass, run_auto_tile
-from .task import TileSpec, auto_plan, run_tile
+from .task import TileSpec, auto_plan
 
 #: memory of an in-memory estimate per point at integer k: ~250 bytes of arrays per point
 #: plus the cached neighbours (int32 index + float64 distance = 12 bytes per neighbour,
@@ -196,7 +196,7 @@ def _estimate(store, plan, sizes, spec, tasks, report):
         fixed = wholecloud.reduce(store, plan.n_tiles, auto_plan(spec), "before")
         spec = dataclasses.replace(spec, fixed=tuple(sorted(fixed.items())))
     todo = [t for t in range(plan.n_tiles) if not store.finished(t)]
-    engine.run_tasks(store.root, todo, sizes, spec, fn=run_auto_tile if auto else run_tile,
+    engine.run_tasks(store.root, todo, sizes, spec, fn=run_auto_tile if auto else None,
                      progress=report.sub(0.1 if auto else 0.0, 1.0), **tasks)
     params = {"todo": len(todo)}
     if not auto:
@@ -211,29 +211,37 @@ def _spec(k, method, passes, orientation, options, normals_given, in_process, vi
     """The tile parameters (validated as :func:`core.estimate` does) and the sign rule."""
     m = get_method(method)
     opts = check_options(m, options)
-    if isinstance(k, str) and k == "auto":  # checked further by auto_plan, once the cloud's size is known
-        passes = None if passes is None else check_int(passes, name="passes", low=0, high=MAX_PASSES)
-    else:
-        if isinstance(k, str):
-            raise ValueError(f'k must be an integer or "auto", got {k!r}')
-        k = check_int(k, name="k", low=m.min_k_for(opts), high=10**6)
-        passes = m.default_passes if passes is None else check_int(passes, name="passes", low=0, high=MAX_PASSES)
+    k, passes = _k_passes(k, passes, m, opts)
+    tile_orient, rule = _orientation(orientation, normals_given, views)
+    spec = TileSpec(k=k, method=m.name, passes=passes, orientation=tile_orient, options=options or {},
+                    normals_given=normals_given,
+                    threads=numba.config.NUMBA_NUM_THREADS if in_process else 1)
+    return spec, rule
+
+
+def _k_passes(k, passes, m, opts):
+    """k ("auto", checked further by :func:`auto_plan` once the cloud's size is known, or
+    an integer) and the passes (None: the default of k="auto" or of the method)."""
+    if isinstance(k, str) and k == "auto":
+        return k, None if passes is None else check_int(passes, name="passes", low=0, high=MAX_PASSES)
+    if isinstance(k, str):
+        raise ValueError(f'k must be an integer or "auto", got {k!r}')
+    k = check_int(k, name="k", low=m.min_k_for(opts), high=10**6)
+    return k, m.default_passes if passes is None else check_int(passes, name="passes", low=0, high=MAX_PASSES)
+
+
+def _orientation(orientation, normals_given, views):
+    """(how each tile orients, how the tiles' signs are then fixed: none/outward/propagate)."""
     if isinstance(orientation, str):
         if orientation not in ("auto", "propagate", "outward", "keep"):
             raise ValueError(f"orientation {orientation!r} is invalid; must be one of ['auto', 'propagate', "
                              "'outward', 'keep'] or a (3,) viewpoint")
         if orientation == "keep" or (orientation == "auto" and normals_given):
-            tile_orient, rule = "keep", "none"
-        elif orientation == "auto" and views:  # each normal faces the scanner that saw its point
-            tile_orient, rule = "scanner", "none"
-        else:
-            tile_orient, rule = "propagate", "outward" if orientation in ("auto", "outward") else "propagate"
-    else:
-        view = np.asarray(orientation, dtype=float)
-        if view.shape != (3,) or not np.isfinite(view).all():
-            raise ValueError(f"orientation as a viewpoint must be 3 finite numbers, got {orientation!r}")
-        tile_orient, rule = tuple(float(v) for v in view), "none"
-    spec = TileSpec(k=k, method=m.name, passes=passes, orientation=tile_orient, options=options or {},
-                    normals_given=normals_given,
-                    threads=numba.config.NUMBA_NUM_THREADS if in_process else 1)
-    return spec, rule
+            return "keep", "none"
+        if orientation == "auto" and views:  # each normal faces the scanner that saw its point
+            return "scanner", "none"
+        return "propagate", "outward" if orientation in ("auto", "outward") else "propagate"
+    view = np.asarray(orientation, dtype=float)
+    if view.shape != (3,) or not np.isfinite(view).all():
+        raise ValueError(f"orientation as a viewpoint must be 3 finite numbers, got {orientation!r}")
+    return tuple(float(v) for v in view), "none"

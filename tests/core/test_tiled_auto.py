@@ -31,7 +31,7 @@ def _same(path, mem):
 
 @pytest.fixture
 def small_candidates(monkeypatch):
-    """Candidates (20, 28) and jets (15, 20, 28) for 8000 points, as a cloud of 2 million
+    """Candidates (20, 28) and jets (15, 20, 28) for 4000-8000 points, as a cloud of 2 million
     gets them (core.scale.candidates): a short chain, so 16 tiles need only small halos."""
     monkeypatch.setattr(scale, "NEIGHBOUR_BUDGET", 240_000)
 
@@ -44,16 +44,22 @@ def _noisy_torus(n=8000):
 
 
 def test_auto_in_16_tiles_is_the_in_memory_estimate(tmp_path, small_candidates):
-    pts = _noisy_torus()
+    pts = _noisy_torus(6000)
     mem = core.estimate(pts, passes=2)
     assert mem.params["passes_run"] >= 1 and len(np.unique(mem.k_point)) > 1
-    run = estimate_tiled(pts, tmp_path / "out.ply", tile_points=500, workers=0, passes=2,
+    run = estimate_tiled(pts, tmp_path / "out.ply", tile_points=375, workers=0, passes=2,
                          workdir=tmp_path / "work", keep_workdir=True)
     assert run.n_tiles >= 16
     _same(tmp_path / "out.ply", mem)
     kept = auto.PassView(tmp_path / "work", run.params["passes_run"])
     rows = np.concatenate([kept.load_result(t) for t in range(run.n_tiles)])
     np.testing.assert_array_equal(rows["k"][np.argsort(rows["index"])], mem.k_point)  # the same k per point
+    ref = (tmp_path / "out.ply").read_bytes()  # a tile killed before its marker: redone, the same file
+    (tmp_path / "work" / "results" / "tile_000003.done").unlink()
+    kept.result_path(3).write_bytes(b"garbage")
+    rerun = estimate_tiled(pts, tmp_path / "out.ply", tile_points=375, workers=0, passes=2, workdir=tmp_path / "work")
+    assert rerun.tiles_skipped == run.n_tiles - 1 and rerun.params == run.params
+    assert (tmp_path / "out.ply").read_bytes() == ref
     for name in ("noise", "crease_typical", "passes_run"):  # the whole cloud's, exactly
         assert run.params[name] == mem.params[name]
 
@@ -65,10 +71,10 @@ def test_the_candidates_come_from_the_whole_cloud(small_candidates):
 
 
 def test_a_noise_free_cloud_keeps_the_jets_and_one_fit(tmp_path, small_candidates):
-    pts = shapes.ellipsoid(6000, seed=2).points  # quiet: the jets are the result, no refinement pass
+    pts = shapes.ellipsoid(4000, seed=2).points  # quiet: the jets are the result, no refinement pass
     mem = core.estimate(pts)
     assert mem.params["passes_run"] == 0 and mem.params["jet_fraction"] > 0.5
-    run = estimate_tiled(pts, tmp_path / "out.ply", tile_points=370, workers=0)
+    run = estimate_tiled(pts, tmp_path / "out.ply", tile_points=250, workers=0)
     assert run.n_tiles >= 16 and run.params["passes_run"] == 0
     _same(tmp_path / "out.ply", mem)
 
@@ -77,12 +83,12 @@ def test_a_noise_free_cloud_keeps_the_jets_and_one_fit(tmp_path, small_candidate
 def test_the_derived_auto_chain_is_needed_and_enough(tmp_path, monkeypatch, small_candidates, cut, exact):
     """With no head start (a zero first margin) the halo is only what the chain demands:
     the derived chain reproduces memory; one ring fewer at each level does not."""
-    pts = _noisy_torus(6000)
+    pts = _noisy_torus(4000)
     mem = core.estimate(pts, passes=1)
     monkeypatch.setattr(task, "first_margin", lambda *args: 0.0)
     derived = halo.auto_chain
     monkeypatch.setattr(auto, "auto_chain", lambda *a: tuple((r - cut, k) for r, k in derived(*a)))
-    estimate_tiled(pts, tmp_path / "out.ply", tile_points=370, workers=0, passes=1)
+    estimate_tiled(pts, tmp_path / "out.ply", tile_points=250, workers=0, passes=1)
     if exact:
         _same(tmp_path / "out.ply", mem)
     else:
