@@ -5,7 +5,8 @@ the fit at p uses the normals of its k neighbours; in an NR pass those are thems
 fits over *their* neighbours; the first fit uses the PCA normals (eqs. 13-14) of points
 one ring further, and each PCA normal needs that point's own k nearest neighbours. So
 with ``passes`` refinement passes the points up to ``passes + 1`` kNN rings away from the
-tile must see exactly their global k nearest neighbours (:func:`chain_rings`).
+tile must see exactly their global k nearest neighbours (:func:`chain_rings`). With
+k="auto" the chain is longer and has two widths (:func:`auto_chain`).
 
 A point's neighbours within the loaded box are its global ones when its k-th neighbour
 is closer than the box's boundary (every point beyond the boundary is farther). The box
