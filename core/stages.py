@@ -233,7 +233,7 @@ def refine(pts, initial: Initial, outlier, nb, sc: Scale, plan, report) -> Refin
     turns, meaningless on a handful of points)."""
     rule = PassRule(plan, few_fits(float((initial.has_normal & ~sc.quiet).mean()), plan))
     best = None
-    for p, fit, nrm in fit_passes(pts, initial, outlier, nb, sc, plan, report, rule.n_fits):
+    for p, fit, nrm in fit_passes(pts, initial, outlier, nb, sc, plan, report, n_fits=rule.n_fits):
         change = _mean_angle_deg(fit.normals, nrm, fit.valid) if rule.measures else None
         keep, more = rule.step(p, change)
         if keep:
@@ -270,9 +270,11 @@ def few_fits(share: float, plan) -> bool:
     return bool(plan.auto and share < PASS_MIN_SHARE)
 
 
-def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, n_fits):
+def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n_fits, fitted=None):
     """Yield ``(p, fit, input normals)`` for the first fit and each refinement pass, up to
-    ``n_fits`` (the caller stops when it has enough); fits are never changed afterwards."""
+    ``n_fits`` (the caller stops when it has enough); fits are never changed afterwards.
+    ``fitted[p]`` (N,) bool, optional: fit only those points in fit p (a tile fits each pass
+    only as far out as later passes use it; the others keep their input normals)."""
     kc = sc.k
     idx, dist = nb.take(int(kc.max()))
     h = dist[np.arange(len(pts)), kc - 1]
@@ -281,7 +283,8 @@ def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, n_fi
         nrm = np.where(sc.on_jet[:, None], sc.jets[0], nrm)
     opts = dict(plan.options)
     for p in range(n_fits):
-        fit = fit_all(pts, nrm, idx, kc, h, has_normal & ~sc.on_jet, method=plan.method, options=opts,
+        centres = has_normal & ~sc.on_jet if fitted is None else has_normal & ~sc.on_jet & fitted[p]
+        fit = fit_all(pts, nrm, idx, kc, h, centres, method=plan.method, options=opts,
                       report=report.sub(p / n_fits, (p + 1) / n_fits))
         yield p, fit, nrm
         new = np.where(fit.valid[:, None], fit.normals, nrm)

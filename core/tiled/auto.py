@@ -22,7 +22,7 @@ from ..estimate import prepare
 from ..planning import EstimatePlan
 from ..stages import PassRule, Refined, few_fits, finish, fit_passes, turn_angles
 from .._progress import Progress
-from .halo import auto_chain
+from .halo import auto_chain, rings_from
 from .plan import TilePlan
 from .store import TileStore
 from .task import auto_plan, LINK_DTYPE, NODE_DTYPE, ROW_DTYPE, _components, _face_viewpoints, _nodes, _rows, load_with_halo
@@ -47,8 +47,9 @@ def run_auto_tile(root, tile: int, spec) -> dict:
     front = prepare(pts, normals, tplan, nb, Progress(None))
     own = owner == tile
     outputs, stats = [], np.zeros((tplan.passes + 2, 2))  # per pass: sum of turns, count; then the noisy points
+    reach = [rings_from(own, nb.indices, tplan.passes - p) for p in range(tplan.passes + 1)]  # what uses fit p
     for p, fit, nrm in fit_passes(pts, front.init, front.outlier, nb, front.scale, tplan, Progress(None),
-                                  tplan.passes + 1):
+                                  n_fits=tplan.passes + 1, fitted=reach):
         mine = fit.valid & own
         stats[p] = math.fsum(turn_angles(fit.normals, nrm, mine)), int(mine.sum())
         kept = finish(Refined(fit, nrm, p), front.scale, front.outlier, tplan).fit

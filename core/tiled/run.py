@@ -100,6 +100,15 @@ def _prepare(source, normals, k, *, method, passes, orientation, options, tile_p
     return src, spec, rule, budget, tile_points
 
 
+def _auto_rules(spec):
+    """What else k="auto"'s tiles depend on (the candidates, the options it resolved): a
+    work directory left by other rules (another version of the library) is not resumed."""
+    if spec.k != "auto":
+        return None
+    plan = auto_plan(spec)
+    return repr((plan.candidates, plan.k_initial, sorted(plan.options.items()), plan.passes, plan.initial))
+
+
 def _memory_k(spec) -> int:
     """The k whose neighbours a tile caches: k, or k="auto"'s largest candidate (plus the
     passes' results it keeps: AUTO_PASS_NEIGHBOURS neighbours' worth of bytes per pass)."""
@@ -166,7 +175,7 @@ def estimate_tiled(source, output, *, normals=None, k="auto", method="nr", passe
     store = TileStore(workdir or directory_for(output))
     same_run = {**spec.__dict__, "threads": None}  # any number of workers may resume a run
     resumed = store.open({"input": list(map(str, src.identity)), "spec": repr(same_run), "rule": rule,
-                          "tile_points": tile_points, "version": _VERSION})
+                          "tile_points": tile_points, "version": _VERSION, "auto": _auto_rules(spec)})
     plan = binning.plan_tiles(src, store, tile_points, report.sub(0.0, 0.05))
     sizes = binning.bin_points(src, store, plan, report.sub(0.05, 0.15))
     tasks = dict(client=client, scheduler=scheduler, workers=workers, memory=budget, label=src.name)

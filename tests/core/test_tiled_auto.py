@@ -126,3 +126,14 @@ def test_the_pass_rule_is_replayed_on_whole_cloud_means(tmp_path):
         stats[-1, 0] = 500  # points NR fits with noise
         wholecloud.write_npy(store, store.result_path(t, ".stats"), stats)
     assert auto.kept_pass(store, 2, plan) == 2  # means 0.11, 0.011, 0.0069, 0.0067 (> 0.7 x 0.0069): undone
+
+
+def test_a_work_directory_of_other_auto_rules_is_not_resumed(monkeypatch):
+    """The candidates (a library's rule, not an argument) are part of the run's manifest."""
+    from core.tiled import run
+
+    spec = task.TileSpec(k="auto", method="nr", passes=4, orientation="propagate", n_points=8000)
+    before = run._auto_rules(spec)
+    monkeypatch.setattr(scale, "NEIGHBOUR_BUDGET", 240_000)
+    assert run._auto_rules(spec) != before
+    assert run._auto_rules(task.TileSpec(k=15, method="nr", passes=1, orientation="propagate")) is None
