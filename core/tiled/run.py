@@ -36,9 +36,12 @@ HALO_ALLOWANCE = 1.5
 #: kernels, Dask (measured 210 MB after a first estimate), with room to spare
 RUNTIME_BYTES = 300_000_000
 DEFAULT_MEMORY = "1.5GB"
-#: k="auto" keeps every pass's result of its own points (~140 bytes: rows, links, nodes)
-#: until the whole cloud chooses one: counted as 6 more neighbours (24 bytes each) per pass
-AUTO_PASS_NEIGHBOURS = 6
+#: k="auto" holds more than NR at its largest candidate (the jets, the scale choice, every
+#: pass's result of its own points until the whole cloud chooses one): counted as this many
+#: more neighbours (24 bytes each) per pass. Measured: one tile of 300k points with the
+#: candidates (20,) of a large cloud peaked at 0.52 GB over the runtime, 1730 bytes a
+#: point = 250 + 24 x (20 + 4 x 11) with the 4 default passes
+AUTO_PASS_NEIGHBOURS = 11
 _VERSION = 2  # bumped when the work directory's layout changes: old ones are cleared
 
 
