@@ -6,6 +6,8 @@ is a function of :mod:`core.stages`.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from . import degenerate, interop
@@ -116,6 +118,36 @@ def estimate(
         normals = as_normals(np.asarray(normals)[kept], len(pts), repair=True)
     report = Progress(progress)
 
+    front = prepare(pts, normals, plan, neighbours, report)
+    best = refine(front.pts, front.init, front.outlier, front.nb, front.scale, plan,
+                  report.sub(0.7 if plan.auto else 0.45, 1.0))
+    marks = flags(best.fit, front.scores, plan, front.reference, nb=front.nb, confidence=front.confidence)
+    report(1.0, "done")
+    return _result(front.pts, kept, plan, stages=(front.init, best, front.scale, marks), neighbours=front.nb,
+                   repaired=front.repaired)
+
+
+class Prepared(NamedTuple):
+    """What the fits start from: the checked points ``pts``, neighbours ``nb``, outlier
+    ``scores`` and flags ``outlier``, oriented initial normals ``init`` (and the counts of
+    their ``repaired`` rows when given, the orientation ``confidence``), the linear
+    ``reference`` fit creases are judged by (k="auto") and the ``scale`` per point."""
+
+    pts: np.ndarray
+    nb: object
+    scores: np.ndarray
+    outlier: np.ndarray
+    init: object
+    repaired: dict | None
+    confidence: np.ndarray
+    reference: object
+    scale: object
+
+
+def prepare(pts, normals, plan, neighbours, report) -> Prepared:
+    """The stages before the fits: neighbours -> outlier scores -> initial normals ->
+    orientation -> scale choice (shared by :func:`estimate` and the tiles of
+    :mod:`core.tiled`, which run the fits' passes themselves)."""
     nb = find_neighbours(pts, plan, neighbours, report.sub(0.0, 0.3))
     pts = nb.points if neighbours is None else pts  # the search keeps the validated copy
     idx_p, _ = nb.take(plan.k_initial)
@@ -134,10 +166,7 @@ def estimate(
         reference = crease_reference(pts, init.normals, init.has_normal, nb, plan, report.sub(0.45, 0.47))
     inliers = init.has_normal & ~outlier if plan.robust else init.has_normal  # outliers sit out the choice of k
     kc = choose_scale(pts, init.normals, nb, inliers, plan, report.sub(0.47, 0.7), scores=scores, k_initial=init.k)
-    best = refine(pts, init, outlier, nb, kc, plan, report.sub(0.7 if plan.auto else 0.45, 1.0))
-    marks = flags(best.fit, scores, plan, reference, nb=nb, confidence=confidence)
-    report(1.0, "done")
-    return _result(pts, kept, plan, stages=(init, best, kc, marks), neighbours=nb, repaired=repaired)
+    return Prepared(pts, nb, scores, outlier, init, repaired, confidence, reference, kc)
 
 
 def _plan(plan, n, asked, normals_given) -> EstimatePlan:

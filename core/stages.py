@@ -117,9 +117,8 @@ def initial_normals(pts, nb, plan, outlier, report) -> Initial:
     jet = None
     noise = plan.noise
     if noise is None:
-        jet, height = jet_normals(pts, nrm, ok, idx_p, dist_p)
-        clean = ~outlier[idx_p].any(axis=1)  # an outlier inflates the residuals around it
-        noise = scale.noise_ratio(np.where(clean, height, np.nan) if clean.any() else height, dist_p[:, -1])
+        jet, ratio, clean = noise_samples(pts, nrm, ok, idx_p, dist_p, outlier)
+        noise = scale.noise_ratio(np.where(clean, ratio, np.nan) if clean.any() else ratio, 1.0)
     k_init = scale.initial_k(noise, plan.k_initial, plan.k_search)
     shun = plan.robust and outlier.any()
     if k_init == plan.k_initial and not shun:
@@ -132,6 +131,18 @@ def initial_normals(pts, nb, plan, outlier, report) -> Initial:
     if plan.initial == "jet":
         nrm, _ = jet_normals(pts, nrm, ok, idx, dist, progress=report.sub(0.4, 0.43))
     return Initial(nrm, ok, noise, k_init)
+
+
+def noise_samples(pts, nrm, ok, idx_p, dist_p, outlier):
+    """What the cloud's noise ratio is the median of (:func:`core.scale.noise_ratio`):
+    ``(jet normals, ratio, clean)`` per point, ratio = 2-jet residual height over the
+    radius of the ``idx_p`` neighbours, clean = no outlier among them (an outlier inflates
+    the residuals around it; the median is taken over the clean points if any). A tiled
+    run gathers these over the whole cloud and fixes ``plan.noise``."""
+    jet, height = jet_normals(pts, nrm, ok, idx_p, dist_p)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratio = height / dist_p[:, -1]
+    return jet, ratio, ~outlier[idx_p].any(axis=1)
 
 
 def crease_reference(pts, nrm, has_normal, nb, plan, report) -> Fit:
@@ -223,40 +234,74 @@ def refine(pts, initial: Initial, outlier, nb, sc: Scale, plan, report) -> Refin
     the jet is the result (and its normal the neighbours' input); passes run only if NR
     fits at least PASS_MIN_SHARE of the points with noise (the pass rule judges by mean
     turns, meaningless on a handful of points)."""
+    rule = PassRule(plan, few_fits(float((initial.has_normal & ~sc.quiet).mean()), plan))
+    best = None
+    for p, fit, nrm in fit_passes(pts, initial, outlier, nb, sc, plan, report, n_fits=rule.n_fits):
+        change = _mean_angle_deg(fit.normals, nrm, fit.valid) if rule.measures else None
+        keep, more = rule.step(p, change)
+        if keep:
+            best = Refined(fit, nrm, p)
+        if not more:
+            break
+    return finish(best, sc, outlier, plan)
+
+
+class PassRule:
+    """When :func:`refine` keeps a pass and stops, from each fit's mean turn of the
+    normals (a whole-cloud mean: a tiled run reduces it over the tiles and replays this
+    rule). ``n_fits``: fits at most (1 when NR fits too few points with noise)."""
+
+    def __init__(self, plan, few: bool):
+        self.plan, self.n_fits = plan, 1 if few else plan.passes + 1
+        self.measures = plan.adaptive or plan.tol is not None
+        self.last = None
+        self.converged = False
+
+    def step(self, p: int, change) -> tuple[bool, bool]:
+        """(keep fit ``p``, compute another): undo and stop at a pass that smoothed the shape."""
+        if self.plan.adaptive and self.last is not None and change > PASS_DECAY * self.last:
+            return False, False
+        self.last = change
+        more = p + 1 < self.n_fits and not self.converged
+        self.converged = self.plan.tol is not None and change < self.plan.tol
+        return True, more
+
+
+def few_fits(share: float, plan) -> bool:
+    """Whether NR fits too few points with noise for refinement passes: ``share`` of all
+    points have a normal and noise (not ``Scale.quiet``), below PASS_MIN_SHARE."""
+    return bool(plan.auto and share < PASS_MIN_SHARE)
+
+
+def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n_fits, fitted=None):
+    """Yield ``(p, fit, input normals)`` for the first fit and each refinement pass, up to
+    ``n_fits`` (the caller stops when it has enough); fits are never changed afterwards.
+    ``fitted[p]`` (N,) bool, optional: fit only those points in fit p (a tile fits each pass
+    only as far out as later passes use it; the others keep their input normals)."""
     kc = sc.k
     idx, dist = nb.take(int(kc.max()))
     h = dist[np.arange(len(pts)), kc - 1]
-    nrm, has_normal, n_fits = _start(initial, sc, plan)
+    nrm, has_normal = initial.normals, initial.has_normal
+    if sc.on_jet.any():  # the jets' normals are the neighbours' input where the jet is kept
+        nrm = np.where(sc.on_jet[:, None], sc.jets[0], nrm)
     opts = dict(plan.options)
-    converged = False
-    best = None
     for p in range(n_fits):
-        fit = fit_all(pts, nrm, idx, kc, h, has_normal & ~sc.on_jet, method=plan.method, options=opts,
+        centres = has_normal & ~sc.on_jet if fitted is None else has_normal & ~sc.on_jet & fitted[p]
+        fit = fit_all(pts, nrm, idx, kc, h, centres, method=plan.method, options=opts,
                       report=report.sub(p / n_fits, (p + 1) / n_fits))
-        # mean turn of the normals in this fit: what the adaptive stop and tol compare
-        change = _mean_angle_deg(fit.normals, nrm, fit.valid) if plan.adaptive or plan.tol is not None else None
-        if plan.adaptive and best is not None and change > PASS_DECAY * last_change:
-            break  # this pass smoothed the shape rather than the noise: keep the previous fit
-        best, last_change = Refined(fit, nrm, p), change
-        if p == plan.passes or converged:
-            break
+        yield p, fit, nrm
         new = np.where(fit.valid[:, None], fit.normals, nrm)
         if plan.robust and p == 0:  # outliers leave their neighbours' fits (and are not estimated)
             has_normal = has_normal & ~outlier
             new[outlier] = np.nan
-        converged = plan.tol is not None and change < plan.tol
         nrm = new
+
+
+def finish(best: Refined, sc: Scale, outlier, plan) -> Refined:
+    """The kept fit with the jets merged in where they are the result, and in robust mode
+    without the outliers (new arrays: the fits yielded by :func:`fit_passes` are kept)."""
     best = _with_jets(best, sc)
     return _drop_outliers(best, outlier) if plan.robust else best
-
-
-def _start(initial: Initial, sc: Scale, plan):
-    """The first fit's input normals (the jets' where kept), who has one, how many fits."""
-    nrm, has_normal = initial.normals, initial.has_normal
-    if sc.on_jet.any():
-        nrm = np.where(sc.on_jet[:, None], sc.jets[0], nrm)
-    few = plan.auto and (has_normal & ~sc.quiet).mean() < PASS_MIN_SHARE
-    return nrm, has_normal, 1 if few else plan.passes + 1
 
 
 def _with_jets(best: Refined, sc: Scale) -> Refined:
@@ -274,16 +319,22 @@ def _drop_outliers(best: Refined, outlier) -> Refined:
     fit = best.fit
     if not fit.valid[outlier].any():
         return best
-    for a in (fit.normals, fit.k1, fit.k2, fit.e1, fit.e2):
-        a[outlier] = np.nan
-    return best._replace(fit=fit._replace(valid=fit.valid & ~outlier))
+    cleared = {name: np.where(outlier.reshape((-1,) + (1,) * (a.ndim - 1)), np.nan, a)
+               for name, a in zip(Fit._fields[:5], fit[:5])}
+    return best._replace(fit=fit._replace(**cleared, valid=fit.valid & ~outlier))
 
 
 def _mean_angle_deg(a, b, mask):
     if not mask.any():
         return 0.0
+    return float(turn_angles(a, b, mask).mean())
+
+
+def turn_angles(a, b, mask) -> np.ndarray:
+    """Angles (degrees, sign-blind) between unit rows of ``a`` and ``b`` where ``mask``:
+    their mean over the cloud is a pass's change (:class:`PassRule`)."""
     cos = np.abs(np.einsum("ij,ij->i", a[mask], b[mask]))
-    return float(np.degrees(np.arccos(np.clip(cos, 0.0, 1.0))).mean())
+    return np.degrees(np.arccos(np.clip(cos, 0.0, 1.0)))
 
 
 def flags(fit: Fit, scores, plan, reference: Fit | None, *, nb=None, confidence=None) -> Flags:

@@ -66,13 +66,12 @@ def _in_memory_budget(memory) -> int:
 
 
 def run(args) -> int:
-    """Run the estimate of ``args`` in tiles (or, for k="auto" within memory, whole, into LAS/LAZ)."""
+    """Run the estimate of ``args`` in tiles (or, for k="auto" within memory and no tile
+    option, whole, into LAS/LAZ: the same answer without the tiles' halos)."""
     orientation = args.viewpoint if args.viewpoint is not None else args.orientation
-    if args.k == "auto":
-        if _too_big(args) or args.tile_points is not None:
-            raise ValueError(f'{args.input}: too large for memory with k="auto", which is not available in '
-                             "tiles yet; pass an integer k (e.g. --k 15) to estimate it in tiles")
-        return _whole_to_las(args, orientation)
+    asked = args.tile_points is not None or args.workers is not None or args.scheduler is not None
+    if args.k == "auto" and not asked and not _too_big(args):
+        return _whole_to_las(args, orientation)  # fits in memory: no tiles needed, the same answer
     bar = _Bar(not args.quiet and (sys.stderr.isatty() or args.progress))
     try:
         res = estimate_tiled(
@@ -86,6 +85,8 @@ def run(args) -> int:
     if not args.quiet:
         print(f"{args.input}: {res.n_points} points in {res.n_tiles} tiles ({res.tiles_skipped} finished "
               f"before), method {args.method}, k {args.k}, {res.seconds:.2f} s")
+        if res.params:
+            print("whole cloud: " + ", ".join(f"{name} {value:.6g}" for name, value in res.params.items()))
         print(f"orientation agreement over tile overlaps: {100 * res.agreement:.2f} %")
         print(f"wrote {res.output}")
     return 0

@@ -18,35 +18,37 @@ from .task import run_tile
 
 
 def run_tasks(root, tiles, sizes, spec, *, client=None, scheduler=None, workers=None, memory=None,
-              label="input", progress=None) -> list:
-    """Run :func:`run_tile` for every tile id in ``tiles``; returns their summaries.
+              label="input", progress=None, fn=None, stage="tiles") -> list:
+    """Run ``fn(root, tile, spec)`` (default :func:`run_tile`) for every tile id in
+    ``tiles``; returns their summaries. ``stage`` names the round in the progress.
 
     ``sizes`` (points per tile) weighs the progress and the ETA. ``workers=0`` runs the
     tiles one by one in this process (no cluster). A failing tile raises ValueError naming
     ``label`` (the input file) and the tile.
     """
     tiles = list(tiles)
+    fn = fn or run_tile
     if not tiles:
         return []
-    clock = _Clock(sum(sizes[t] for t in tiles), progress)
+    clock = _Clock(sum(sizes[t] for t in tiles), progress, stage)
     if client is None and scheduler is None and workers == 0:
         out = []
         for t in tiles:
-            out.append(_guarded(root, t, spec, label))
+            out.append(_guarded(fn, root, t, spec, label))
             clock.done(sizes[t])
         return out
-    return _on_dask(root, tiles, sizes, spec, clock, client=client, scheduler=scheduler, workers=workers,
+    return _on_dask(fn, root, tiles, sizes, spec, clock, client=client, scheduler=scheduler, workers=workers,
                     memory=memory, label=label)
 
 
-def _guarded(root, tile, spec, label):
+def _guarded(fn, root, tile, spec, label):
     try:
-        return run_tile(root, tile, spec)
+        return fn(root, tile, spec)
     except Exception as exc:
         raise ValueError(f"{label}: tile {tile} failed: {type(exc).__name__}: {exc}") from exc
 
 
-def _on_dask(root, tiles, sizes, spec, clock, *, client, scheduler, workers, memory, label):
+def _on_dask(fn, root, tiles, sizes, spec, clock, *, client, scheduler, workers, memory, label):
     from distributed import Client, LocalCluster, as_completed
 
     own_cluster = own_client = None
@@ -59,7 +61,7 @@ def _on_dask(root, tiles, sizes, spec, clock, *, client, scheduler, workers, mem
                                        dashboard_address=":0", silence_logs=40)
             client = own_client = Client(own_cluster)
     clock.note(f"dask dashboard {client.dashboard_link}")
-    futures = {client.submit(run_tile, str(root), t, spec, key=f"darboux-tile-{t}-{time.time_ns()}",
+    futures = {client.submit(fn, str(root), t, spec, key=f"darboux-{stage_key(clock.stage)}-{t}-{time.time_ns()}",
                              pure=False): t for t in tiles}
     out = []
     try:
@@ -80,10 +82,16 @@ def _on_dask(root, tiles, sizes, spec, clock, *, client, scheduler, workers, mem
     return out
 
 
+def stage_key(stage: str) -> str:
+    """A Dask key part from a stage name (the dashboard groups tasks by it)."""
+    return "-".join(stage.split()) or "tile"
+
+
 class _Clock:
     """Progress over points done, with an ETA from the rate so far."""
 
-    def __init__(self, total, progress):
+    def __init__(self, total, progress, stage="tiles"):
+        self.stage = stage
         self.total = max(int(total), 1)
         self.progress = progress
         self.count = 0
@@ -99,4 +107,4 @@ class _Clock:
             return
         elapsed = time.perf_counter() - self.t0
         eta = elapsed * (self.total - self.count) / max(self.count, 1)
-        self.progress(self.count / self.total, f"tiles, ETA {eta:5.0f} s")
+        self.progress(self.count / self.total, f"{self.stage}, ETA {eta:5.0f} s")

@@ -5,7 +5,8 @@ the fit at p uses the normals of its k neighbours; in an NR pass those are thems
 fits over *their* neighbours; the first fit uses the PCA normals (eqs. 13-14) of points
 one ring further, and each PCA normal needs that point's own k nearest neighbours. So
 with ``passes`` refinement passes the points up to ``passes + 1`` kNN rings away from the
-tile must see exactly their global k nearest neighbours (:func:`chain_rings`).
+tile must see exactly their global k nearest neighbours (:func:`chain_rings`). With
+k="auto" the chain is longer and has two widths (:func:`auto_chain`).
 
 A point's neighbours within the loaded box are its global ones when its k-th neighbour
 is closer than the box's boundary (every point beyond the boundary is farther). The box
@@ -29,6 +30,35 @@ _GROWTH = 1.5
 def chain_rings(passes: int) -> int:
     """kNN rings beyond a tile whose neighbourhoods must be exact: one per fit (passes + 1)."""
     return passes + 1
+
+
+def auto_chain(passes: int, k_search: int, k_initial: int) -> tuple:
+    """The dependency chain of k="auto" as ``((rings, k), ...)``: points within ``rings``
+    kNN hops of the tile (over the ``k_search`` lists) need their ``k`` nearest exact.
+
+    The output at p is the last of ``passes + 1`` fits (the tiles compute all of them: the
+    pass that is kept is a whole-cloud decision, :mod:`core.tiled.auto`). Fit j at a point
+    uses its neighbours' normals of fit j - 1, so fit 0 is needed ``passes`` rings out and
+    every point up to there needs its exact ``k_search`` list (the fit's k, and the scale
+    choice's candidates up to k_search). Fit 0 and the scale choice at ring ``passes`` use
+    the initial normals of ring ``passes + 1`` (the fold test, the noise pooled over 20
+    neighbours, the jets' normals) and their k_init-NN PCA and 2-jet, which in robust mode
+    skip outliers over the whole ``k_search`` list (``Neighbours.take_without``): exact
+    ``k_search`` lists to ring ``passes + 1``. The outlier flags of those lists' points,
+    ring ``passes + 2``, need only their ``k_initial`` nearest (the outlier scores).
+    """
+    return ((passes + 1, k_search), (passes + 2, k_initial))
+
+
+def shortfall(nb, own, chain, lo, hi) -> tuple[float, np.ndarray]:
+    """(:func:`check_halo`'s largest shortfall over the ``chain`` levels, the points whose
+    ``nb`` lists are exact to their end: the first level's)."""
+    worst, exact = -np.inf, None
+    for rings, k in chain:
+        needed = rings_from(own, nb.indices, rings)
+        worst = max(worst, check_halo(nb.points, nb.distances[:, k - 1], needed, lo, hi))
+        exact = needed if exact is None else exact
+    return worst, exact
 
 
 def first_margin(own_xyz: np.ndarray, k: int, rings: int) -> float:

@@ -5,7 +5,8 @@ from __future__ import annotations
 import os
 import pathlib
 import time
-from dataclasses import dataclass
+import dataclasses
+from dataclasses import dataclass, field
 
 import numba
 import numpy as np
@@ -13,10 +14,13 @@ import numpy as np
 from .._progress import Progress
 from .._validate import check_int
 from ..methods import check_options, get_method
+from ..tuning import MAX_PASSES
 from . import assemble, binning, engine, signs
 from .source import open_source
 from .store import TileStore, directory_for
-from .task import TileSpec
+from . import wholecloud
+from .auto import PassView, kept_pass, run_auto_tile
+from .task import TileSpec, auto_plan
 
 #: memory of an in-memory estimate per point at integer k: ~250 bytes of arrays per point
 #: plus the cached neighbours (int32 index + float64 distance = 12 bytes per neighbour,
@@ -32,7 +36,13 @@ HALO_ALLOWANCE = 1.5
 #: kernels, Dask (measured 210 MB after a first estimate), with room to spare
 RUNTIME_BYTES = 300_000_000
 DEFAULT_MEMORY = "1.5GB"
-_VERSION = 3  # bumped when the work directory's layout changes: old ones are cleared
+#: k="auto" holds more than NR at its largest candidate (the jets, the scale choice, every
+#: pass's result of its own points until the whole cloud chooses one): counted as this many
+#: more neighbours (24 bytes each) per pass. Measured: one tile of 300k points with the
+#: candidates (20,) of a large cloud peaked at 0.52 GB over the runtime, 1730 bytes a
+#: point = 250 + 24 x (20 + 4 x 11) with the 4 default passes
+AUTO_PASS_NEIGHBOURS = 11
+_VERSION = 4  # bumped when the work directory's layout changes: old ones are cleared
 
 
 @dataclass(frozen=True)
@@ -45,6 +55,7 @@ class TiledRun:
     tiles_skipped: int
     agreement: float  # share of halo points whose orientations agree across tiles
     seconds: float
+    params: dict = field(default_factory=dict)  # k="auto": the whole cloud's noise, crease_typical, passes_run
 
 
 def bytes_per_point(k: int) -> int:
@@ -77,9 +88,6 @@ def default_tile_points(k: int, memory) -> int:
 def _prepare(source, normals, k, *, method, passes, orientation, options, tile_points, workers, memory,
              ignore_normals):
     """Validate the arguments (cheap checks before the file is opened) and resolve defaults."""
-    if isinstance(k, str):
-        raise ValueError(f'k must be an integer for a tiled estimate, got {k!r} (k="auto" needs the whole '
-                         "cloud's noise level and is not available in tiles yet)")
     budget = parse_memory(memory)
     if tile_points is not None:
         tile_points = check_int(tile_points, name="tile_points", low=100, high=10**10)
@@ -88,8 +96,29 @@ def _prepare(source, normals, k, *, method, passes, orientation, options, tile_p
     src = open_source(source, normals, use_normals=not ignore_normals)
     spec, rule = _spec(k, method, passes, orientation, options, src.has_normals, in_process=workers == 0,
                        views=src.has_views)
-    tile_points = tile_points or _tile_points(spec.k, budget, src.count, workers)
+    if spec.k == "auto":
+        spec = dataclasses.replace(spec, n_points=max(src.count, 3))
+        spec = dataclasses.replace(spec, passes=auto_plan(spec).passes)  # checks method and options first
+    tile_points = tile_points or _tile_points(_memory_k(spec), budget, src.count, workers)
     return src, spec, rule, budget, tile_points
+
+
+def _auto_rules(spec):
+    """What else k="auto"'s tiles depend on (the candidates, the options it resolved): a
+    work directory left by other rules (another version of the library) is not resumed."""
+    if spec.k != "auto":
+        return None
+    plan = auto_plan(spec)
+    return repr((plan.candidates, plan.k_initial, sorted(plan.options.items()), plan.passes, plan.initial))
+
+
+def _memory_k(spec) -> int:
+    """The k whose neighbours a tile caches: k, or k="auto"'s largest candidate (plus the
+    passes' results it keeps: AUTO_PASS_NEIGHBOURS neighbours' worth of bytes per pass)."""
+    if spec.k != "auto":
+        return spec.k
+    plan = auto_plan(spec)
+    return plan.k_search + AUTO_PASS_NEIGHBOURS * plan.passes
 
 
 def _tile_points(k, budget, count, workers) -> int:
@@ -99,7 +128,7 @@ def _tile_points(k, budget, count, workers) -> int:
     return min(default_tile_points(k, budget), busy)
 
 
-def estimate_tiled(source, output, *, normals=None, k=15, method="nr", passes=None, orientation="auto",
+def estimate_tiled(source, output, *, normals=None, k="auto", method="nr", passes=None, orientation="auto",
                    options=None, tile_points=None, workers=None, memory=DEFAULT_MEMORY, client=None,
                    scheduler=None, workdir=None, keep_workdir=False, ignore_normals=False,
                    progress=None) -> TiledRun:
@@ -118,7 +147,11 @@ def estimate_tiled(source, output, *, normals=None, k=15, method="nr", passes=No
     output : path of the result: .laz/.las (any size, written in chunks, extra-bytes
         dimensions nx ny nz k1 k2 e1_* e2_* gaussian mean valid k) or .ply/.csv (in memory).
     normals : (N, 3) array, optional, with an array ``source``.
-    k, method, passes, options : as for :func:`core.estimate`; k must be an integer.
+    k, method, passes, options : as for :func:`core.estimate`. k="auto" (the default)
+        gives every point the in-memory choice of k, model and fit: a pre-pass fixes the
+        whole cloud's medians (:mod:`.wholecloud`), each tile runs every refinement pass
+        and the pass kept is chosen for the whole cloud (:mod:`.auto`); ``params`` of the
+        result reports the noise, crease_typical and passes_run used.
     orientation : as for :func:`core.estimate`: "auto", "outward", "propagate", "keep" or a
         (3,) viewpoint (scanner position).
     tile_points : points per tile; default from ``memory`` and k.
@@ -145,45 +178,82 @@ def estimate_tiled(source, output, *, normals=None, k=15, method="nr", passes=No
     store = TileStore(workdir or directory_for(output))
     same_run = {**spec.__dict__, "threads": None}  # any number of workers may resume a run
     resumed = store.open({"input": list(map(str, src.identity)), "spec": repr(same_run), "rule": rule,
-                          "tile_points": tile_points, "version": _VERSION})
+                          "tile_points": tile_points, "version": _VERSION, "auto": _auto_rules(spec)})
     plan = binning.plan_tiles(src, store, tile_points, report.sub(0.0, 0.05))
     sizes = binning.bin_points(src, store, plan, report.sub(0.05, 0.15))
-    todo = [t for t in range(plan.n_tiles) if not store.finished(t)]
-    engine.run_tasks(store.root, todo, sizes, spec, client=client, scheduler=scheduler, workers=workers,
-                     memory=budget, label=src.name, progress=report.sub(0.15, 0.9))
+    tasks = dict(client=client, scheduler=scheduler, workers=workers, memory=budget, label=src.name)
+    spec, results, params = _estimate(store, plan, sizes, spec, tasks, report.sub(0.15, 0.9))
     report(0.9, "orientation across tiles")
-    tile_signs, agreement = signs.tile_signs(store, plan.n_tiles, rule)
+    tile_signs, agreement = signs.tile_signs(results, plan.n_tiles, rule)
     report(0.93, "writing")
-    out = assemble.assemble(store, plan.n_tiles, plan.n_points, tile_signs, output, src)
+    out = assemble.assemble(results, plan.n_tiles, plan.n_points, tile_signs, output, src)
     if not keep_workdir:
         store.remove()
     report(1.0, "done")
-    skipped = plan.n_tiles - len(todo) if resumed else 0
-    return TiledRun(out, plan.n_points, plan.n_tiles, skipped, agreement, time.perf_counter() - t0)
+    todo = params.pop("todo")
+    skipped = plan.n_tiles - todo if resumed else 0
+    return TiledRun(out, plan.n_points, plan.n_tiles, skipped, agreement, time.perf_counter() - t0, params)
+
+
+def _estimate(store, plan, sizes, spec, tasks, report):
+    """The tile tasks: with k="auto" a pre-pass fixes the whole-cloud quantities, and the
+    pass every tile reports is chosen for the whole cloud (:mod:`.auto`). Returns the spec
+    run, the store to read the results from, and the whole-cloud params."""
+    auto = spec.k == "auto"
+    if auto:
+        spec = dataclasses.replace(spec, n_points=plan.n_points)
+        todo = [t for t in range(plan.n_tiles) if not wholecloud.sampled(store, t, "before")]
+        engine.run_tasks(store.root, todo, sizes, spec, fn=wholecloud.run_before, stage="whole-cloud medians",
+                         progress=report.sub(0.0, 0.1), **tasks)
+        fixed = wholecloud.reduce(store, plan.n_tiles, auto_plan(spec), "before")
+        spec = dataclasses.replace(spec, fixed=tuple(sorted(fixed.items())))
+    todo = [t for t in range(plan.n_tiles) if not store.finished(t)]
+    engine.run_tasks(store.root, todo, sizes, spec, fn=run_auto_tile if auto else None,
+                     progress=report.sub(0.1 if auto else 0.0, 1.0), **tasks)
+    params = {"todo": len(todo)}
+    if not auto:
+        return spec, store, params
+    whole = auto_plan(spec)
+    kept = kept_pass(store, plan.n_tiles, whole)
+    params.update(dict(spec.fixed), passes_run=kept, **wholecloud.reduce(store, plan.n_tiles, whole, "after"))
+    return spec, PassView(store.root, kept), params
 
 
 def _spec(k, method, passes, orientation, options, normals_given, in_process, views=False):
     """The tile parameters (validated as :func:`core.estimate` does) and the sign rule."""
     m = get_method(method)
     opts = check_options(m, options)
+    k, passes = _k_passes(k, passes, m, opts)
+    tile_orient, rule = _orientation(orientation, normals_given, views)
+    spec = TileSpec(k=k, method=m.name, passes=passes, orientation=tile_orient, options=options or {},
+                    normals_given=normals_given,
+                    threads=numba.config.NUMBA_NUM_THREADS if in_process else 1)
+    return spec, rule
+
+
+def _k_passes(k, passes, m, opts):
+    """k ("auto", checked further by :func:`auto_plan` once the cloud's size is known, or
+    an integer) and the passes (None: the default of k="auto" or of the method)."""
+    if isinstance(k, str) and k == "auto":
+        return k, None if passes is None else check_int(passes, name="passes", low=0, high=MAX_PASSES)
+    if isinstance(k, str):
+        raise ValueError(f'k must be an integer or "auto", got {k!r}')
     k = check_int(k, name="k", low=m.min_k_for(opts), high=10**6)
-    passes = m.default_passes if passes is None else check_int(passes, name="passes", low=0, high=20)
+    return k, m.default_passes if passes is None else check_int(passes, name="passes", low=0, high=MAX_PASSES)
+
+
+def _orientation(orientation, normals_given, views):
+    """(how each tile orients, how the tiles' signs are then fixed: none/outward/propagate)."""
     if isinstance(orientation, str):
         if orientation not in ("auto", "propagate", "outward", "keep"):
             raise ValueError(f"orientation {orientation!r} is invalid; must be one of ['auto', 'propagate', "
                              "'outward', 'keep'] or a (3,) viewpoint")
         if orientation == "keep" or (orientation == "auto" and normals_given):
-            tile_orient, rule = "keep", "none"
-        elif orientation == "auto" and views:  # each normal faces the scanner that saw its point
-            tile_orient, rule = "scanner", "none"
-        else:
-            tile_orient, rule = "propagate", "outward" if orientation in ("auto", "outward") else "propagate"
-    else:
-        view = np.asarray(orientation, dtype=float)
-        if view.shape != (3,) or not np.isfinite(view).all():
-            raise ValueError(f"orientation as a viewpoint must be 3 finite numbers, got {orientation!r}")
-        tile_orient, rule = tuple(float(v) for v in view), "none"
-    spec = TileSpec(k=k, method=m.name, passes=passes, orientation=tile_orient, options=options or {},
-                    normals_given=normals_given,
-                    threads=numba.config.NUMBA_NUM_THREADS if in_process else 1)
-    return spec, rule
+            return "keep", "none"
+        if orientation == "auto" and views:  # each normal faces the scanner that saw its point
+            return "scanner", "none"
+        return "propagate", "outward" if orientation in ("auto", "outward") else "propagate"
+    view = np.asarray(orientation, dtype=float)
+    if view.shape != (3,) or not np.isfinite(view).all():
+        raise ValueError(f"orientation as a viewpoint must be 3 finite numbers, got {orientation!r}")
+    return tuple(float(v) for v in view), "none"

@@ -6,6 +6,7 @@ so nothing but the tile id and a few parameters travel through the scheduler.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -16,7 +17,8 @@ from ..estimate import estimate
 from ..neighbours import build_neighbours
 from ..normals import pca_normals
 from ..orientation import ORIENT_K
-from .halo import chain_rings, check_halo, first_margin, gather, grown, rings_from
+from ..planning import EstimatePlan
+from .halo import chain_rings, first_margin, gather, grown, shortfall
 from .plan import TilePlan
 from .store import TileStore
 
@@ -44,13 +46,25 @@ NODE_DTYPE = np.dtype([("comp", "<i4"), ("count", "<i8"), ("sum", "<f8", 3), ("t
 class TileSpec:
     """What every tile runs: the estimate's parameters and the in-tile orientation."""
 
-    k: int
+    k: object  # an int, or "auto" (then n_points and the whole-cloud quantities ``fixed`` matter)
     method: str
     passes: int
     orientation: object  # "propagate", "keep", "scanner" (each point's viewpoint) or a (3,) viewpoint tuple
     options: dict = field(default_factory=dict)
     normals_given: bool = False
     threads: int = 1
+    n_points: int = 0  # of the whole cloud (k="auto" derives its candidates from it)
+    fixed: tuple = ()  # (EstimatePlan field, whole-cloud value) pairs (core.tiled.wholecloud)
+
+
+def auto_plan(spec: TileSpec, n_points: int | None = None) -> EstimatePlan:
+    """The k="auto" plan of the whole cloud (candidates from its N, the whole-cloud
+    quantities of ``spec.fixed``), for ``n_points`` points of one tile."""
+    orientation = "keep" if spec.orientation == "scanner" else spec.orientation
+    whole = EstimatePlan.build(spec.n_points, k="auto", method=spec.method, passes=spec.passes,
+                               orientation=orientation, options=dict(spec.options) or None,
+                               normals_given=spec.normals_given)
+    return dataclasses.replace(whole, n_points=n_points or spec.n_points, **dict(spec.fixed))
 
 
 def run_tile(root, tile: int, spec: TileSpec) -> dict:
@@ -89,21 +103,25 @@ def run_tile(root, tile: int, spec: TileSpec) -> dict:
 
 
 def _load_with_halo(store, plan, tile, spec):
-    """Grow the halo until every point of the dependency chain has its true neighbours."""
+    return load_with_halo(store, plan, tile, spec.k, ((chain_rings(spec.passes), spec.k),))
+
+
+def load_with_halo(store, plan, tile, k_max, chain):
+    """The tile and a halo grown until every point of the dependency ``chain`` (see
+    :func:`core.tiled.halo.shortfall`) has its true neighbours; returns the records, their
+    owner tiles, their ``k_max`` neighbours and the points whose lists are exact."""
     own_xyz = np.asarray(store.read_bin(tile)["xyz"])
-    rings = chain_rings(spec.passes)
-    margin = first_margin(own_xyz, spec.k, rings)
+    margin = first_margin(own_xyz, k_max, max(rings for rings, _ in chain))
     scale = float(np.abs(plan.bounds).max())
     for _ in range(MAX_GROWTHS):
         rec, owner, lo, hi = gather(store, plan, tile, margin)
-        if len(rec) < spec.k:
-            raise ValueError(f"tile {tile}: only {len(rec)} points within reach, fewer than k={spec.k}")
-        nb = build_neighbours(rec["xyz"], spec.k)
-        needed = rings_from(owner == tile, nb.indices, rings)
-        shortfall = check_halo(nb.points, nb.distances[:, -1], needed, lo, hi)
-        if shortfall < 0:
+        if len(rec) < k_max:
+            raise ValueError(f"tile {tile}: only {len(rec)} points within reach, fewer than k={k_max}")
+        nb = build_neighbours(rec["xyz"], k_max)
+        short, needed = shortfall(nb, owner == tile, chain, lo, hi)
+        if short < 0:
             return rec, owner, nb, needed
-        margin = grown(margin, shortfall, scale)
+        margin = grown(margin, short, scale)
     raise ValueError(f"tile {tile}: the halo did not cover the neighbourhoods after {MAX_GROWTHS} growths "
                      f"(margin {margin:.4g})")
 

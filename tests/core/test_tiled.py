@@ -194,8 +194,10 @@ def test_bad_input_is_named_and_leaves_no_output(tmp_path):
     zero.write_bytes(bytes(raw))
     with pytest.raises(ValueError, match=r"zero\.las.*scale"):
         estimate_tiled(zero, tmp_path / "o.laz", k=15, workers=0)
-    with pytest.raises(ValueError, match=r"k must be an integer"):
-        estimate_tiled(src, tmp_path / "o.laz", k="auto", workers=0)
+    with pytest.raises(ValueError, match=r"k must be an integer or \"auto\", got 'big'"):
+        estimate_tiled(src, tmp_path / "o.laz", k="big", workers=0)
+    with pytest.raises(ValueError, match=r'k="auto" is available for methods nf and nr, not \'ct\''):
+        estimate_tiled(src, tmp_path / "o.laz", method="ct", workers=0)
     with pytest.raises(ValueError, match=r"is the input"):
         estimate_tiled(src, src, k=15, workers=0)
     with pytest.raises(ValueError, match=r"memory 'lots' is invalid"):

@@ -41,8 +41,10 @@ def test_a_budget_smaller_than_the_cloud_switches_to_tiles(scan, tmp_path, capsy
     assert "8000 points in 1 tiles" in capsys.readouterr().out  # on a local Dask cluster
     assert main(["estimate", str(scan), "-o", str(tmp_path / "b.ply"), "--k", "15", "--memory", "900MB", "-q"]) == 0
     assert "tiles" not in capsys.readouterr().out  # fits: in memory
-    code = main(["estimate", str(scan), "-o", str(tmp_path / "a.ply"), "--memory", "700MB"])
-    assert code == 2 and 'k="auto"' in capsys.readouterr().err and not (tmp_path / "a.ply").exists()
+    assert main(["estimate", str(scan), "-o", str(tmp_path / "a.ply"), "--memory", "700MB"]) == 0
+    text = capsys.readouterr().out  # the default, k="auto", in tiles too, with the whole cloud's medians
+    assert "8000 points in 1 tiles" in text and "k auto" in text and "whole cloud: noise" in text
+    assert (tmp_path / "a.ply").exists()
 
 
 def test_auto_k_within_memory_writes_laz(scan, tmp_path):

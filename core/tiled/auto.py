@@ -1,0 +1,123 @@
+"""k="auto" in tiles: one tile's estimate with every pass kept, and the whole-cloud pass choice.
+
+In memory, k="auto" refines the normals pass after pass and stops (undoing the last pass)
+once a pass turns the normals, on average over the whole cloud, by more than PASS_DECAY x
+the pass before (:class:`core.stages.PassRule`). A tile cannot know that mean, so each
+tile runs every pass (its halo holds the chain of all of them, :func:`core.tiled.halo.auto_chain`),
+writes each pass's result for its own points and its share of each pass's mean turn;
+:func:`kept_pass` then sums the shares and replays the in-memory rule, and the run
+assembles the kept pass (:class:`PassView`). The whole-cloud quantities the front of the
+estimate needs (the noise) are fixed beforehand by :mod:`core.tiled.wholecloud`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from types import SimpleNamespace
+
+import numpy as np
+
+from ..estimate import prepare
+from ..planning import EstimatePlan
+from ..stages import PassRule, Refined, few_fits, finish, fit_passes, turn_angles
+from .._progress import Progress
+from .halo import auto_chain, rings_from
+from .plan import TilePlan
+from .store import TileStore
+from .task import auto_plan, LINK_DTYPE, NODE_DTYPE, ROW_DTYPE, _components, _face_viewpoints, _nodes, _rows, load_with_halo
+from . import wholecloud
+
+
+def run_auto_tile(root, tile: int, spec) -> dict:
+    """Estimate tile ``tile`` with k="auto", every pass written (``.pass{p}`` results)."""
+    store = TileStore(root)
+    if store.finished(tile):
+        return {"tile": tile, "skipped": True, "points": len(store.read_bin(tile))}
+    plan = TilePlan.load(store.plan_path)
+    whole = auto_plan(spec)
+    if len(store.read_bin(tile)) == 0:
+        _save(store, tile, [_empty()] * (whole.passes + 1), np.zeros((whole.passes + 2, 2)), {})
+        return {"tile": tile, "skipped": False, "points": 0, "loaded": 0}
+    chain = auto_chain(whole.passes, whole.k_search, whole.k_initial)
+    rec, owner, nb, exact = load_with_halo(store, plan, tile, whole.k_search, chain)
+    pts = np.ascontiguousarray(rec["xyz"])
+    normals = np.ascontiguousarray(rec["n"]) if spec.normals_given else None
+    tplan = dataclasses.replace(whole, n_points=len(pts))
+    front = prepare(pts, normals, tplan, nb, Progress(None))
+    own = owner == tile
+    outputs, stats = [], np.zeros((tplan.passes + 2, 2))  # per pass: sum of turns, count; then the noisy points
+    reach = [rings_from(own, nb.indices, tplan.passes - p) for p in range(tplan.passes + 1)]  # what uses fit p
+    for p, fit, nrm in fit_passes(pts, front.init, front.outlier, nb, front.scale, tplan, Progress(None),
+                                  n_fits=tplan.passes + 1, fitted=reach):
+        mine = fit.valid & own
+        stats[p] = math.fsum(turn_angles(fit.normals, nrm, mine)), int(mine.sum())
+        kept = finish(Refined(fit, nrm, p), front.scale, front.outlier, tplan).fit
+        res = SimpleNamespace(normals=np.where(kept.valid[:, None], kept.normals, nrm), k1=kept.k1, k2=kept.k2,
+                              e1=kept.e1, e2=kept.e2, valid=kept.valid, k_point=front.scale.k_point)
+        outputs.append(_outputs(rec, res, nb, own, owner, exact, spec, front.init.normals))
+    stats[-1, 0] = np.count_nonzero(front.init.has_normal & ~front.scale.quiet & own)
+    _save(store, tile, outputs, stats, wholecloud.samples_after(front, tplan, own))
+    return {"tile": tile, "skipped": False, "points": int(own.sum()), "loaded": len(pts)}
+
+
+def _outputs(rec, res, nb, own, owner, exact, spec, initial):
+    """(rows, links, nodes) of one pass, as :func:`core.tiled.task.run_tile` writes them."""
+    comp = _components(nb.indices, np.isfinite(res.normals).all(axis=1), exact)
+    rows = _rows(rec, res, comp, own)
+    if spec.orientation == "scanner":
+        _face_viewpoints(rows, initial[own], rec["view"][own])
+    halo = exact & ~own & (comp >= 0)
+    links = np.empty(int(halo.sum()), LINK_DTYPE)
+    links["index"], links["owner"] = rec["index"][halo], owner[halo]
+    links["comp"], links["n"] = comp[halo], res.normals[halo]
+    return rows, links, _nodes(rows)
+
+
+def _empty():
+    return np.zeros(0, ROW_DTYPE), np.zeros(0, LINK_DTYPE), np.zeros(0, NODE_DTYPE)
+
+
+def _save(store, tile, outputs, stats, samples) -> None:
+    """Every pass's arrays, the tile's shares of the whole-cloud reductions, then the marker."""
+    for p, arrays in enumerate(outputs):
+        for part, arr in zip(("", ".links", ".nodes"), arrays):
+            wholecloud.write_npy(store, store.result_path(tile, f".pass{p}{part}"), arr)
+    wholecloud.save_samples(store, tile, "after", samples)
+    wholecloud.write_npy(store, store.result_path(tile, ".stats"), stats)
+    store._write_bytes(store.root / "results" / f"tile_{tile:06d}.done", b"")
+
+
+def kept_pass(store: TileStore, n_tiles: int, plan: EstimatePlan) -> int:
+    """The pass the in-memory estimate keeps: each pass's mean turn of the normals and the
+    share of points NR fits with noise, summed over the tiles, through its :class:`PassRule`.
+
+    The sums are exact (``math.fsum``) where memory sums pairwise, so a mean may differ in
+    its last bit; the choice differs only if a mean lies within ~1e-15 of PASS_DECAY x the
+    previous one (or of ``tol``).
+    """
+    stats = [np.load(store.result_path(t, ".stats")) for t in range(n_tiles)]
+    noisy = sum(int(s[-1, 0]) for s in stats)
+    sums, counts = zip(*[(math.fsum(s[p, 0] for s in stats), sum(int(s[p, 1]) for s in stats))
+                         for p in range(plan.passes + 1)])
+    rule = PassRule(plan, few_fits(noisy / plan.n_points, plan))
+    kept = 0
+    for p in range(rule.n_fits):
+        change = (sums[p] / counts[p] if counts[p] else 0.0) if rule.measures else None
+        keep, more = rule.step(p, change)
+        kept = p if keep else kept
+        if not more:
+            break
+    return kept
+
+
+class PassView(TileStore):
+    """The run's store seen through one pass: its results are the tiles' results (what
+    :mod:`.signs` and :mod:`.assemble` read)."""
+
+    def __init__(self, root, kept: int):
+        super().__init__(root)
+        self.kept = kept
+
+    def result_path(self, tile: int, part: str = ""):
+        return super().result_path(tile, f".pass{self.kept}{part}")

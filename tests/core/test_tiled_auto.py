@@ -1,0 +1,139 @@
+"""k="auto" in tiles: every point gets the in-memory choice of k, model and fit, from the
+whole cloud's candidates, medians and pass decision; the halo holds the derived chain."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import core
+from core import noise, scale, shapes
+from core.io import read_cloud
+from core.tiled import auto, estimate_tiled, halo, task, wholecloud
+
+
+def _same(path, mem):
+    """Assert that the PLY result at ``path`` is ``mem`` point for point (signs aligned)."""
+    c = read_cloud(path)
+    f = c.fields
+    valid = f["valid"].astype(bool)
+    np.testing.assert_array_equal(valid, mem.valid)
+    same = np.einsum("ij,ij->i", c.normals, mem.normals) > 0
+    assert same[valid].mean() >= 0.999
+    s = np.where(same, 1.0, -1.0)
+    k1, k2 = np.where(same, f["k1"], -f["k2"]), np.where(same, f["k2"], -f["k1"])
+    e1 = np.column_stack([np.where(same, f[f"e1_{a}"], f[f"e2_{a}"]) for a in "xyz"])
+    v = mem.valid
+    assert np.abs(c.normals * s[:, None] - mem.normals)[v].max() < 1e-9
+    assert max(np.abs(k1 - mem.k1)[v].max(), np.abs(k2 - mem.k2)[v].max()) < 1e-9
+    assert np.minimum(np.abs(e1 - mem.e1), np.abs(e1 + mem.e1))[v].max() < 1e-9
+
+
+@pytest.fixture
+def small_candidates(monkeypatch):
+    """Candidates (20, 28) and jets (15, 20, 28) for 4000-8000 points, as a cloud of 2 million
+    gets them (core.scale.candidates): a short chain, so 16 tiles need only small halos."""
+    monkeypatch.setattr(scale, "NEIGHBOUR_BUDGET", 240_000)
+
+
+def _noisy_torus(n=8000):
+    """Noise on half of a torus (NR, refined, at the noise's k there; jets elsewhere), and outliers."""
+    t = shapes.torus(n, seed=3).points
+    pts = np.where(t[:, :1] > 0.5, noise.add_noise(t, 0.1, seed=1), t)
+    return np.concatenate([pts, [[0.0, 0.0, 2.5], [3.2, 0.4, 0.0]]])  # two outliers: robust mode at work
+
+
+def test_auto_in_16_tiles_is_the_in_memory_estimate(tmp_path, small_candidates):
+    pts = _noisy_torus(6000)
+    mem = core.estimate(pts, passes=2)
+    assert mem.params["passes_run"] >= 1 and len(np.unique(mem.k_point)) > 1
+    run = estimate_tiled(pts, tmp_path / "out.ply", tile_points=375, workers=0, passes=2,
+                         workdir=tmp_path / "work", keep_workdir=True)
+    assert run.n_tiles >= 16
+    _same(tmp_path / "out.ply", mem)
+    kept = auto.PassView(tmp_path / "work", run.params["passes_run"])
+    rows = np.concatenate([kept.load_result(t) for t in range(run.n_tiles)])
+    np.testing.assert_array_equal(rows["k"][np.argsort(rows["index"])], mem.k_point)  # the same k per point
+    ref = (tmp_path / "out.ply").read_bytes()  # a tile killed before its marker: redone, the same file
+    (tmp_path / "work" / "results" / "tile_000003.done").unlink()
+    kept.result_path(3).write_bytes(b"garbage")
+    rerun = estimate_tiled(pts, tmp_path / "out.ply", tile_points=375, workers=0, passes=2, workdir=tmp_path / "work")
+    assert rerun.tiles_skipped == run.n_tiles - 1 and rerun.params == run.params
+    assert (tmp_path / "out.ply").read_bytes() == ref
+    for name in ("noise", "crease_typical", "passes_run"):  # the whole cloud's, exactly
+        assert run.params[name] == mem.params[name]
+
+
+def test_the_candidates_come_from_the_whole_cloud(small_candidates):
+    spec = task.TileSpec(k="auto", method="nr", passes=4, orientation="propagate", n_points=8000)
+    assert task.auto_plan(spec, 500).candidates == core.plan(8000).candidates == (20, 28)
+    assert core.plan(500).candidates != (20, 28)  # what a tile alone would have chosen
+
+
+def test_a_noise_free_cloud_keeps_the_jets_and_one_fit(tmp_path, small_candidates):
+    """Quiet: the jets are the result and no refinement pass runs; signs by a viewpoint."""
+    pts = shapes.ellipsoid(4000, seed=2).points
+    view = (0.1, -0.2, 0.3)  # inside: every normal inward
+    mem = core.estimate(pts, orientation=view)
+    assert mem.params["passes_run"] == 0 and mem.params["jet_fraction"] > 0.5
+    run = estimate_tiled(pts, tmp_path / "out.ply", tile_points=250, workers=0, orientation=view)
+    assert run.n_tiles >= 16 and run.params["passes_run"] == 0
+    _same(tmp_path / "out.ply", mem)
+
+
+@pytest.mark.parametrize("cut, exact", [(0, True), (1, False)])
+def test_the_derived_auto_chain_is_needed_and_enough(tmp_path, monkeypatch, small_candidates, cut, exact):
+    """With no head start (a zero first margin) the halo is only what the chain demands:
+    the derived chain reproduces memory; one ring fewer at each level does not."""
+    pts = _noisy_torus(4000)
+    mem = core.estimate(pts, passes=1)
+    monkeypatch.setattr(task, "first_margin", lambda *args: 0.0)
+    derived = halo.auto_chain
+    monkeypatch.setattr(auto, "auto_chain", lambda *a: tuple((r - cut, k) for r, k in derived(*a)))
+    estimate_tiled(pts, tmp_path / "out.ply", tile_points=250, workers=0, passes=1)
+    if exact:
+        _same(tmp_path / "out.ply", mem)
+    else:
+        with pytest.raises(AssertionError):
+            _same(tmp_path / "out.ply", mem)
+
+
+def test_the_auto_chain_covers_every_pass():
+    assert halo.auto_chain(4, 226, 15) == ((5, 226), (6, 15))
+    assert halo.auto_chain(0, 20, 15) == ((1, 20), (2, 15))
+
+
+@pytest.mark.parametrize("sizes", [[0], [1], [5, 0, 3], [4, 4], [3000, 1, 2500, 0, 7], [1_200_000, 900_001]])
+def test_the_median_of_sorted_files_is_numpys(monkeypatch, sizes):
+    monkeypatch.setattr(wholecloud, "_GATHER", 64)  # the narrowing, not only the final partition
+    rng = np.random.default_rng(len(sizes))
+    arrays = [np.sort(np.round(rng.normal(size=n), 2)) for n in sizes]  # ties across arrays
+    joined = np.concatenate(arrays)
+    assert wholecloud.median_of(arrays) == (float(np.median(joined)) if len(joined) else 0.0)
+    for k in (0, len(joined) // 3, len(joined) - 1) if len(joined) else ():
+        assert wholecloud.kth_smallest(arrays, k) == np.sort(joined)[k]
+
+
+def test_the_pass_rule_is_replayed_on_whole_cloud_means(tmp_path):
+    """Tiles' sums of turns: a pass that turns more than PASS_DECAY x the previous is undone."""
+    store = auto.TileStore(tmp_path)
+    (tmp_path / "results").mkdir()
+    plan = core.plan(1000, k="auto")
+    share = [[10.0, 1.0, 0.9, 0.8, 0.7], [100.0, 10.0, 6.0, 5.9, 1.0]]  # per tile: sum of turns per pass
+    for t, sums in enumerate(share):
+        stats = np.zeros((plan.passes + 2, 2))
+        stats[:-1, 0], stats[:-1, 1] = sums, 500
+        stats[-1, 0] = 500  # points NR fits with noise
+        wholecloud.write_npy(store, store.result_path(t, ".stats"), stats)
+    assert auto.kept_pass(store, 2, plan) == 2  # means 0.11, 0.011, 0.0069, 0.0067 (> 0.7 x 0.0069): undone
+
+
+def test_a_work_directory_of_other_auto_rules_is_not_resumed(monkeypatch):
+    """The candidates (a library's rule, not an argument) are part of the run's manifest."""
+    from core.tiled import run
+
+    spec = task.TileSpec(k="auto", method="nr", passes=4, orientation="propagate", n_points=8000)
+    before = run._auto_rules(spec)
+    monkeypatch.setattr(scale, "NEIGHBOUR_BUDGET", 240_000)
+    assert run._auto_rules(spec) != before
+    assert run._auto_rules(task.TileSpec(k=15, method="nr", passes=1, orientation="propagate")) is None
