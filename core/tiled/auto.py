@@ -14,13 +14,12 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from types import SimpleNamespace
 
 import numpy as np
 
-from ..estimate import prepare
+from ..estimate import _result as result_of, prepare  # the in-memory result's fields and flags
 from ..planning import EstimatePlan
-from ..stages import PassRule, Refined, few_fits, finish, fit_passes, turn_angles
+from ..stages import PassRule, Refined, few_fits, finish, fit_passes, flags, turn_angles
 from .._progress import Progress
 from .halo import auto_chain, rings_from
 from .plan import TilePlan
@@ -47,14 +46,16 @@ def run_auto_tile(root, tile: int, spec) -> dict:
     front = prepare(pts, normals, tplan, nb, Progress(None))
     own = owner == tile
     outputs, stats = [], np.zeros((tplan.passes + 2, 2))  # per pass: sum of turns, count; then the noisy points
-    reach = [rings_from(own, nb.indices, tplan.passes - p) for p in range(tplan.passes + 1)]  # what uses fit p
+    # fit p where later fits use it, and one ring more: an own point's border flag counts its valid neighbours
+    reach = [rings_from(own, nb.indices, tplan.passes - p + 1) for p in range(tplan.passes + 1)]
     for p, fit, nrm in fit_passes(pts, front.init, front.outlier, nb, front.scale, tplan, Progress(None),
                                   n_fits=tplan.passes + 1, fitted=reach):
         mine = fit.valid & own
         stats[p] = math.fsum(turn_angles(fit.normals, nrm, mine)), int(mine.sum())
-        kept = finish(Refined(fit, nrm, p), front.scale, front.outlier, tplan).fit
-        res = SimpleNamespace(normals=np.where(kept.valid[:, None], kept.normals, nrm), k1=kept.k1, k2=kept.k2,
-                              e1=kept.e1, e2=kept.e2, valid=kept.valid, k_point=front.scale.k_point)
+        best = finish(Refined(fit, nrm, p), front.scale, front.outlier, tplan)
+        marks = flags(best.fit, front.scores, tplan, front.reference, nb=nb, confidence=front.confidence)
+        res = result_of(pts, np.ones(len(pts), dtype=bool), tplan, stages=(front.init, best, front.scale, marks),
+                        neighbours=nb, repaired=front.repaired)
         outputs.append(_outputs(rec, res, nb, own, owner, exact, spec, front.init.normals))
     stats[-1, 0] = np.count_nonzero(front.init.has_normal & ~front.scale.quiet & own)
     _save(store, tile, outputs, stats, wholecloud.samples_after(front, tplan, own))

@@ -27,6 +27,7 @@ def _same(path, mem):
     assert np.abs(c.normals * s[:, None] - mem.normals)[v].max() < 1e-9
     assert max(np.abs(k1 - mem.k1)[v].max(), np.abs(k2 - mem.k2)[v].max()) < 1e-9
     assert np.minimum(np.abs(e1 - mem.e1), np.abs(e1 + mem.e1))[v].max() < 1e-9
+    np.testing.assert_array_equal(f["border"].astype(bool), mem.border)  # reads the neighbours' final normals
 
 
 @pytest.fixture
@@ -53,7 +54,10 @@ def test_auto_in_16_tiles_is_the_in_memory_estimate(tmp_path, small_candidates):
     _same(tmp_path / "out.ply", mem)
     kept = auto.PassView(tmp_path / "work", run.params["passes_run"])
     rows = np.concatenate([kept.load_result(t) for t in range(run.n_tiles)])
-    np.testing.assert_array_equal(rows["k"][np.argsort(rows["index"])], mem.k_point)  # the same k per point
+    rows = rows[np.argsort(rows["index"])]
+    np.testing.assert_array_equal(rows["k"], mem.k_point)  # the same k per point
+    for field, name in (("degree", "degree_point"), ("border", "border"), ("crease", "crease")):  # and flags
+        np.testing.assert_array_equal(rows[field], getattr(mem, name), err_msg=field)
     ref = (tmp_path / "out.ply").read_bytes()  # a tile killed before its marker: redone, the same file
     (tmp_path / "work" / "results" / "tile_000003.done").unlink()
     kept.result_path(3).write_bytes(b"garbage")
@@ -81,21 +85,16 @@ def test_a_noise_free_cloud_keeps_the_jets_and_one_fit(tmp_path, small_candidate
     _same(tmp_path / "out.ply", mem)
 
 
-@pytest.mark.parametrize("cut, exact", [(0, True), (1, False)])
-def test_the_derived_auto_chain_is_needed_and_enough(tmp_path, monkeypatch, small_candidates, cut, exact):
-    """With no head start (a zero first margin) the halo is only what the chain demands:
-    the derived chain reproduces memory; one ring fewer at each level does not."""
+def test_the_derived_auto_chain_is_enough(tmp_path, monkeypatch, small_candidates):
+    """With no head start (a zero first margin) the halo is only what the chain demands
+    (grown in steps until it is covered): the derived chain reproduces memory. (That one
+    ring fewer is wrong is not asserted: the halo's growth steps overshoot, so on a cloud
+    this small it can come out the same.)"""
     pts = _noisy_torus(4000)
     mem = core.estimate(pts, passes=1)
     monkeypatch.setattr(task, "first_margin", lambda *args: 0.0)
-    derived = halo.auto_chain
-    monkeypatch.setattr(auto, "auto_chain", lambda *a: tuple((r - cut, k) for r, k in derived(*a)))
     estimate_tiled(pts, tmp_path / "out.ply", tile_points=250, workers=0, passes=1)
-    if exact:
-        _same(tmp_path / "out.ply", mem)
-    else:
-        with pytest.raises(AssertionError):
-            _same(tmp_path / "out.ply", mem)
+    _same(tmp_path / "out.ply", mem)
 
 
 def test_the_auto_chain_covers_every_pass():
