@@ -13,8 +13,8 @@ from ._progress import Progress
 from ._validate import as_normals, as_points
 from .planning import EstimatePlan
 from .result import CurvatureResult
-from .stages import (choose_scale, crease_reference, find_neighbours, flags, given_normals, initial_normals,
-                     orient_signs, outlier_scores, refine)
+from .stages import (choose_scale, crease_reference, flags, given_normals, initial_normals, orient_signs,
+                     outlier_scores, refine, spatial_neighbours)
 from .tuning import AUTO_PASSES, JET_DEGREE, MAX_PASSES, OUTLIER_SCORE, PASS_DECAY, PCA_K
 
 __all__ = ["estimate", "AUTO_PASSES", "MAX_PASSES", "OUTLIER_SCORE", "PASS_DECAY", "PCA_K"]
@@ -116,8 +116,8 @@ def estimate(
         normals = as_normals(np.asarray(normals)[kept], len(pts), repair=True)
     report = Progress(progress)
 
-    nb = find_neighbours(pts, plan, neighbours, report.sub(0.0, 0.3))
-    pts = nb.points if neighbours is None else pts  # the search keeps the validated copy
+    nb, order = spatial_neighbours(pts, plan, neighbours, report.sub(0.0, 0.3))
+    caller_pts, pts, normals = pts, nb.points, order.to_sorted(normals)  # the stages run in spatial order
     idx_p, _ = nb.take(plan.k_initial)
     scores = outlier_scores(pts, idx_p)
     outlier = scores > OUTLIER_SCORE
@@ -126,7 +126,7 @@ def estimate(
         init = initial_normals(pts, nb, plan, outlier, report)
     else:
         init, repaired = given_normals(pts, normals, nb, plan)
-    init, confidence = orient_signs(pts, init, idx_p, plan)
+    init, confidence = orient_signs(pts, init, idx_p, plan, rank=order.order)
     report(0.45, "orientation")
 
     reference = None
@@ -136,8 +136,10 @@ def estimate(
     kc = choose_scale(pts, init.normals, nb, inliers, plan, report.sub(0.47, 0.7), scores=scores, k_initial=init.k)
     best = refine(pts, init, outlier, nb, kc, plan, report.sub(0.7 if plan.auto else 0.45, 1.0))
     marks = flags(best.fit, scores, plan, reference, nb=nb, confidence=confidence)
+    stages = order.to_caller((init, best, kc, marks))
+    nb = order.neighbours_to_caller(nb, caller_pts)
     report(1.0, "done")
-    return _result(pts, kept, plan, stages=(init, best, kc, marks), neighbours=nb, repaired=repaired)
+    return _result(caller_pts, kept, plan, stages=stages, neighbours=nb, repaired=repaired)
 
 
 def _plan(plan, n, asked, normals_given) -> EstimatePlan:
