@@ -12,6 +12,7 @@ from scipy.spatial import cKDTree
 
 from ._progress import Progress
 from ._validate import as_points, check_int
+from .kernels.knn import keep_nearest
 from .spacing import mean_spacing
 
 #: ``progress(fraction, stage)``; returning False cancels
@@ -175,8 +176,9 @@ def _query_distinct(tree, pts, order, idx, dist, report) -> None:
         d, i = np.reshape(d, (stop - start, k_query)), np.reshape(i, (stop - start, k_query))
         if k_query > k_max:
             _canonical_cut(tree, pts, query, d, i, k_max)
-        dist[start:stop], idx[start:stop] = d[:, :k_max], i[:, :k_max]
-        _ties_by_index(dist[start:stop], idx[start:stop])
+        tied = np.empty(stop - start, dtype=np.bool_)
+        keep_nearest(d, i, dist[start:stop], idx[start:stop], tied)
+        _ties_by_index(dist[start:stop], idx[start:stop], np.flatnonzero(tied))
         report(stop / n, "neighbours")
     _self_first(idx, dist, np.arange(n) if order is None else order)
 
@@ -251,10 +253,9 @@ def _canonical_cut(tree, pts, query, d, i, k_max) -> None:
         d[r, :k_max], i[r, :k_max] = dd[order], ball[order]
 
 
-def _ties_by_index(dist: np.ndarray, idx: np.ndarray) -> None:
+def _ties_by_index(dist: np.ndarray, idx: np.ndarray, rows: np.ndarray) -> None:
     """Within equal distances, order neighbours by index (so that ``take(k)`` for a smaller
-    k, and the sums over neighbours, do not depend on the kd-tree); only rows with a tie."""
-    rows = np.flatnonzero((dist[:, 1:] == dist[:, :-1]).any(axis=1))
+    k, and the sums over neighbours, do not depend on the kd-tree); ``rows``: those with a tie."""
     if len(rows):
         order = _row_lexsort(dist[rows], idx[rows])
         dist[rows] = np.take_along_axis(dist[rows], order, axis=1)

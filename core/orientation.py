@@ -116,19 +116,21 @@ def _global_signs(points, normals, labels, mode, sign, rank):
     have = np.flatnonzero(labels >= 0)
     if not len(have):
         return
-    lab = labels[have]
+    rows = slice(None) if len(have) == len(labels) else have  # a view, not a copy, when all have a normal
+    lab = labels[rows]
     n_comp = int(lab.max()) + 1
     if mode == "propagate":
-        z = points[have, 2]
-        order = np.lexsort((rank[have], -z, lab))  # by component, highest first
+        z = points[rows, 2]
+        order = np.lexsort((rank[rows], -z, lab))  # by component, highest first
         first = order[np.r_[0, np.flatnonzero(np.diff(lab[order])) + 1]]
         vote = np.zeros(n_comp)
         vote[lab[first]] = normals[have[first], 2]
     else:
-        rel = points[have] - points[have].mean(axis=0)
+        pts = points[rows]
+        rel = pts - pts.mean(axis=0)
         square = np.einsum("ij,ij->i", rel, rel)
         rms = np.sqrt(np.bincount(lab, square, n_comp) / np.maximum(np.bincount(lab, minlength=n_comp), 1))
-        far, facing = far_facing(rel, normals[have], rms[lab])
+        far, facing = far_facing(rel, normals[rows], rms[lab])
         vote = np.bincount(lab[far], facing, n_comp)
     sign[have[vote[lab] < 0]] *= -1.0
 
