@@ -9,17 +9,6 @@ from ._base import OPTS
 
 
 @njit(**OPTS, parallel=True)
-def scatter_rows(src, dest, out):
-    """``out[dest[r]] = src[r]`` for every row r, on all cores (numpy's fancy assignment
-    is single-threaded and 3-5x slower on 10^6 rows)."""
-    n, m = src.shape
-    for r in prange(n):
-        d = dest[r]
-        for c in range(m):
-            out[d, c] = src[r, c]
-
-
-@njit(**OPTS, parallel=True)
 def relabel_rows(idx, dist, dest, out_idx, out_dist):
     """Neighbour lists moved to the other order: row r goes to row ``dest[r]`` and every
     index j in it becomes ``dest[j]``."""
@@ -36,7 +25,7 @@ def move_rows(a, dest):
     """Move row r of ``a`` to row ``dest[r]``, in place (numpy reference: ``b[dest] = a``).
 
     Follows the permutation's cycles with one row of scratch, so an (N, k) array is
-    reordered without a second copy of it (slower than :func:`scatter_rows`: for arrays
+    reordered without a second copy of it (slower than :func:`relabel_rows`: for arrays
     too large to hold twice).
     """
     n = a.shape[0]
