@@ -15,8 +15,9 @@ from ._progress import Progress
 from ._validate import as_normals, as_points
 from .planning import EstimatePlan
 from .result import CurvatureResult
-from .stages import (choose_scale, crease_reference, find_neighbours, flags, given_normals, initial_normals,
-                     orient_signs, outlier_scores, refine)
+from .spatial_order import SpatialOrder
+from .stages import (choose_scale, crease_reference, flags, given_normals, initial_normals, orient_signs,
+                     outlier_scores, refine, spatial_neighbours)
 from .tuning import AUTO_PASSES, JET_DEGREE, MAX_PASSES, OUTLIER_SCORE, PASS_DECAY, PCA_K
 
 __all__ = ["estimate", "AUTO_PASSES", "MAX_PASSES", "OUTLIER_SCORE", "PASS_DECAY", "PCA_K"]
@@ -122,16 +123,18 @@ def estimate(
     best = refine(front.pts, front.init, front.outlier, front.nb, front.scale, plan,
                   report.sub(0.7 if plan.auto else 0.45, 1.0))
     marks = flags(best.fit, front.scores, plan, front.reference, nb=front.nb, confidence=front.confidence)
+    stages = front.order.to_caller((front.init, best, front.scale, marks))
+    nb = front.order.neighbours_to_caller(front.nb, pts)
     report(1.0, "done")
-    return _result(front.pts, kept, plan, stages=(front.init, best, front.scale, marks), neighbours=front.nb,
-                   repaired=front.repaired)
+    return _result(pts, kept, plan, stages=stages, neighbours=nb, repaired=front.repaired)
 
 
 class Prepared(NamedTuple):
-    """What the fits start from: the checked points ``pts``, neighbours ``nb``, outlier
-    ``scores`` and flags ``outlier``, oriented initial normals ``init`` (and the counts of
-    their ``repaired`` rows when given, the orientation ``confidence``), the linear
-    ``reference`` fit creases are judged by (k="auto") and the ``scale`` per point."""
+    """What the fits start from: the points ``pts`` in spatial ``order`` (the caller's
+    order is ``order.to_caller``), neighbours ``nb``, outlier ``scores`` and flags
+    ``outlier``, oriented initial normals ``init`` (and the counts of their ``repaired``
+    rows when given, the orientation ``confidence``), the linear ``reference`` fit creases
+    are judged by (k="auto") and the ``scale`` per point."""
 
     pts: np.ndarray
     nb: object
@@ -142,14 +145,16 @@ class Prepared(NamedTuple):
     confidence: np.ndarray
     reference: object
     scale: object
+    order: SpatialOrder
 
 
 def prepare(pts, normals, plan, neighbours, report) -> Prepared:
     """The stages before the fits: neighbours -> outlier scores -> initial normals ->
     orientation -> scale choice (shared by :func:`estimate` and the tiles of
-    :mod:`core.tiled`, which run the fits' passes themselves)."""
-    nb = find_neighbours(pts, plan, neighbours, report.sub(0.0, 0.3))
-    pts = nb.points if neighbours is None else pts  # the search keeps the validated copy
+    :mod:`core.tiled`, which run the fits' passes themselves). They run on the points in
+    spatial order (:mod:`core.spatial_order`; given ``neighbours``: in the caller's)."""
+    nb, order = spatial_neighbours(pts, plan, neighbours, report.sub(0.0, 0.3))
+    pts, normals = nb.points, order.to_sorted(normals)  # the stages run in spatial order
     idx_p, _ = nb.take(plan.k_initial)
     scores = outlier_scores(pts, idx_p)
     outlier = scores > OUTLIER_SCORE
@@ -158,7 +163,7 @@ def prepare(pts, normals, plan, neighbours, report) -> Prepared:
         init = initial_normals(pts, nb, plan, outlier, report)
     else:
         init, repaired = given_normals(pts, normals, nb, plan)
-    init, confidence = orient_signs(pts, init, idx_p, plan)
+    init, confidence = orient_signs(pts, init, idx_p, plan, rank=order.order)
     report(0.45, "orientation")
 
     reference = None
@@ -166,7 +171,7 @@ def prepare(pts, normals, plan, neighbours, report) -> Prepared:
         reference = crease_reference(pts, init.normals, init.has_normal, nb, plan, report.sub(0.45, 0.47))
     inliers = init.has_normal & ~outlier if plan.robust else init.has_normal  # outliers sit out the choice of k
     kc = choose_scale(pts, init.normals, nb, inliers, plan, report.sub(0.47, 0.7), scores=scores, k_initial=init.k)
-    return Prepared(pts, nb, scores, outlier, init, repaired, confidence, reference, kc)
+    return Prepared(pts, nb, scores, outlier, init, repaired, confidence, reference, kc, order)
 
 
 def _plan(plan, n, asked, normals_given) -> EstimatePlan:

@@ -12,6 +12,7 @@ from scipy.spatial import cKDTree
 
 from ._progress import Progress
 from ._validate import as_points, check_int
+from .kernels.knn import keep_nearest
 from .spacing import mean_spacing
 
 #: ``progress(fraction, stage)``; returning False cancels
@@ -104,37 +105,82 @@ def build_neighbours(points: ArrayLike, k_max: int, *, progress: ProgressCallbac
 def search_neighbours(pts: np.ndarray, k_max: int, *, progress=None) -> Neighbours:
     """:func:`build_neighbours` on points already validated (a C-contiguous (N, 3)
     float64 array, e.g. from :func:`core.estimate`), which are kept, not copied."""
+    return _search(pts, k_max, progress, spatial=False)[0]
+
+
+def search_in_spatial_order(pts: np.ndarray, k_max: int, *, progress=None) -> tuple[Neighbours, np.ndarray | None]:
+    """:func:`search_neighbours` on the points put in the kd-tree's leaf order (neighbours
+    in space are neighbours in memory: every later loop over the neighbours reads cache
+    lines already loaded, 2-3x faster at 1M points, and the search itself too).
+
+    Returns ``(nb, order)``: ``nb`` holds the points ``pts[order]`` and their neighbours
+    as indices into that array; each row holds the same neighbours in the same order as
+    :func:`search_neighbours` gives (ties are broken by the caller's index, not by the
+    sorted one). ``order`` is None, and ``nb`` in the caller's order, when large groups of
+    identical points take the duplicate-aware search.
+    """
+    return _search(pts, k_max, progress, spatial=True)
+
+
+def _search(pts, k_max, progress, *, spatial):
     k_max = check_int(k_max, name="k_max", low=1, high=len(pts))
     report = Progress(progress)
     report(0.0, "neighbours")
     n = len(pts)
     idx = np.empty((n, k_max), dtype=np.int64 if n > 2**31 - 1 else np.int32)
     dist = np.empty((n, k_max), dtype=np.float64)
-    groups = _duplicate_groups(pts)
-    if groups is None:
-        _query_distinct(pts, idx, dist, report)
-    else:
+    groups = _duplicate_groups(pts) if _largest_group_bound(pts) > MAX_DUPLICATES else None
+    if groups is not None:
         _query_with_duplicates(pts, groups, idx, dist, report)
+        spatial = False
+    else:
+        tree = cKDTree(pts)
+        order = np.asarray(tree.indices, dtype=idx.dtype)  # the leaf order
+        _query_distinct(tree, pts, order if spatial else None, idx, dist, report)
+    if spatial:
+        inverse = np.empty_like(order)
+        inverse[order] = np.arange(n, dtype=order.dtype)
+        for start in range(0, n, _ROWS):  # caller's indices -> indices into pts[order]
+            idx[start:start + _ROWS] = inverse[idx[start:start + _ROWS]]
+        pts = pts[order]
     idx.setflags(write=False)
     dist.setflags(write=False)
-    return Neighbours(points=pts, indices=idx, distances=dist)
+    return Neighbours(points=pts, indices=idx, distances=dist), (order if spatial else None)
 
 
-def _query_distinct(pts, idx, dist, report) -> None:
-    """Plain kd-tree search (few or no duplicates)."""
-    tree = cKDTree(pts)
+#: odd 64-bit multipliers mixing the three coordinates' bits into one hash
+_MIX = np.array([0x9E3779B97F4A7C15, 0xC2B2AE3D27D4EB4F, 0x165667B19E3779F9], dtype=np.uint64)
+
+
+def _largest_group_bound(pts) -> int:
+    """An upper bound on the size of the largest group of identical points: the largest
+    group of equal hashes of their coordinates (a sort of N integers, 30x faster than
+    sorting the points by their three coordinates; a collision only overestimates)."""
+    bits = (pts + 0.0).view(np.uint64)  # + 0.0: -0.0 and 0.0 are the same coordinate
+    h = bits[:, 0] * _MIX[0] ^ bits[:, 1] * _MIX[1] ^ bits[:, 2] * _MIX[2]
+    h.sort()
+    new = np.ones(len(h) + 1, dtype=bool)
+    np.not_equal(h[1:], h[:-1], out=new[1:-1])
+    return int(np.diff(np.flatnonzero(new)).max())
+
+
+def _query_distinct(tree, pts, order, idx, dist, report) -> None:
+    """Plain kd-tree search (few or no duplicates); row r of ``idx`` / ``dist`` holds the
+    neighbours of point ``order[r]`` (of point r without ``order``), as the caller's indices."""
     n, k_max = idx.shape
     k_query = min(k_max + 1, n)  # one more: a tie at the cut shows as equal k-th and (k+1)-th distances
     for start in range(0, n, _CHUNK):
         stop = min(n, start + _CHUNK)
-        d, i = tree.query(pts[start:stop], k=k_query, workers=-1)
+        query = pts[start:stop] if order is None else pts[order[start:stop]]
+        d, i = tree.query(query, k=k_query, workers=-1)
         d, i = np.reshape(d, (stop - start, k_query)), np.reshape(i, (stop - start, k_query))
         if k_query > k_max:
-            _canonical_cut(tree, pts, start, d, i, k_max)
-        dist[start:stop], idx[start:stop] = d[:, :k_max], i[:, :k_max]
-        _ties_by_index(dist[start:stop], idx[start:stop])
+            _canonical_cut(tree, pts, query, d, i, k_max)
+        tied = np.empty(stop - start, dtype=np.bool_)
+        keep_nearest(d, i, dist[start:stop], idx[start:stop], tied)
+        _ties_by_index(dist[start:stop], idx[start:stop], np.flatnonzero(tied))
         report(stop / n, "neighbours")
-    _self_first(idx, dist)
+    _self_first(idx, dist, np.arange(n) if order is None else order)
 
 
 def _duplicate_groups(pts):
@@ -187,7 +233,7 @@ def _query_with_duplicates(pts, groups, idx, dist, report) -> None:
         report(g1 / len(distinct), "neighbours")
 
 
-def _canonical_cut(tree, pts, start, d, i, k_max) -> None:
+def _canonical_cut(tree, pts, query, d, i, k_max) -> None:
     """Rows whose k_max-th and next neighbours are equally far: keep the lowest indices.
 
     The kd-tree keeps whichever tied point it met first, which depends on the tree; with
@@ -199,18 +245,17 @@ def _canonical_cut(tree, pts, start, d, i, k_max) -> None:
     rows = np.flatnonzero(d[:, k_max] == d[:, k_max - 1])
     if not len(rows):
         return
-    balls = tree.query_ball_point(pts[start + rows], r=d[rows, k_max - 1] * (1 + 1e-12) + 1e-300)
+    balls = tree.query_ball_point(query[rows], r=d[rows, k_max - 1] * (1 + 1e-12) + 1e-300)
     for r, ball in zip(rows, balls):
         ball = np.asarray(ball, dtype=np.int64)
-        dd = np.sqrt(((pts[ball] - pts[start + r]) ** 2).sum(axis=1))
+        dd = np.sqrt(((pts[ball] - query[r]) ** 2).sum(axis=1))
         order = np.lexsort((ball, dd))[: k_max]
         d[r, :k_max], i[r, :k_max] = dd[order], ball[order]
 
 
-def _ties_by_index(dist: np.ndarray, idx: np.ndarray) -> None:
+def _ties_by_index(dist: np.ndarray, idx: np.ndarray, rows: np.ndarray) -> None:
     """Within equal distances, order neighbours by index (so that ``take(k)`` for a smaller
-    k, and the sums over neighbours, do not depend on the kd-tree); only rows with a tie."""
-    rows = np.flatnonzero((dist[:, 1:] == dist[:, :-1]).any(axis=1))
+    k, and the sums over neighbours, do not depend on the kd-tree); ``rows``: those with a tie."""
     if len(rows):
         order = _row_lexsort(dist[rows], idx[rows])
         dist[rows] = np.take_along_axis(dist[rows], order, axis=1)
@@ -224,19 +269,20 @@ def _row_lexsort(dist, idx):
     return np.take_along_axis(order, by_dist, axis=1)
 
 
-def _self_first(idx: np.ndarray, dist: np.ndarray) -> None:
-    """Duplicate points can tie with the point itself; put the point first."""
-    rows = np.arange(len(idx))
-    wrong = idx[:, 0] != rows
+def _self_first(idx: np.ndarray, dist: np.ndarray, own: np.ndarray) -> None:
+    """Duplicate points can tie with the point itself; put the point (row r's is
+    ``own[r]``) first."""
+    wrong = idx[:, 0] != own
     if not wrong.any():
         return
     for r in np.flatnonzero(wrong):
-        pos = np.flatnonzero(idx[r] == r)
+        me = own[r]
+        pos = np.flatnonzero(idx[r] == me)
         if len(pos):
             j = pos[0]
             idx[r, 1 : j + 1] = idx[r, 0:j].copy()
         else:  # more than k_max exact duplicates: the point was not returned at all
             idx[r, 1:] = idx[r, :-1].copy()
             dist[r, 1:] = dist[r, :-1].copy()
-        idx[r, 0] = r
+        idx[r, 0] = me
         dist[r, 0] = 0.0

@@ -55,7 +55,7 @@ class Orientation:
     labels: np.ndarray
 
 
-def orient(points, normals, idx, mode="outward", *, ok=None) -> Orientation:
+def orient(points, normals, idx, mode="outward", *, ok=None, rank=None) -> Orientation:
     """Make normal signs globally consistent.
 
     Parameters
@@ -69,6 +69,9 @@ def orient(points, normals, idx, mode="outward", *, ok=None) -> Orientation:
         point faces +z), "keep" (signs untouched, only the confidence), or a (3,)
         viewpoint that every normal is made to face.
     ok : (N,) bool, rows that have a normal (default: finite rows).
+    rank : (N,) int, optional, each point's index in the caller's order when the points
+        are passed in another (:mod:`core.spatial_order`): equally strong edges are taken
+        in that order, so the signs do not depend on the order in memory.
 
     Returns
     -------
@@ -80,23 +83,32 @@ def orient(points, normals, idx, mode="outward", *, ok=None) -> Orientation:
     graph = np.ascontiguousarray(idx[:, :ORIENT_K], dtype=np.int64)
     n = len(pts)
     labels = np.where(ok, 0, -1)
-    ev, first = _evidence(pts, nrm, graph, ok)
+    rank = np.arange(n) if rank is None else np.asarray(rank, dtype=np.int64)
+    ev, first = _evidence(pts, nrm, graph, ok, rank)
     sign = np.ones(n)
     if not isinstance(mode, str):
         sign[np.einsum("ij,ij->i", nrm, np.asarray(mode, dtype=float) - pts) < 0] = -1.0
     elif mode != "keep":
-        flat = ev.ravel()
-        order = kern.strongest_first(flat, first.ravel(), SORT_LEVELS)
+        rows = np.empty(n, dtype=np.int64)
+        rows[rank] = np.arange(n)
+        order = kern.strongest_first(ev, first, SORT_LEVELS, rows)
         flip = np.zeros(n, dtype=np.int8)
-        roots = kern.kruskal_signs(order, np.repeat(np.arange(n), graph.shape[1]), graph.ravel(), flat, n, flip)
+        roots = kern.kruskal_signs(order, graph, ev, flip)
         sign[flip == 1] = -1.0
-        labels = np.where(ok, np.unique(roots, return_inverse=True)[1], -1)
-        _global_signs(pts, nrm * sign[:, None], labels, mode, sign)
+        labels = np.where(ok, _numbered(roots), -1)
+        _global_signs(pts, nrm * sign[:, None], labels, mode, sign, rank)
     confidence = np.empty(n)
     kern.agreement(ev, graph, (sign < 0).astype(np.int8), ok, confidence)
     if mode != "keep" and isinstance(mode, str):
         _settle(ev, graph, ok, sign, confidence)
     return Orientation(nrm * sign[:, None], confidence, labels)
+
+
+def _numbered(roots):
+    """Component numbers 0, 1, ... in the order of their roots' indices (what
+    ``np.unique(roots, return_inverse=True)[1]`` gives, without sorting N values)."""
+    is_root = roots == np.arange(len(roots))
+    return (np.cumsum(is_root) - 1)[roots]
 
 
 def _settle(ev, graph, ok, sign, confidence):
@@ -117,26 +129,28 @@ def orient_normals(points, normals, idx, mode, *, ok=None):
     return orient(points, normals, idx, mode, ok=ok).normals
 
 
-def _global_signs(points, normals, labels, mode, sign):
+def _global_signs(points, normals, labels, mode, sign, rank):
     """Flip whole components (in ``sign``): "outward" by a vote of each component's points beyond its RMS
     distance from the cloud's centre (:data:`FAR_SHARE`) (weighted by how squarely they face away), "propagate" by the sign
-    of its highest point's normal z."""
+    of its highest point's normal z (of equally high ones, the lowest ``rank``)."""
     have = np.flatnonzero(labels >= 0)
     if not len(have):
         return
-    lab = labels[have]
+    rows = slice(None) if len(have) == len(labels) else have  # a view, not a copy, when all have a normal
+    lab = labels[rows]
     n_comp = int(lab.max()) + 1
     if mode == "propagate":
-        z = points[have, 2]
-        order = np.lexsort((-z, lab))  # by component, highest first
+        z = points[rows, 2]
+        order = np.lexsort((rank[rows], -z, lab))  # by component, highest first
         first = order[np.r_[0, np.flatnonzero(np.diff(lab[order])) + 1]]
         vote = np.zeros(n_comp)
         vote[lab[first]] = normals[have[first], 2]
     else:
-        rel = points[have] - points[have].mean(axis=0)
+        pts = points[rows]
+        rel = pts - pts.mean(axis=0)
         square = np.einsum("ij,ij->i", rel, rel)
         rms = np.sqrt(np.bincount(lab, square, n_comp) / np.maximum(np.bincount(lab, minlength=n_comp), 1))
-        far, facing = far_facing(rel, normals[have], rms[lab])
+        far, facing = far_facing(rel, normals[rows], rms[lab])
         vote = np.bincount(lab[far], facing, n_comp)
     sign[have[vote[lab] < 0]] *= -1.0
 
@@ -153,7 +167,7 @@ def far_facing(rel, normals, rms):
     return far, np.nan_to_num(facing)
 
 
-def _evidence(points, normals, graph, ok):
+def _evidence(points, normals, graph, ok, rank):
     """The signed evidence of every graph edge, and which entries are an edge's first copy."""
     n = len(points)
     packed = np.zeros((n, 8))  # one cache line per point for the random reads
@@ -162,5 +176,5 @@ def _evidence(points, normals, graph, ok):
     kern.offset_spread(points, normals, graph, ok, packed[:, 6])
     ev = np.empty(graph.shape)
     first = np.empty(graph.shape, dtype=np.bool_)
-    kern.sign_evidence(packed, graph, ok, GATE, ev, first)
+    kern.sign_evidence(packed, graph, ok, GATE, ev, first, rank)
     return ev, first

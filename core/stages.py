@@ -12,11 +12,12 @@ import numpy as np
 from . import kernels, scale
 from .frame import darboux_frame
 from .border import border_of_valid, served_by
-from .neighbours import Neighbours, search_neighbours
+from .neighbours import Neighbours, search_in_spatial_order, search_neighbours
 from .normal_repair import repair_normals
 from .normals import jet_normals, pca_normals
 from .orientation import orient
 from .patch import Chunk
+from .spatial_order import SpatialOrder
 from .tuning import (CREASE_NOISE, CREASE_RATIO, CREASE_SPREAD, JET_SCORE, OUTLIER_FLOOR, PASS_DECAY,
                      PASS_MIN_SHARE)
 
@@ -82,6 +83,15 @@ def find_neighbours(pts, plan, neighbours, report) -> Neighbours:
     return neighbours
 
 
+def spatial_neighbours(pts, plan, neighbours, report) -> tuple[Neighbours, SpatialOrder]:
+    """:func:`find_neighbours`, searched on the points in spatial order (the stages then run
+    on ``nb.points``, :mod:`core.spatial_order`); given neighbours are used as they are."""
+    if neighbours is not None:
+        return find_neighbours(pts, plan, neighbours, report), SpatialOrder(None)
+    nb, order = search_in_spatial_order(pts, plan.k_search, progress=report)
+    return nb, SpatialOrder(order)
+
+
 def outlier_scores(pts, idx) -> np.ndarray:
     """Distance of each point from its neighbours' plane in units of their spread."""
     scores = np.full(len(pts), np.nan)
@@ -97,9 +107,10 @@ def given_normals(pts, normals, nb, plan) -> tuple[Initial, dict]:
     return Initial(fixed, np.isfinite(fixed).all(axis=1)), counts
 
 
-def orient_signs(pts, init: Initial, idx, plan) -> tuple[Initial, np.ndarray]:
-    """Signs made consistent (:func:`core.orientation.orient`) and their confidence."""
-    out = orient(pts, init.normals, idx, plan.orientation, ok=init.has_normal)
+def orient_signs(pts, init: Initial, idx, plan, *, rank=None) -> tuple[Initial, np.ndarray]:
+    """Signs made consistent (:func:`core.orientation.orient`) and their confidence;
+    ``rank``: the points' indices in the caller's order if they are in another."""
+    out = orient(pts, init.normals, idx, plan.orientation, ok=init.has_normal, rank=rank)
     return init._replace(normals=out.normals), out.confidence
 
 

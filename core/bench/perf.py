@@ -1,12 +1,14 @@
 """``python -m core bench perf``: wall time and peak memory of each stage of an NR estimate.
 
-The reference is the neighbour search alone (``cKDTree(points)`` + ``query(k)`` on all
-cores) measured in the same run, so the printed ratio does not depend on the machine.
-Targets: whole NR estimate (k = 15, 1 refinement pass) <= 2x that search; peak memory
-<= 2 GB at 1M points; re-estimate with cached neighbours on 100k points < 0.5 s; k="auto"
-<= 2x the fixed-k estimate: the same fit (cubic, robust, the passes auto kept) at the largest
-candidate k, so the ratio is the cost of *choosing* k and passes; the ratio to the paper's NR
-at k = 15 is printed too.
+The reference is the neighbour search alone (``cKDTree(points)`` + ``query(k + 1)`` on all
+cores: the k neighbours and the next one, which the search needs to see ties at the cut)
+measured in the same run, so the printed ratio does not depend on the machine; the
+reference and the end-to-end estimate are each timed twice and the faster run is kept
+(the machine may be shared). Targets: whole NR estimate (k = 15, 1 refinement pass)
+<= 1.5x that search; peak memory <= 2 GB at 1M points; re-estimate with cached neighbours
+on 100k points < 0.5 s; k="auto" <= 3x NR at k = 15; the ratio to the same fit (cubic,
+robust, the passes auto kept) at the largest candidate k is printed too, the cost of
+*choosing* k and passes.
 """
 
 from __future__ import annotations
@@ -20,7 +22,10 @@ from scipy.spatial import cKDTree
 from .. import build_neighbours, estimate, plan, shapes
 from .._progress import Progress
 from ..methods import get_method
-from ..normals import orient_normals, pca_normals
+from ..neighbours import search_in_spatial_order
+from ..normals import pca_normals
+from ..orientation import orient
+from ..spatial_order import SpatialOrder
 from ..stages import fit_all
 from ._common import Sampler
 from ._table import fmt, text_table
@@ -65,14 +70,15 @@ def _timed(fn):
 
 
 def _stage_rows(points, k):
-    """Each stage of the NR pipeline run by hand, in the order estimate() runs them."""
+    """Each stage of the NR pipeline run by hand, in the order and in the (spatial) order
+    of the points that estimate() runs them."""
     rows = []
-    nb, dt, mem = _timed(lambda: build_neighbours(points, k))
-    rows.append(("neighbours (kd-tree)", dt, mem))
+    (nb, order), dt, mem = _timed(lambda: search_in_spatial_order(points, k))
+    rows.append(("neighbours (kd-tree, spatial order)", dt, mem))
     idx, dist = nb.take(k)
     (nrm, ok), dt, mem = _timed(lambda: pca_normals(nb.points, idx, dist))
     rows.append(("PCA normals (eqs. 13-14)", dt, mem))
-    nrm, dt, mem = _timed(lambda: orient_normals(nb.points, nrm, idx, "outward", ok=ok))
+    nrm, dt, mem = _timed(lambda: orient(nb.points, nrm, idx, "outward", ok=ok, rank=order).normals)
     rows.append(("orientation (core.orientation)", dt, mem))
     m = get_method("nr")
     kc = np.full(len(points), k, dtype=np.int64)
@@ -83,9 +89,19 @@ def _stage_rows(points, k):
     out, dt, mem = _timed(lambda: fit(nrm))
     rows.append(("NF fit + frame, pass 1", dt, mem))
     nrm2 = np.where(out.valid[:, None], out.normals, nrm)
-    _, dt, mem = _timed(lambda: fit(nrm2))
+    out, dt, mem = _timed(lambda: fit(nrm2))
     rows.append(("NF fit + frame, pass 2 (NR)", dt, mem))
-    return rows, nb
+    back = SpatialOrder(order)
+    _, dt, mem = _timed(lambda: (back.to_caller(out), back.neighbours_to_caller(nb, points)))
+    rows.append(("back to the caller's order", dt, mem))
+    return rows
+
+
+def _best_of_two(fn):
+    """The faster of two timed runs (the result of the second is dropped)."""
+    first = _timed(fn)
+    second = _timed(fn)
+    return first if first[1] <= second[1] else second
 
 
 def run(sizes=(100_000, 1_000_000), k=15, seed=0, out=print):
@@ -96,8 +112,8 @@ def run(sizes=(100_000, 1_000_000), k=15, seed=0, out=print):
     summary = []
     for n in sizes:
         pts = shapes.torus(n, seed=seed).points
-        _, t_ref, mem_ref = _timed(lambda: cKDTree(pts).query(pts, k=k, workers=-1))
-        res, t_all, mem_all = _timed(lambda: estimate(pts, k=k, method="nr"))
+        _, t_ref, mem_ref = _best_of_two(lambda: cKDTree(pts).query(pts, k=k + 1, workers=-1))
+        res, t_all, mem_all = _best_of_two(lambda: estimate(pts, k=k, method="nr"))
         invalid = res.n_invalid
         del res  # each measurement starts without the previous result (its neighbours) alive
         res, t_auto, mem_auto = _timed(lambda: estimate(pts, k="auto", method="nr"))
@@ -106,10 +122,11 @@ def run(sizes=(100_000, 1_000_000), k=15, seed=0, out=print):
         k_top = plan(n, k="auto").k_search
         res, t_same, mem_same = _timed(lambda: estimate(pts, k=k_top, method="nr", options=opts, passes=passes))
         del res
-        stages, nb = _stage_rows(pts, k)
+        stages = _stage_rows(pts, k)
+        nb = build_neighbours(pts, k)
         _, t_re, _ = _timed(lambda: estimate(pts, k=k, method="nr", neighbours=nb))
         _, t_nf, _ = _timed(lambda: estimate(pts, k=k, method="nf", neighbours=nb))
-        rows = [("cKDTree build + query (reference)", t_ref, mem_ref)] + stages + [
+        rows = [(f"cKDTree build + query k={k + 1} (reference)", t_ref, mem_ref)] + stages + [
             ("core.estimate NR, end to end", t_all, mem_all),
             ('core.estimate NR, k="auto", end to end', t_auto, mem_auto),
             (f"same fit at fixed k = {k_top} (no choice)", t_same, mem_same),
@@ -125,11 +142,11 @@ def run(sizes=(100_000, 1_000_000), k=15, seed=0, out=print):
                             auto_paper=t_auto / t_all, k_top=k_top))
     out("")
     for s in summary:
-        out(f"{s['n']:>9,} points: NR / search = {s['ratio']:.2f} (target <= 2), "
+        out(f"{s['n']:>9,} points: NR k={k} / search = {s['ratio']:.2f} (target <= 1.5), "
             f"peak {s['peak_mb']:.0f} MB (target <= 2048 at 1M), "
             f"re-estimate {s['reestimate']:.3f} s (target < 0.5 s at 100k), "
-            f"auto / same fit at fixed k={s['k_top']} = {s['auto']:.2f} (target <= 2), "
-            f"auto / NR k={k} = {s['auto_paper']:.1f}, invalid {s['invalid']}")
+            f"auto / NR k={k} = {s['auto_paper']:.1f} (target <= 3), "
+            f"auto / same fit at fixed k={s['k_top']} = {s['auto']:.2f}, invalid {s['invalid']}")
     return summary
 
 

@@ -49,7 +49,7 @@ def _median(t):
 
 
 @njit(**_OPTS, parallel=True)
-def sign_evidence(packed, idx, ok, gate, out, first):
+def sign_evidence(packed, idx, ok, gate, out, first, rank):
     """Signed evidence that normals i and j = idx[i, m] point the same way (> 0) or not (< 0).
 
     ``packed`` rows are (p, n, spread, 0): one cache line per neighbour. With the chord
@@ -65,7 +65,8 @@ def sign_evidence(packed, idx, ok, gate, out, first):
     does not cross the surface lies wholly inside or wholly outside the solid, so it leaves
     both points on the same side of their consistently oriented normals (a_i a_j > 0).
     ``out[i, m]`` is 0 where either point has no normal or the chord has zero length;
-    ``first[i, m]`` is False where the edge also appears in row j with j < i.
+    ``first[i, m]`` is False where the edge also appears in row j with rank[j] < rank[i]
+    (``rank``: the point's index in the caller's order, whatever the order in memory).
     """
     n, k = idx.shape
     for i in prange(n):
@@ -75,7 +76,7 @@ def sign_evidence(packed, idx, ok, gate, out, first):
             first[i, m] = True
             if j == i or not ok[i] or not ok[j]:
                 continue
-            if j < i:
+            if rank[j] < rank[i]:
                 for q in range(k):
                     if idx[j, q] == i:
                         first[i, m] = False
@@ -115,23 +116,26 @@ def _find(parent, parity, x):
 
 
 @njit(**_OPTS)
-def kruskal_signs(order, rows, cols, evidence, n, flip):
+def kruskal_signs(order, idx, evidence, flip):
     """Maximum spanning forest (Kruskal) of the evidence graph with a parity union-find.
 
-    Edges are taken in ``order`` (decreasing |evidence|); an edge joining two trees fixes
-    their relative sign (flip when its evidence is negative). Writes ``flip`` (1: flip the
-    normal) and returns the component root of every node.
+    Edges (the flat indices e of ``idx`` (N, k) and ``evidence`` (N, k), edge e joins
+    row e // k and ``idx.flat[e]``) are taken in ``order`` (decreasing |evidence|); an
+    edge joining two trees fixes their relative sign (flip when its evidence is
+    negative). Writes ``flip`` (1: flip the normal) and returns the component root of
+    every node.
     """
+    n, k = idx.shape
     parent = np.arange(n)
     parity = np.zeros(n, dtype=np.int8)
     size = np.ones(n, dtype=np.int64)
     for e in order:
-        i, j = rows[e], cols[e]
+        i, m = e // k, e % k
         ri, pi = _find(parent, parity, i)
-        rj, pj = _find(parent, parity, j)
+        rj, pj = _find(parent, parity, idx[i, m])
         if ri == rj:
             continue
-        s = 1 if evidence[e] < 0.0 else 0
+        s = 1 if evidence[i, m] < 0.0 else 0
         if size[ri] < size[rj]:
             ri, rj = rj, ri
         parent[rj] = ri
@@ -146,24 +150,29 @@ def kruskal_signs(order, rows, cols, evidence, n, flip):
 
 
 @njit(**_OPTS)
-def strongest_first(evidence, use, levels):
-    """Indices of the non-zero entries of ``evidence`` where ``use`` by decreasing |evidence|, to within
-    1 / ``levels`` (a counting sort: linear time, where a comparison sort of 10^7 edges
-    costs more than the whole spanning forest)."""
+def strongest_first(evidence, use, levels, rows):
+    """Indices of the non-zero entries of ``evidence`` (N, k) where ``use``, flattened, by
+    decreasing |evidence| to within 1 / ``levels`` (a counting sort: linear time, where a
+    comparison sort of 10^7 edges costs more than the whole spanning forest); within a
+    level, row by row in the order ``rows`` (the caller's order of the points), so the
+    forest does not depend on the order of the points in memory."""
+    n, k = evidence.shape
     count = np.zeros(levels + 1, dtype=np.int64)
-    for e in range(len(evidence)):
-        if evidence[e] != 0.0 and use[e]:
-            b = levels - min(levels - 1, int(abs(evidence[e]) * levels))
-            count[b] += 1
+    for i in range(n):
+        for m in range(k):
+            if evidence[i, m] != 0.0 and use[i, m]:
+                count[levels - min(levels - 1, int(abs(evidence[i, m]) * levels))] += 1
     start = np.zeros(levels + 1, dtype=np.int64)
     for b in range(1, levels + 1):
         start[b] = start[b - 1] + count[b - 1]
     order = np.empty(start[levels] + count[levels], dtype=np.int64)
-    for e in range(len(evidence)):
-        if evidence[e] != 0.0 and use[e]:
-            b = levels - min(levels - 1, int(abs(evidence[e]) * levels))
-            order[start[b]] = e
-            start[b] += 1
+    for t in range(n):
+        i = rows[t]
+        for m in range(k):
+            if evidence[i, m] != 0.0 and use[i, m]:
+                b = levels - min(levels - 1, int(abs(evidence[i, m]) * levels))
+                order[start[b]] = i * k + m
+                start[b] += 1
     return order
 
 

@@ -1,0 +1,168 @@
+"""The estimate runs on the points in spatial order and answers in the caller's order:
+every number must be the one the caller's order gives (ties, orientation forests and
+the thread count included), and the reordering helpers must be exact permutations."""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+import pytest
+
+import core
+from core import neighbours, shapes, shapes_thin, spatial_order, stages
+from core.kernels.permute import move_rows
+from core.kernels.sign_evidence import strongest_first
+from core.orientation import ORIENT_K, SORT_LEVELS, _evidence, orient
+
+FIELDS = ("normals", "k1", "k2", "e1", "e2", "valid", "k_point", "outlier_score", "crease",
+          "orientation_confidence")
+
+
+def _unsorted(pts, k_max, *, progress=None):
+    return neighbours.search_neighbours(pts, k_max, progress=progress), None
+
+
+def _same(a, b):
+    for f in FIELDS:
+        np.testing.assert_array_equal(np.asarray(getattr(a, f)), np.asarray(getattr(b, f)), err_msg=f)
+    np.testing.assert_array_equal(a.neighbours.indices, b.neighbours.indices)
+    np.testing.assert_array_equal(a.neighbours.distances, b.neighbours.distances)
+    assert a.neighbours.points is a.points
+
+
+def _clouds():
+    rng = np.random.default_rng(7)
+    grid = np.round(shapes.sphere(3000, seed=2).points * 12) / 12  # many ties between equal distances
+    noisy = shapes.torus(3000, seed=3).points + rng.normal(scale=0.03, size=(3000, 3))
+    return {"ties": grid, "noisy torus": noisy, "thin plate": shapes_thin.thin_plate(3000, seed=1).points,
+            "two sheets": shapes_thin.two_sheets(3000, seed=1).points}
+
+
+CLOUDS = _clouds()
+
+
+@pytest.mark.parametrize("name", sorted(CLOUDS))
+@pytest.mark.parametrize("orientation", ["auto", "propagate"])
+def test_spatial_order_changes_no_number(name, orientation, monkeypatch):
+    pts = CLOUDS[name]
+    sorted_run = core.estimate(pts, k=15, orientation=orientation)
+    monkeypatch.setattr(stages, "search_in_spatial_order", _unsorted)
+    _same(sorted_run, core.estimate(pts, k=15, orientation=orientation))
+
+
+def test_spatial_order_changes_no_number_with_k_auto(monkeypatch):
+    pts = CLOUDS["noisy torus"]
+    sorted_run = core.estimate(pts)
+    monkeypatch.setattr(stages, "search_in_spatial_order", _unsorted)
+    _same(sorted_run, core.estimate(pts))
+
+
+def test_large_neighbour_arrays_are_reordered_in_place(monkeypatch):
+    pts = CLOUDS["ties"]
+    copied = core.estimate(pts, k=15)
+    monkeypatch.setattr(spatial_order, "COPY_BYTES", 0)
+    _same(copied, core.estimate(pts, k=15))
+
+
+def test_sorted_search_is_the_plain_search_relabelled():
+    pts = CLOUDS["ties"]
+    plain = neighbours.search_neighbours(pts, 20)
+    nb, order = neighbours.search_in_spatial_order(pts, 20)
+    assert sorted(order) == list(range(len(pts))) and not np.array_equal(order, np.arange(len(pts)))
+    np.testing.assert_array_equal(nb.points, pts[order])
+    np.testing.assert_array_equal(order[nb.indices], plain.indices[order])
+    np.testing.assert_array_equal(nb.distances, plain.distances[order])
+
+
+def test_given_neighbours_still_work_and_agree():
+    pts = CLOUDS["noisy torus"]
+    nb = core.build_neighbours(pts, 20)
+    a, b = core.estimate(pts, k=15), core.estimate(pts, k=15, neighbours=nb)
+    for f in FIELDS:
+        np.testing.assert_array_equal(np.asarray(getattr(a, f)), np.asarray(getattr(b, f)), err_msg=f)
+    assert b.neighbours is nb
+
+
+def test_results_do_not_depend_on_the_thread_count():
+    if numba.config.NUMBA_NUM_THREADS < 2:
+        pytest.skip("one thread only")
+    pts = CLOUDS["two sheets"]
+    before = numba.get_num_threads()
+    try:
+        numba.set_num_threads(1)
+        one = core.estimate(pts, k=15)
+        numba.set_num_threads(2)
+        two = core.estimate(pts, k=15)
+    finally:
+        numba.set_num_threads(before)
+    _same(one, two)
+
+
+def test_duplicates_keep_the_caller_order():
+    pts = np.vstack([CLOUDS["noisy torus"], np.repeat(CLOUDS["noisy torus"][:1], 300, axis=0)])
+    nb, order = neighbours.search_in_spatial_order(pts, 15)
+    assert order is None and nb.points is pts  # the duplicate-aware search, in the caller's order
+    assert (nb.indices[:, 0] == np.arange(len(pts))).all()
+
+
+@pytest.mark.parametrize("groups", [[1], [3, 300], [257, 2, 900]])
+def test_largest_group_bound_is_at_least_the_largest_group(groups):
+    rng = np.random.default_rng(len(groups))
+    base = rng.random((len(groups) + 50, 3))
+    pts = np.vstack([base[len(groups):]] + [np.repeat(base[i:i + 1], g, axis=0) for i, g in enumerate(groups)])
+    pts[-1] = pts[-2] * -0.0 if groups == [1] else pts[-1]  # -0.0 and 0.0 are the same coordinate
+    bound = neighbours._largest_group_bound(pts)
+    assert bound >= max(groups) and bound <= max(groups) + 1
+    assert neighbours._largest_group_bound(np.array([[0.0, -0.0, 1.0], [-0.0, 0.0, 1.0]])) == 2
+
+
+def test_orient_with_rank_matches_the_caller_order():
+    s = shapes_thin.thin_plate(3000, seed=4)
+    pts = s.points
+    idx = core.build_neighbours(pts, 12).indices
+    nrm = core.estimate(pts, k=12, orientation="keep").normals * np.where(np.arange(len(pts)) % 3, 1.0, -1.0)[:, None]
+    perm = np.random.default_rng(0).permutation(len(pts))
+    inverse = np.argsort(perm)
+    for mode in ("outward", "propagate"):
+        ref = orient(pts, nrm, idx, mode)
+        got = orient(pts[perm], nrm[perm], inverse[idx[perm]], mode, rank=perm)
+        np.testing.assert_array_equal(got.normals, ref.normals[perm])
+        np.testing.assert_array_equal(got.confidence, ref.confidence[perm])
+
+
+@pytest.mark.parametrize("shape", [(500,), (500, 3), (500, 1), (500, 0)])
+@pytest.mark.parametrize("dtype", [np.float64, np.float32, np.bool_, np.int32])
+def test_to_caller_and_move_rows_are_the_numpy_permutation(shape, dtype):
+    rng = np.random.default_rng(1)
+    order = rng.permutation(500).astype(np.int32)
+    a = (rng.random(shape) * 100).astype(dtype)
+    ref = np.empty_like(a)
+    ref[order] = a
+    back = spatial_order.SpatialOrder(order)
+    np.testing.assert_array_equal(back.to_caller(a), ref)
+    np.testing.assert_array_equal(back.to_caller(np.asfortranarray(a)), ref)
+    assert back.to_caller((a, 3.0))[1] == 3.0 and spatial_order.SpatialOrder(None).to_caller(a) is a
+    if a.ndim == 2:
+        moved = a.copy()
+        move_rows(moved, order)
+        np.testing.assert_array_equal(moved, ref)
+
+
+def test_orientation_edges_are_taken_in_the_caller_order():
+    """The spanning forest's input, edge by edge: the same evidence, the same first copies
+    and the same order of equally strong edges whatever the order of the points."""
+    rng = np.random.default_rng(5)
+    pts = rng.random((2000, 3))
+    nrm = rng.normal(size=(2000, 3))
+    nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
+    graph = core.build_neighbours(pts, ORIENT_K).indices.astype(np.int64)
+    ok = np.ones(len(pts), dtype=bool)
+    perm = rng.permutation(len(pts))
+    inverse = np.argsort(perm)
+    ev, first = _evidence(pts, nrm, graph, ok, np.arange(len(pts)))
+    ev_s, first_s = _evidence(pts[perm], nrm[perm], inverse[graph[perm]], ok[perm], perm)
+    np.testing.assert_array_equal(ev_s, ev[perm])
+    np.testing.assert_array_equal(first_s, first[perm])
+    order = strongest_first(ev, first, SORT_LEVELS, np.arange(len(pts)))
+    order_s = strongest_first(ev_s, first_s, SORT_LEVELS, inverse)
+    np.testing.assert_array_equal(perm[order_s // ORIENT_K] * ORIENT_K + order_s % ORIENT_K, order)
