@@ -9,7 +9,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import kernels, scale
+from . import kernels, passes, scale
 from .frame import darboux_frame
 from .border import border_of_valid, served_by
 from .neighbours import Neighbours, search_neighbours
@@ -181,22 +181,43 @@ def fit_all(pts, nrm, idx, kc, h, has_normal, *, method, options, report) -> Fit
     """One fit of ``method`` with ``options`` over all points in chunks, through the shared
     frame path: point i uses its first ``kc[i]`` neighbours in ``idx``, lengths in units of
     ``h[i]``; points without ``has_normal`` (or h = 0) stay invalid."""
-    n = len(pts)
+    out = _empty_fit(len(pts))
+    _Fitter(pts, idx, kc, h, method, options).into(out, nrm, has_normal, report)
+    return out
+
+
+def _empty_fit(n) -> Fit:
     def vectors():
         return np.full((n, 3), np.nan)
 
     def scalars():
         return np.full(n, np.nan)
 
-    out = Fit(vectors(), scalars(), scalars(), vectors(), vectors(), np.zeros(n, dtype=bool), scalars(), scalars())
-    usable = has_normal & (h > 0)
-    for start in range(0, n, _CHUNK):
-        centres = np.arange(start, min(n, start + _CHUNK))
-        centres = centres[usable[centres]]
-        if len(centres):
-            _fit_chunk(Chunk.build(pts, nrm, idx[centres], h[centres], centres, kc[centres]), method, options, out)
-        report(min(n, start + _CHUNK) / n, method.name)
-    return out
+    return Fit(vectors(), scalars(), scalars(), vectors(), vectors(), np.zeros(n, dtype=bool), scalars(), scalars())
+
+
+class _Fitter(NamedTuple):
+    """What every fit of a refinement shares: the points, their neighbours ``idx``, the
+    sizes ``kc``, the length units ``h``, the method and its options (see :func:`fit_all`)."""
+
+    pts: np.ndarray
+    idx: np.ndarray
+    kc: np.ndarray
+    h: np.ndarray
+    method: object
+    options: dict
+
+    def into(self, out: Fit, nrm, has_normal, report) -> None:
+        """Fit the points with ``has_normal`` (and h > 0) to the normals ``nrm``, into ``out``."""
+        n = len(self.pts)
+        usable = has_normal & (self.h > 0)
+        for start in range(0, n, _CHUNK):
+            c = np.arange(start, min(n, start + _CHUNK))
+            c = c[usable[c]]
+            if len(c):
+                chunk = Chunk.build(self.pts, nrm, self.idx[c], self.h[c], c, self.kc[c])
+                _fit_chunk(chunk, self.method, self.options, out)
+            report(min(n, start + _CHUNK) / n, self.method.name)
 
 
 def _fit_chunk(chunk, method, opts, out: Fit) -> None:
@@ -215,25 +236,33 @@ def _fit_chunk(chunk, method, opts, out: Fit) -> None:
 def refine(pts, initial: Initial, outlier, nb, sc: Scale, plan, report) -> Refined:
     """Fit, then refine the normals (NR, §4.4) up to ``plan.passes`` times: stop below
     ``plan.tol``; with ``plan.adaptive`` undo a pass that turned the normals more than
-    PASS_DECAY x the pass before (it smoothed the shape, not the noise). In robust mode
-    the outliers leave their neighbours' fits after the first one. Where ``sc.on_jet``
-    the jet is the result (and its normal the neighbours' input); passes run only if NR
-    fits at least PASS_MIN_SHARE of the points with noise (the pass rule judges by mean
-    turns, meaningless on a handful of points)."""
+    PASS_DECAY x the pass before (it smoothed the shape, not the noise). The adaptive rule
+    judges each pass on :func:`core.passes.rule_sample` before the rest of the pass is
+    fitted, so an undone pass costs only the sample. In robust mode the outliers leave
+    their neighbours' fits after the first one. Where ``sc.on_jet`` the jet is the result
+    (and its normal the neighbours' input); passes run only if NR fits at least
+    PASS_MIN_SHARE of the points with noise (the pass rule judges by mean turns,
+    meaningless on a handful of points)."""
     kc = sc.k
     idx, dist = nb.take(int(kc.max()))
     h = dist[np.arange(len(pts)), kc - 1]
     nrm, has_normal, n_fits = _start(initial, sc, plan)
-    opts = dict(plan.options)
+    judged = passes.rule_sample(len(pts)) if plan.adaptive else np.ones(len(pts), dtype=bool)
+    fitter = _Fitter(pts, idx, kc, h, plan.method, dict(plan.options))
     converged = False
     best = None
     for p in range(n_fits):
-        fit = fit_all(pts, nrm, idx, kc, h, has_normal & ~sc.on_jet, method=plan.method, options=opts,
-                      report=report.sub(p / n_fits, (p + 1) / n_fits))
-        # mean turn of the normals in this fit: what the adaptive stop and tol compare
-        change = _mean_angle_deg(fit.normals, nrm, fit.valid) if plan.adaptive or plan.tol is not None else None
+        sub = report.sub(p / n_fits, (p + 1) / n_fits)
+        fit = _empty_fit(len(pts))
+        fitted = has_normal & ~sc.on_jet
+        fitter.into(fit, nrm, fitted & judged, sub.sub(0.0, judged.mean()))
+        # mean turn of the normals in this pass (on the rule's sample): what the adaptive stop and tol compare
+        watched = plan.adaptive or plan.tol is not None
+        change = passes.mean_turn_deg(fit.normals, nrm, fit.valid & judged) if watched else None
         if plan.adaptive and best is not None and change > PASS_DECAY * last_change:
             break  # this pass smoothed the shape rather than the noise: keep the previous fit
+        if not judged.all():
+            fitter.into(fit, nrm, fitted & ~judged, sub.sub(judged.mean(), 1.0))
         best, last_change = Refined(fit, nrm, p), change
         if p == plan.passes or converged:
             break
@@ -274,13 +303,6 @@ def _drop_outliers(best: Refined, outlier) -> Refined:
     for a in (fit.normals, fit.k1, fit.k2, fit.e1, fit.e2):
         a[outlier] = np.nan
     return best._replace(fit=fit._replace(valid=fit.valid & ~outlier))
-
-
-def _mean_angle_deg(a, b, mask):
-    if not mask.any():
-        return 0.0
-    cos = np.abs(np.einsum("ij,ij->i", a[mask], b[mask]))
-    return float(np.degrees(np.arccos(np.clip(cos, 0.0, 1.0))).mean())
 
 
 def flags(fit: Fit, scores, plan, reference: Fit | None, *, nb=None, confidence=None) -> Flags:
