@@ -9,7 +9,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import kernels, scale
+from . import kernels, passes, scale
 from .frame import darboux_frame
 from .border import border_of_valid, served_by
 from .neighbours import Neighbours, search_in_spatial_order, search_neighbours
@@ -206,22 +206,43 @@ def fit_all(pts, nrm, idx, kc, h, has_normal, *, method, options, report) -> Fit
     """One fit of ``method`` with ``options`` over all points in chunks, through the shared
     frame path: point i uses its first ``kc[i]`` neighbours in ``idx``, lengths in units of
     ``h[i]``; points without ``has_normal`` (or h = 0) stay invalid."""
-    n = len(pts)
+    out = _empty_fit(len(pts))
+    _Fitter(pts, idx, kc, h, method, options).into(out, nrm, has_normal, report)
+    return out
+
+
+def _empty_fit(n) -> Fit:
     def vectors():
         return np.full((n, 3), np.nan)
 
     def scalars():
         return np.full(n, np.nan)
 
-    out = Fit(vectors(), scalars(), scalars(), vectors(), vectors(), np.zeros(n, dtype=bool), scalars(), scalars())
-    usable = has_normal & (h > 0)
-    for start in range(0, n, _CHUNK):
-        centres = np.arange(start, min(n, start + _CHUNK))
-        centres = centres[usable[centres]]
-        if len(centres):
-            _fit_chunk(Chunk.build(pts, nrm, idx[centres], h[centres], centres, kc[centres]), method, options, out)
-        report(min(n, start + _CHUNK) / n, method.name)
-    return out
+    return Fit(vectors(), scalars(), scalars(), vectors(), vectors(), np.zeros(n, dtype=bool), scalars(), scalars())
+
+
+class _Fitter(NamedTuple):
+    """What every fit of a refinement shares: the points, their neighbours ``idx``, the
+    sizes ``kc``, the length units ``h``, the method and its options (see :func:`fit_all`)."""
+
+    pts: np.ndarray
+    idx: np.ndarray
+    kc: np.ndarray
+    h: np.ndarray
+    method: object
+    options: dict
+
+    def into(self, out: Fit, nrm, has_normal, report) -> None:
+        """Fit the points with ``has_normal`` (and h > 0) to the normals ``nrm``, into ``out``."""
+        n = len(self.pts)
+        usable = has_normal & (self.h > 0)
+        for start in range(0, n, _CHUNK):
+            c = np.arange(start, min(n, start + _CHUNK))
+            c = c[usable[c]]
+            if len(c):
+                chunk = Chunk.build(self.pts, nrm, self.idx[c], self.h[c], c, self.kc[c])
+                _fit_chunk(chunk, self.method, self.options, out)
+            report(min(n, start + _CHUNK) / n, self.method.name)
 
 
 def _fit_chunk(chunk, method, opts, out: Fit) -> None:
@@ -240,17 +261,23 @@ def _fit_chunk(chunk, method, opts, out: Fit) -> None:
 def refine(pts, initial: Initial, outlier, nb, sc: Scale, plan, report) -> Refined:
     """Fit, then refine the normals (NR, §4.4) up to ``plan.passes`` times: stop below
     ``plan.tol``; with ``plan.adaptive`` undo a pass that turned the normals more than
-    PASS_DECAY x the pass before (it smoothed the shape, not the noise). In robust mode
-    the outliers leave their neighbours' fits after the first one. Where ``sc.on_jet``
-    the jet is the result (and its normal the neighbours' input); passes run only if NR
-    fits at least PASS_MIN_SHARE of the points with noise (the pass rule judges by mean
-    turns, meaningless on a handful of points)."""
+    PASS_DECAY x the pass before (it smoothed the shape, not the noise). The adaptive rule
+    judges each pass on :func:`core.passes.rule_sample` before the rest of the pass is
+    fitted, so an undone pass costs only the sample. In robust mode the outliers leave
+    their neighbours' fits after the first one. Where ``sc.on_jet`` the jet is the result
+    (and its normal the neighbours' input); passes run only if NR fits at least
+    PASS_MIN_SHARE of the points with noise (the pass rule judges by mean turns,
+    meaningless on a handful of points)."""
     rule = PassRule(plan, few_fits(float((initial.has_normal & ~sc.quiet).mean()), plan))
+    judged = passes.rule_sample(pts, plan.n_points) if plan.adaptive else None
     best = None
-    for p, fit, nrm in fit_passes(pts, initial, outlier, nb, sc, plan, report, n_fits=rule.n_fits):
-        change = _mean_angle_deg(fit.normals, nrm, fit.valid) if rule.measures else None
+    for p, fit, nrm, complete in fit_passes(pts, initial, outlier, nb, sc, plan, report, n_fits=rule.n_fits,
+                                            first=judged):
+        seen = fit.valid if judged is None else fit.valid & judged
+        change = passes.mean_turn_deg(fit.normals, nrm, seen) if rule.measures else None
         keep, more = rule.step(p, change)
         if keep:
+            complete()
             best = Refined(fit, nrm, p)
         if not more:
             break
@@ -284,23 +311,29 @@ def few_fits(share: float, plan) -> bool:
     return bool(plan.auto and share < PASS_MIN_SHARE)
 
 
-def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n_fits, fitted=None):
-    """Yield ``(p, fit, input normals)`` for the first fit and each refinement pass, up to
-    ``n_fits`` (the caller stops when it has enough); fits are never changed afterwards.
-    ``fitted[p]`` (N,) bool, optional: fit only those points in fit p (a tile fits each pass
-    only as far out as later passes use it; the others keep their input normals)."""
+def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n_fits, fitted=None, first=None):
+    """Yield ``(p, fit, input normals, complete)`` for the first fit and each refinement
+    pass, up to ``n_fits`` (the caller stops when it has enough); fits are never changed
+    afterwards. ``fitted[p]`` (N,) bool, optional: fit only those points in fit p (a tile
+    fits each pass only as far out as later passes use it; the others keep their input
+    normals). With a mask ``first`` a pass is fitted there only, and ``complete()`` fits
+    its other points (done before the next pass if the caller did not)."""
     kc = sc.k
     idx, dist = nb.take(int(kc.max()))
     h = dist[np.arange(len(pts)), kc - 1]
     nrm, has_normal = initial.normals, initial.has_normal
     if sc.on_jet.any():  # the jets' normals are the neighbours' input where the jet is kept
         nrm = np.where(sc.on_jet[:, None], sc.jets[0], nrm)
-    opts = dict(plan.options)
+    fitter = _Fitter(pts, idx, kc, h, plan.method, dict(plan.options))
+    share = 1.0 if first is None else float(first.mean())
     for p in range(n_fits):
+        sub = report.sub(p / n_fits, (p + 1) / n_fits)
+        fit = _empty_fit(len(pts))
         centres = has_normal & ~sc.on_jet if fitted is None else has_normal & ~sc.on_jet & fitted[p]
-        fit = fit_all(pts, nrm, idx, kc, h, centres, method=plan.method, options=opts,
-                      report=report.sub(p / n_fits, (p + 1) / n_fits))
-        yield p, fit, nrm
+        fitter.into(fit, nrm, centres if first is None else centres & first, sub.sub(0.0, share))
+        complete = _Rest(fitter, fit, nrm, None if first is None else centres & ~first, sub.sub(share, 1.0))
+        yield p, fit, nrm, complete
+        complete()
         new = np.where(fit.valid[:, None], fit.normals, nrm)
         if plan.robust and p == 0:  # outliers leave their neighbours' fits (and are not estimated)
             has_normal = has_normal & ~outlier
@@ -335,17 +368,16 @@ def _drop_outliers(best: Refined, outlier) -> Refined:
     return best._replace(fit=fit._replace(**cleared, valid=fit.valid & ~outlier))
 
 
-def _mean_angle_deg(a, b, mask):
-    if not mask.any():
-        return 0.0
-    return float(turn_angles(a, b, mask).mean())
+class _Rest:
+    """A pass's fit at the points outside the rule's sample, run once (:func:`fit_passes`)."""
 
+    def __init__(self, fitter, fit, nrm, mask, report):
+        self.fitter, self.args = fitter, None if mask is None or not mask.any() else (fit, nrm, mask, report)
 
-def turn_angles(a, b, mask) -> np.ndarray:
-    """Angles (degrees, sign-blind) between unit rows of ``a`` and ``b`` where ``mask``:
-    their mean over the cloud is a pass's change (:class:`PassRule`)."""
-    cos = np.abs(np.einsum("ij,ij->i", a[mask], b[mask]))
-    return np.degrees(np.arccos(np.clip(cos, 0.0, 1.0)))
+    def __call__(self) -> None:
+        if self.args is not None:
+            args, self.args = self.args, None
+            self.fitter.into(*args)
 
 
 def flags(fit: Fit, scores, plan, reference: Fit | None, *, nb=None, confidence=None) -> Flags:

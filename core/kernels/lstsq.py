@@ -4,6 +4,11 @@ Per centre a scratch record holds the monomials R of the neighbours' offsets, th
 matrix G (lower triangle), its Cholesky factor L, the vectors ``vec`` (rows BX, BY:
 right-hand sides; CX, CY: coefficients; C1, C2: columns 1, 2 of G^-1; D, E: work) and
 the sums ``acc`` = (sum w, sum w X^2, sum w Y^2, RSS X, RSS Y).
+
+G[a, c] = sum w R_a R_c depends on (a, c) only through the monomial R_a R_c, of degree
+<= 2 x degree: a cubic's 55 entries are 28 distinct moments sum w u^i v^j, and only those
+are summed (:data:`MOMENT_OF`, :data:`MOMENT_PAIR`). Measured on 226 neighbours: 0.78 us
+per cubic accumulation against 1.19 us for the 55 sums.
 """
 
 from __future__ import annotations
@@ -19,6 +24,32 @@ from .algebra import MAX_TERMS, chol_solve, cholesky, n_terms, poly_row
 
 # rows of the per-block vector scratch of the NF kernels
 BX, BY, CX, CY, C1, C2, D, E = range(8)
+
+
+def _moment_tables(max_degree):
+    """Monomials are numbered by total degree t, then by the power of v (the order of
+    :func:`poly_row`): u^i v^j is number t (t + 1) / 2 + j. Returns MOMENT_OF[a, c], the
+    number of R_a R_c, and MOMENT_PAIR[m], the entry (a, c) with a >= c of G (a, c of
+    degree ceil(t / 2) and floor(t / 2)) whose sum stands for monomial m, for every
+    monomial of degree t <= 2 x max_degree: any fit of degree d <= max_degree finds the
+    moments of degree <= 2 d among the entries of its own G."""
+    def number(i, j):
+        return (i + j) * (i + j + 1) // 2 + j
+
+    powers = [(t - j, j) for t in range(2 * max_degree + 1) for j in range(t + 1)]
+    p = (max_degree + 1) * (max_degree + 2) // 2
+    of = np.array([[number(powers[a][0] + powers[c][0], powers[a][1] + powers[c][1]) for c in range(p)]
+                   for a in range(p)], dtype=np.int64)
+    pair = np.empty((len(powers), 2), dtype=np.int64)
+    for m, (i, j) in enumerate(powers):
+        half = (i + j + 1) // 2
+        ai = min(i, half)
+        a, c = number(ai, half - ai), number(i - ai, j - half + ai)
+        pair[m] = max(a, c), min(a, c)
+    return of, pair
+
+
+MOMENT_OF, MOMENT_PAIR = _moment_tables(3)
 
 
 class Scratch(NamedTuple):
@@ -104,9 +135,9 @@ def _accumulate_linear(R, X, Y, wt, j0, j1, vec, G, acc):
 def accumulate(R, X, Y, wt, j0, j1, degree, vec, G, acc):
     """Add neighbours j0..j1-1 to the weighted normal equations of X and Y on the
     monomials R (G lower triangle, right-hand sides vec[BX], vec[BY]) and to acc =
-    (sum w, sum w X^2, sum w Y^2). Sums run over neighbours innermost (vectorised), or
-    all in one pass for degree 1, whose few sums over short neighbourhoods gain nothing
-    from vectors."""
+    (sum w, sum w X^2, sum w Y^2). Sums run over neighbours innermost (vectorised), once
+    per distinct moment of G (the other entries are copies); degree 1 sums everything in
+    one pass (its few sums over short neighbourhoods gain nothing from vectors)."""
     if degree == 1:
         _accumulate_linear(R, X, Y, wt, j0, j1, vec, G, acc)
         return
@@ -120,19 +151,22 @@ def accumulate(R, X, Y, wt, j0, j1, degree, vec, G, acc):
             sy += t * Y[j]
         vec[BX, a] += sx
         vec[BY, a] += sy
+    for m in range(n_terms(2 * degree)):
+        a, c = MOMENT_PAIR[m, 0], MOMENT_PAIR[m, 1]
+        g = 0.0
+        for j in range(j0, j1):
+            g += wt[j] * R[a, j] * R[c, j]
+        G[a, c] += g
+    for a in range(p):
         for c in range(a + 1):
-            g = 0.0
-            for j in range(j0, j1):
-                g += wt[j] * R[a, j] * R[c, j]
-            G[a, c] += g
-    s0 = 0.0
+            m = MOMENT_OF[a, c]
+            G[a, c] = G[MOMENT_PAIR[m, 0], MOMENT_PAIR[m, 1]]
     s1 = 0.0
     s2 = 0.0
     for j in range(j0, j1):
-        s0 += wt[j]
         s1 += wt[j] * X[j] * X[j]
         s2 += wt[j] * Y[j] * Y[j]
-    acc[0] += s0
+    acc[0] = G[0, 0]  # sum w: both are summed since the last reset
     acc[1] += s1
     acc[2] += s2
 
@@ -196,11 +230,9 @@ def solve(degree, rcond, vec, G, L, acc):
     """
     if degree == 1:
         return solve_linear(rcond, vec, G, acc)
-    p = n_terms(degree)
-    if not cholesky(G, p, rcond, vec[D], L):
+    if not solve_coefficients(degree, rcond, vec, G, L, acc):
         return False
-    chol_solve(L, vec[D], p, vec[BX], vec[CX])
-    chol_solve(L, vec[D], p, vec[BY], vec[CY])
+    p = n_terms(degree)
     e = vec[E]
     e[:p] = 0.0
     e[1] = 1.0
@@ -208,6 +240,20 @@ def solve(degree, rcond, vec, G, L, acc):
     e[1] = 0.0
     e[2] = 1.0
     chol_solve(L, vec[D], p, e, vec[C2])
+    return True
+
+
+@njit(**OPTS)
+def solve_coefficients(degree, rcond, vec, G, L, acc):
+    """:func:`solve` without the columns of G^-1 (vec[C1], vec[C2]), which only the
+    variances and the exact constraint need: what an intermediate reweighting needs."""
+    if degree == 1:
+        return solve_linear(rcond, vec, G, acc)
+    p = n_terms(degree)
+    if not cholesky(G, p, rcond, vec[D], L):
+        return False
+    chol_solve(L, vec[D], p, vec[BX], vec[CX])
+    chol_solve(L, vec[D], p, vec[BY], vec[CY])
     fx = fy = 0.0
     for a in range(p):
         fx += vec[CX, a] * vec[BX, a]

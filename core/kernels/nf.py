@@ -26,7 +26,8 @@ import numpy as np
 from numba import njit, prange
 
 from ._base import BLOCK, OPTS, theta
-from .lstsq import BX, BY, C1, C2, CX, CY, accumulate, fit_scratch, monomials, reset, slope_variances, solve
+from .lstsq import (BX, BY, C1, C2, CX, CY, accumulate, fit_scratch, monomials, reset, slope_variances, solve,
+                    solve_coefficients)
 from .robust import robust_weights
 
 
@@ -139,23 +140,24 @@ def _fit_block(f, opt, out, start, stop, s):
 @njit(**OPTS)
 def _fit_point(f, opt, r, n, s):
     """Least squares (eqs. 25-26) of centre r's n neighbours, then ``opt.irls`` robust
-    reweightings; False when the system is singular."""
+    reweightings; False when the system is singular. Only the last solve computes the
+    columns of G^-1 that the variances and the exact constraint need."""
     gather(f, r, n, opt.weighting, opt.theta_reach, s)
     for j in range(n):
         s.wt[j] = s.base[j]
     monomials(s.u, s.v, n, opt.degree, s.R)
-    reset(opt.degree, s.vec, s.G, s.acc)
-    accumulate(s.R, s.X, s.Y, s.wt, 0, n, opt.degree, s.vec, s.G, s.acc)
-    ok = solve(opt.degree, opt.rcond, s.vec, s.G, s.L, s.acc)
-    if opt.robust > 0:
-        for _ in range(opt.irls):
-            if not ok:
-                break
+    rounds = opt.irls if opt.robust > 0 else 0
+    for it in range(rounds + 1):
+        if it > 0:
             robust_weights(s, n, opt.degree, opt.robust)
-            reset(opt.degree, s.vec, s.G, s.acc)
-            accumulate(s.R, s.X, s.Y, s.wt, 0, n, opt.degree, s.vec, s.G, s.acc)
-            ok = solve(opt.degree, opt.rcond, s.vec, s.G, s.L, s.acc)
-    return ok
+        reset(opt.degree, s.vec, s.G, s.acc)
+        accumulate(s.R, s.X, s.Y, s.wt, 0, n, opt.degree, s.vec, s.G, s.acc)
+        if it < rounds:
+            if not solve_coefficients(opt.degree, opt.rcond, s.vec, s.G, s.L, s.acc):
+                return False
+        elif not solve(opt.degree, opt.rcond, s.vec, s.G, s.L, s.acc):
+            return False
+    return True
 
 
 @njit(**OPTS)

@@ -19,7 +19,8 @@ import numpy as np
 
 from ..estimate import _result as result_of, prepare  # the in-memory result's fields and flags
 from ..planning import EstimatePlan
-from ..stages import PassRule, Refined, few_fits, finish, fit_passes, flags, turn_angles
+from ..passes import rule_sample, turn_angles
+from ..stages import PassRule, Refined, few_fits, finish, fit_passes, flags
 from .._progress import Progress
 from .halo import auto_chain, rings_from
 from .plan import TilePlan
@@ -45,13 +46,14 @@ def run_auto_tile(root, tile: int, spec) -> dict:
     tplan = dataclasses.replace(whole, n_points=len(pts))
     front = prepare(pts, normals, tplan, nb, Progress(None))
     own = owner == tile
+    judged = own & rule_sample(pts, whole.n_points) if whole.adaptive else own  # as in memory (core.passes)
     outputs, stats = [], np.zeros((tplan.passes + 2, 2))  # per pass: sum of turns, count; then the noisy points
     # fit p where later fits use it, and one ring more: an own point's border flag counts its valid neighbours
     reach = [rings_from(own, nb.indices, tplan.passes - p + 1) for p in range(tplan.passes + 1)]
-    for p, fit, nrm in fit_passes(pts, front.init, front.outlier, nb, front.scale, tplan, Progress(None),
+    for p, fit, nrm, _ in fit_passes(pts, front.init, front.outlier, nb, front.scale, tplan, Progress(None),
                                   n_fits=tplan.passes + 1, fitted=reach):
-        mine = fit.valid & own
-        stats[p] = math.fsum(turn_angles(fit.normals, nrm, mine)), int(mine.sum())
+        seen = fit.valid & judged
+        stats[p] = math.fsum(turn_angles(fit.normals, nrm, seen)), int(seen.sum())
         best = finish(Refined(fit, nrm, p), front.scale, front.outlier, tplan)
         marks = flags(best.fit, front.scores, tplan, front.reference, nb=nb, confidence=front.confidence)
         res = result_of(pts, np.ones(len(pts), dtype=bool), tplan, stages=(front.init, best, front.scale, marks),

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import core
-from core import noise, scale, shapes
+from core import noise, passes, scale, shapes
 from core.io import read_cloud
 from core.tiled import auto, estimate_tiled, halo, task, wholecloud
 
@@ -44,7 +44,10 @@ def _noisy_torus(n=8000):
     return np.concatenate([pts, [[0.0, 0.0, 2.5], [3.2, 0.4, 0.0]]])  # two outliers: robust mode at work
 
 
-def test_auto_in_16_tiles_is_the_in_memory_estimate(tmp_path, small_candidates):
+def test_auto_in_16_tiles_is_the_in_memory_estimate(tmp_path, small_candidates, monkeypatch):
+    sample = passes.rule_sample  # the pass rule judged on ~1000 of the points, in memory and in the tiles
+    monkeypatch.setattr(passes, "rule_sample", lambda pts, n=None: sample(pts, n, size=1000))
+    monkeypatch.setattr(auto, "rule_sample", passes.rule_sample)
     pts = _noisy_torus(6000)
     mem = core.estimate(pts, passes=2)
     assert mem.params["passes_run"] >= 1 and len(np.unique(mem.k_point)) > 1
