@@ -136,8 +136,8 @@ PASS_DECAY = 0.7
 #: points the pass-stop rule is judged on (core.passes): about RULE_SAMPLE points of a larger
 #: cloud, chosen by a hash of their coordinates (the same in any order and in tiles). The
 #: turns of a pass have a spread about 0.55 x their mean (measured on noisy tori, saddles
-#: and ellipsoids), so 16384 points measure the mean to 0.4 %: only a pass within about 1 % of the threshold can be judged otherwise than on all points, and
-#: such a pass turns the normals by a few hundredths of a degree either way.
+#: and ellipsoids), so 16384 points measure the mean to 0.4 %: only a pass within about
+#: 1 % of the threshold can be judged otherwise than on all points, and such a pass turns the normals by a few hundredths of a degree either way.
 RULE_SAMPLE = 16_384
 #: |mu|^2 at or above this leaves no upward normal: the fit is rejected (core.frame)
 MAX_TILT2 = 1.0 - 1e-6
