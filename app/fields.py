@@ -142,6 +142,12 @@ def compute_fields(result, *, reference_normals=None, sample=None) -> dict[str, 
     return {name: np.array(values, dtype=float, copy=True) for name, values in out.items()}
 
 
+#: Above this many values the automatic limits are percentiles of an evenly strided subset:
+#: the rank error of a 98th percentile from 200k values is ~0.03 %, and it saves the GUI
+#: thread ~50 ms per recolour of a 1M-point cloud (measured: np.percentile on 1M, 2 cores).
+LIMIT_SAMPLE = 200_000
+
+
 def robust_limits(values: np.ndarray, *, signed: bool, clip: float = 2.0, floor: float = 0.0) -> tuple[float, float]:
     """Colour limits that ignore the ``clip`` % most extreme values.
 
@@ -210,7 +216,9 @@ def colouring(spec: FieldSpec, values: np.ndarray, *, clip: float = 2.0, floor: 
     diverging and centred on 0 for signed fields, sequential over their own range for
     one-signed ones (errors and angles from 0), the outlier score around its threshold,
     sizes on a log scale."""
-    signed = is_signed(spec, values, floor)
+    values = np.asarray(values, dtype=float)
+    sample = values[:: -(-len(values) // LIMIT_SAMPLE)] if len(values) > LIMIT_SAMPLE else values
+    signed = is_signed(spec, sample, floor)
     cmap = colormap_for(spec, signed)
     log = spec.scale == "log"
     if clim is not None:
@@ -223,7 +231,7 @@ def colouring(spec: FieldSpec, values: np.ndarray, *, clip: float = 2.0, floor: 
         if positive.size:
             lo, hi = float(positive.min()), float(positive.max())
             return Colouring((lo, hi if hi > lo else 2.0 * lo), cmap, True)
-    lo, hi = robust_limits(values, signed=signed, clip=clip, floor=floor)
+    lo, hi = robust_limits(sample, signed=signed, clip=clip, floor=floor)
     if not signed and (spec.unit == "deg" or spec.needs == "truth"):
         lo, hi = 0.0, max(hi, 1e-12)  # errors and angles start at 0
     return Colouring((lo, hi), cmap)

@@ -101,6 +101,7 @@ def _run(relay: _Relay, ticket: LoadTicket, make, *, file: bool = False) -> None
     """Job thread: build the source, or report why not in one line."""
     try:
         source = make()
+        source.geometry  # noqa: B018 - framing facts computed here, not on the GUI thread
     except (core.io.CloudFileError, OSError, ValueError) as exc:
         text = str(exc)
         if file and ticket.label not in text:

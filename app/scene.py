@@ -11,6 +11,7 @@ import numpy as np
 import pyvista as pv
 
 from . import framing, glyphs
+from .geometry import CloudGeometry
 from .lod import LevelOfDetail
 from .theme import LIGHT, Theme
 
@@ -41,6 +42,8 @@ class CloudScene:
     def __init__(self, plotter):
         self.plotter = plotter
         self.points: np.ndarray | None = None
+        self.geometry: CloudGeometry | None = None
+        self.drawn: np.ndarray | None = None  # indices of the points a still frame draws
         self.spacing = 1.0
         self.point_size = 5.0  # the user's "Point size": the sprite size at the default density
         self.sprite_size = 5.0  # what is drawn: follows the point spacing on screen (app/framing.py)
@@ -75,66 +78,62 @@ class CloudScene:
                 pass
 
     # -- cloud and colours ----------------------------------------------------
-    def set_cloud(self, points: np.ndarray, values: np.ndarray | None = None, *, reset_camera: str | None = None):
-        """Show ``points`` (in place if the count did not change)."""
+    def set_cloud(self, points: np.ndarray, values: np.ndarray | None = None, *, reset_camera: str | None = None,
+                  geometry: CloudGeometry | None = None):
+        """Show ``points`` (in place if the count did not change).
+
+        ``geometry``: the cloud's :class:`app.geometry.CloudGeometry`, computed off the GUI
+        thread (computed here if None). Above :data:`app.lod.STILL_POINTS` points a still
+        frame draws that many (a random subset, sprites grown to cover): with software
+        OpenGL every frame then costs the GUI thread at most ~0.1 s.
+        """
         points = np.asarray(points, dtype=float)
-        vals = np.full(len(points), np.nan) if values is None else np.asarray(values, dtype=float)
-        if self._cloud is not None and self._cloud.n_points == len(points):
-            self._cloud.points = points.copy()
+        if geometry is None or geometry.n_points != len(points):
+            geometry = CloudGeometry.of(points)
+        drawn = geometry.subset(self.lod.budget)
+        vals = np.full(len(drawn), np.nan) if values is None else np.asarray(values, dtype=float)[drawn]
+        if self._cloud is not None and self._cloud.n_points == len(drawn) and self.geometry is geometry:
+            self._cloud.points = points[drawn]
             self._cloud.point_data["values"] = vals
-            self.lod.set_points(points)
-            self.lod.set_values(vals)
         else:
             if self._actor is not None:
                 self.plotter.remove_actor(self._actor, render=False)
-            self._cloud = pv.PolyData(points.copy())
-            self._sprite_spacing = framing.cloud_spacing(points)
+            self._cloud = pv.PolyData(points[drawn])
             self._cloud.point_data["values"] = vals
             self._actor = self.plotter.add_mesh(
-                self._cloud,
-                scalars="values",
-                cmap=self._lut,
-                clim=self._lut.scalar_range,
-                render_points_as_spheres=True,
-                point_size=self.point_size,
-                show_scalar_bar=False,
-                nan_color=NAN_COLOUR,
-                pickable=False,
-                name="cloud",
-                reset_camera=False,
-                render=False,
+                self._cloud, scalars="values", cmap=self._lut, clim=self._lut.scalar_range,
+                render_points_as_spheres=True, point_size=self.point_size, show_scalar_bar=False,
+                nan_color=NAN_COLOUR, pickable=False, name="cloud", reset_camera=False, render=False,
             )
             self._actor.mapper.SetUseLookupTableScalarRange(True)
-            self.lod.set_cloud(points, self._actor, self.point_size, NAN_COLOUR)
-            if self._bar is None:
-                self._bar = self.plotter.add_scalar_bar(
-                    title=self._bar_title or " ",
-                    lookup_table=self._lut,
-                    vertical=False,
-                    position_x=0.25,
-                    position_y=0.03,
-                    width=0.5,
-                    height=0.075,
-                    title_font_size=14,
-                    label_font_size=12,
-                    n_labels=3,
-                    fmt="%.3g",
-                    color=self.theme.text,
-                    render=False,
-                )
-                self._bar.SetMaximumHeightInPixels(90)
-                # tick labels below the bar, the title above it: the title no longer
-                # sits on the middle tick label
-                self._bar.SetTextPositionToPrecedeScalarBar()
+            self.lod.set_cloud(geometry, self._actor, self.point_size, NAN_COLOUR)
+            self._add_bar()
+        # the drawn subset is sparser than the cloud: spacing grows as 1 / sqrt(density)
+        self._sprite_spacing = geometry.spacing * np.sqrt(len(points) / max(len(drawn), 1))
+        self.geometry, self.drawn = geometry, drawn
         self.points = points
+        self.lod.set_points(points)
+        self.lod.set_values(values)
         if reset_camera:
             self.reset_camera(reset_camera)
+
+    def _add_bar(self) -> None:  # once per scene
+        if self._bar is not None:
+            return
+        self._bar = self.plotter.add_scalar_bar(
+            title=self._bar_title or " ", lookup_table=self._lut, vertical=False, position_x=0.25,
+            position_y=0.03, width=0.5, height=0.075, title_font_size=14, label_font_size=12, n_labels=3,
+            fmt="%.3g", color=self.theme.text, render=False,
+        )
+        self._bar.SetMaximumHeightInPixels(90)
+        # tick labels below the bar, the title above it: the title no longer sits on the middle tick label
+        self._bar.SetTextPositionToPrecedeScalarBar()
 
     def set_values(self, values: np.ndarray, *, title: str, cmap: str, clim: tuple[float, float], log: bool = False):
         """Colour the cloud by ``values`` (NaN drawn in a neutral grey), on a log scale if ``log``."""
         if self._cloud is None:
             return
-        self._cloud.point_data["values"] = np.asarray(values, dtype=float)
+        self._cloud.point_data["values"] = np.asarray(values, dtype=float)[self.drawn]
         self._cloud.set_active_scalars("values")
         self.lod.set_values(values)
         if self._lut.cmap is None or getattr(self._lut.cmap, "name", None) != cmap:
@@ -258,8 +257,7 @@ class CloudScene:
 
     def radius(self) -> float:
         """Half the diagonal of the cloud's bounding box."""
-        pts = self.points[np.isfinite(self.points).all(axis=1)]
-        return 0.5 * float(np.linalg.norm(np.ptp(pts, axis=0))) if len(pts) else 1.0
+        return self.geometry.radius if self.geometry is not None else 1.0
 
     # -- camera, text, render ------------------------------------------------------
     def set_title(self, text: str):
@@ -299,7 +297,7 @@ class CloudScene:
         if self.points is None or not len(self.points):
             return
         renderer = self.plotter.renderer
-        sample = framing.fit_sample(self.points)
+        sample = self.points[self.geometry.fit_index]
         framing.fit_to_region(renderer, sample)
         # the sprites' size depends on the fit: fit again with half a sprite of room
         size = framing.sprite_size(renderer, sample.mean(axis=0), self._sprite_spacing, self.point_size)
@@ -321,7 +319,7 @@ class CloudScene:
         # pyvista's camera getter renders the whole scene once on a fresh renderer
         # (camera_set False): 6 s for 1M sprites with llvmpipe. We place it ourselves.
         self.plotter.renderer.camera_set = True
-        framing.look_from(self.plotter.renderer, self.points, view)
+        framing.look_from(self.plotter.renderer, self.geometry.centre, self.geometry.radius, view)
         self.plotter.renderer.reset_camera(render=False)  # Plotter.reset_camera renders regardless
         self._fit()
         self.view = view
@@ -336,10 +334,12 @@ class CloudScene:
         return x, y
 
     def pick(self, x: float, y: float, radius: float | None = None) -> int | None:
-        """Index of the front-most cloud point within ``radius`` px of display (x, y)."""
+        """Index of the front-most drawn cloud point within ``radius`` px of display (x, y)
+        (a still frame of a big cloud draws a subset: the pick is among what is seen)."""
         if self.points is None or not len(self.points):
             return None
-        px, py, depth = framing.projection(self.plotter.renderer, self.points)
+        drawn = self.drawn if self.drawn is not None else np.arange(len(self.points))
+        px, py, depth = framing.projection(self.plotter.renderer, self.points[drawn])
         r = radius if radius is not None else max(4.0, 0.5 * self.sprite_size)
         d2 = (px - x) ** 2 + (py - y) ** 2
         near = np.flatnonzero((d2 <= r * r) & np.isfinite(depth) & (np.abs(depth) <= 1.0))
@@ -348,7 +348,7 @@ class CloudScene:
         # front-most first; among points at about the same depth, the closest to the click
         front = depth[near]
         keep = near[front <= front.min() + 1e-3 * (1.0 + abs(front.min()))]
-        return int(keep[np.argmin(d2[keep])]) if len(keep) else int(near[np.argmin(front)])
+        return int(drawn[keep[np.argmin(d2[keep])] if len(keep) else near[np.argmin(front)]])
 
     def enable_picking(self, callback) -> None:
         """Call ``callback(index)`` when the user clicks (press and release, no drag) a point."""
