@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import degenerate, interop
+from . import degenerate, interop, stage_cache
 from ._progress import Progress
 from ._validate import as_normals, as_points
 from .planning import EstimatePlan
@@ -36,6 +36,7 @@ def estimate(
     drop_nonfinite=False,
     progress=None,
     plan=None,
+    cache=None,
 ) -> CurvatureResult:
     """Estimate normals, principal curvatures and directions of a point cloud.
 
@@ -86,6 +87,9 @@ def estimate(
         defaults). Through it the noise and the typical crease residual can be fixed
         rather than measured on this cloud (``params["noise"]``,
         ``params["crease_typical"]`` report what was used).
+    cache : :class:`core.stage_cache.StageCache`, optional. Passed to successive calls on
+        the same cloud, it keeps the stages a change does not touch (neighbours to the
+        chosen k when only ``passes`` or ``tol`` change); the result is bit-identical.
 
     Returns
     -------
@@ -115,25 +119,27 @@ def estimate(
             raise ValueError(f"normals must have shape ({len(kept)}, 3) to match points, got shape {shape}")
         normals = as_normals(np.asarray(normals)[kept], len(pts), repair=True)
     report = Progress(progress)
+    run = stage_cache.memo(cache, pts, normals, plan)  # each stage: run, or re-used from the cache
 
-    nb = find_neighbours(pts, plan, neighbours, report.sub(0.0, 0.3))
+    nb = run.neighbours(lambda: find_neighbours(pts, plan, neighbours, report.sub(0.0, 0.3)), neighbours)
     pts = nb.points if neighbours is None else pts  # the search keeps the validated copy
     idx_p, _ = nb.take(plan.k_initial)
-    scores = outlier_scores(pts, idx_p)
+    scores = run("scores", lambda: outlier_scores(pts, idx_p))
     outlier = scores > OUTLIER_SCORE
-    repaired = None
     if normals is None:
-        init = initial_normals(pts, nb, plan, outlier, report)
+        init, repaired = run("initial", lambda: initial_normals(pts, nb, plan, outlier, report)), None
     else:
-        init, repaired = given_normals(pts, normals, nb, plan)
-    init, confidence = orient_signs(pts, init, idx_p, plan)
+        init, repaired = run("initial", lambda: given_normals(pts, normals, nb, plan))
+    init, confidence = run("orientation", lambda: orient_signs(pts, init, idx_p, plan))
     report(0.45, "orientation")
 
     reference = None
     if plan.auto:
-        reference = crease_reference(pts, init.normals, init.has_normal, nb, plan, report.sub(0.45, 0.47))
+        reference = run("reference", lambda: crease_reference(pts, init.normals, init.has_normal, nb, plan,
+                                                                report.sub(0.45, 0.47)))
     inliers = init.has_normal & ~outlier if plan.robust else init.has_normal  # outliers sit out the choice of k
-    kc = choose_scale(pts, init.normals, nb, inliers, plan, report.sub(0.47, 0.7), scores=scores, k_initial=init.k)
+    kc = run("scale", lambda: choose_scale(pts, init.normals, nb, inliers, plan, report.sub(0.47, 0.7), scores=scores,
+                                           k_initial=init.k))
     best = refine(pts, init, outlier, nb, kc, plan, report.sub(0.7 if plan.auto else 0.45, 1.0))
     marks = flags(best.fit, scores, plan, reference, nb=nb, confidence=confidence)
     report(1.0, "done")
