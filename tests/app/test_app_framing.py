@@ -118,3 +118,42 @@ def test_cloud_spacing_of_a_grid():
     g[::7] += 0.001 * np.random.default_rng(1).normal(size=g[::7].shape)
     assert framing.cloud_spacing(g) == pytest.approx(0.01, rel=0.05)  # 20k queries against all points
     assert framing.cloud_spacing(g[:1]) == 0.0 and framing.cloud_spacing(np.full((5, 3), np.nan)) == 0.0
+
+
+def test_a_still_frame_draws_at_most_the_budget_with_sprites_grown_to_cover(scene):
+    points = make_shape("sphere", 4000).points
+    values = np.linspace(-1.0, 1.0, len(points))
+    _show(scene, points, "oblique")
+    full_size = scene.sprite_size
+    assert scene._cloud.n_points == 4000
+    scene.lod.budget = 1000
+    scene.set_cloud(points + 0.0, values, reset_camera="oblique")  # a new array: rebuilt with the budget
+    scene.set_values(values, title="H", cmap="RdBu_r", clim=(-1.0, 1.0))
+    _render(scene)
+    drawn = scene.drawn
+    assert scene._cloud.n_points == len(drawn) == 1000 and np.all(np.diff(drawn) > 0)
+    assert np.array_equal(scene._cloud.points, points[drawn])
+    assert np.array_equal(scene._cloud.point_data["values"], values[drawn])
+    # a quarter of the density: sprites twice as wide (spacing ~ 1 / sqrt(density))
+    assert scene.sprite_size == pytest.approx(2.0 * full_size, rel=0.15)
+    # a click picks among the points drawn
+    x, y = scene.display_coords(drawn[10])
+    assert scene.pick(float(x[0]), float(y[0])) in set(drawn.tolist())
+
+
+def test_cloud_geometry_ignores_non_finite_rows_and_nests_its_subsets():
+    from app.geometry import CloudGeometry
+
+    points = make_shape("cube", 3000).points.copy()
+    points[::7] = np.nan
+    g = CloudGeometry.of(points)
+    finite = np.isfinite(points).all(axis=1)
+    assert g.n_points == 3000 and set(g.order.tolist()) == set(np.flatnonzero(finite).tolist())
+    lo, hi = points[finite].min(axis=0), points[finite].max(axis=0)
+    assert np.allclose(g.centre, 0.5 * (lo + hi)) and g.radius == pytest.approx(0.5 * np.linalg.norm(hi - lo))
+    assert finite[g.fit_index].all() and g.spacing > 0
+    small, large = g.subset(100), g.subset(1000)
+    assert len(small) == 100 and set(small) <= set(large)  # the moving stand-in is part of the still frame
+    assert np.array_equal(CloudGeometry.of(points[1:6]).subset(10), np.arange(5))  # all finite: all drawn
+    empty = CloudGeometry.of(np.full((4, 3), np.nan))
+    assert empty.radius == 1.0 and len(empty.subset(10)) == 0
