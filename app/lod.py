@@ -110,8 +110,9 @@ class LevelOfDetail:
             if render:
                 self.plotter.render()
 
-    def attach(self) -> None:
-        """Follow the interactor style's start/end of interaction (drag, zoom, pan)."""
+    def attach(self, after_end=None) -> None:
+        """Follow the interactor style's start/end of interaction (drag, zoom, pan);
+        ``after_end()`` is called when an interaction ends (the scene's zoom detail)."""
         iren = getattr(self.plotter, "iren", None)
         style = iren.interactor.GetInteractorStyle() if iren is not None else None
         if style is None:
@@ -119,6 +120,8 @@ class LevelOfDetail:
         self._style = style
         self._tags = [style.AddObserver("StartInteractionEvent", self.begin),
                       style.AddObserver("EndInteractionEvent", self.end)]
+        if after_end is not None:
+            self._tags.append(style.AddObserver("EndInteractionEvent", lambda *_args: after_end()))
 
     def close(self) -> None:
         style = getattr(self, "_style", None)

@@ -157,3 +157,42 @@ def test_cloud_geometry_ignores_non_finite_rows_and_nests_its_subsets():
     assert np.array_equal(CloudGeometry.of(points[1:6]).subset(10), np.arange(5))  # all finite: all drawn
     empty = CloudGeometry.of(np.full((4, 3), np.nan))
     assert empty.radius == 1.0 and len(empty.subset(10)) == 0
+
+
+def test_visible_subset_keeps_the_frustum_and_the_earliest_in_the_drawing_order():
+    from app.detail import visible_subset
+
+    points = np.random.default_rng(1).uniform(-2.0, 2.0, size=(5000, 3))
+    order = np.random.default_rng(2).permutation(5000)
+    inside = np.flatnonzero((np.abs(points) <= 1.0).all(axis=1))  # identity: clip = world, w = 1
+    chosen, seen = visible_subset(points, np.eye(4), order, budget=10_000)
+    assert seen == len(inside) and np.array_equal(chosen, inside)
+    chosen, seen = visible_subset(points, np.eye(4), order, budget=100)
+    rank = np.argsort(order)
+    assert seen == len(inside) and len(chosen) == 100 and set(chosen) <= set(inside)
+    assert rank[chosen].max() < np.sort(rank[inside])[100]  # the first 100 of them in the order
+
+
+def test_zoomed_in_the_still_budget_goes_to_the_points_in_view(scene, qtbot):
+    points = make_shape("plane", 8000).points
+    scene.lod.budget = 1000
+    _show(scene, points, "xy")
+    uniform = scene.drawn.copy()
+    scene.plotter.camera.Dolly(8.0)  # an eighth of the width: a few % of the plane in view
+    scene.plotter.renderer.ResetCameraClippingRange()  # as the interactor's zoom does
+    _render(scene)
+    before = scene.drawn
+    scene.detail.request()  # what the end of a drag or zoom does
+    qtbot.waitUntil(lambda: scene.drawn is not before, timeout=10_000)
+    x, y = scene.display_coords(np.arange(len(points)))
+    width, height = scene.plotter.window_size
+    in_view = np.flatnonzero((x >= 0) & (x <= width) & (y >= 0) & (y <= height))
+    assert 200 < len(in_view) < 1000 and set(scene.drawn) == set(in_view)  # every point in view is drawn
+    assert len(np.intersect1d(uniform, in_view)) < 0.3 * len(in_view)  # the uniform subset drew few of them
+    scene.plotter.camera.Dolly(0.125)  # back out: the same uniform subset as before
+    scene.plotter.renderer.ResetCameraClippingRange()
+    _render(scene)
+    before = scene.drawn
+    scene.detail.request()
+    qtbot.waitUntil(lambda: scene.drawn is not before, timeout=10_000)
+    assert np.array_equal(scene.drawn, uniform)
