@@ -93,6 +93,8 @@ class VisibleDetail(QObject):
             return  # a newer request, or another cloud
         if asked[2] != _camera(self.scene.plotter.renderer):
             return  # the camera moved on; its own stop asks again
+        if self.scene.drawn is not None and np.array_equal(indices, self.scene.drawn):
+            return  # already drawn (the whole cloud in view: the uniform subset)
         self._apply(indices, n_visible)
 
     def close(self) -> None:

@@ -120,7 +120,8 @@ class CloudScene(Picking):
         self.lod.set_values(values)
         if reset_camera:
             self.reset_camera(reset_camera)
-        self.detail.request()
+        elif not same:
+            self.detail.request()  # a new cloud in a camera someone may have zoomed
 
     def _draw(self, drawn: np.ndarray, visible: int) -> None:
         """Draw the points ``drawn`` (indices) of the ``visible`` in view; sprites grow as the
@@ -137,9 +138,11 @@ class CloudScene(Picking):
         self._sprite_spacing = self.geometry.spacing * np.sqrt(max(visible, 1) / max(len(drawn), 1))
 
     def _show_detail(self, drawn: np.ndarray, visible: int) -> None:
-        """The visible points the camera's stop selected (app/detail.py): draw them."""
+        """The visible points the camera's stop selected (app/detail.py): draw them
+        (rendered now, unless the moving stand-in is on screen: its end renders)."""
         self._draw(drawn, visible)
-        self.plotter.render()
+        if not self.lod.active:
+            self.plotter.render()
 
     def _add_bar(self) -> None:  # once per scene
         if self._bar is not None:
@@ -316,6 +319,7 @@ class CloudScene(Picking):
         """Frame the whole cloud, keeping the viewing direction."""
         self.plotter.renderer.reset_camera(render=False)  # Plotter.reset_camera renders regardless
         self._fit()
+        self.detail.request()
 
     def _fit(self) -> None:
         """Fill the view above the colour bar with the cloud's projection (app/framing.py)."""
@@ -348,6 +352,7 @@ class CloudScene(Picking):
         self.plotter.renderer.reset_camera(render=False)  # Plotter.reset_camera renders regardless
         self._fit()
         self.view = view
+        self.detail.request()  # the whole cloud in view again: the uniform subset
 
     def render(self):
         self.plotter.render()

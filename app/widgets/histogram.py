@@ -97,8 +97,8 @@ class Histogram(FigureCanvasQTAgg):
             self.draw_idle()
             return
         pad = 0.1 * (hi - lo)
-        edges = np.linspace(lo - pad, hi + pad, self.bins + 1)
-        counts, edges = np.histogram(np.clip(finite, edges[0], edges[-1]), bins=edges)
+        # a bin count and range, not an array of edges: numpy's equal-bin path (no sort of the values)
+        counts, edges = np.histogram(np.clip(finite, lo - pad, hi + pad), bins=self.bins, range=(lo - pad, hi + pad))
         centres = 0.5 * (edges[:-1] + edges[1:])
         colours = matplotlib.colormaps[cmap](np.clip((centres - lo) / (hi - lo), 0.0, 1.0))
         width = edges[1] - edges[0]
