@@ -7,6 +7,7 @@ for :func:`robust_limits`).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -142,10 +143,21 @@ def compute_fields(result, *, reference_normals=None, sample=None) -> dict[str, 
     return {name: np.array(values, dtype=float, copy=True) for name, values in out.items()}
 
 
-#: Above this many values the automatic limits are percentiles of an evenly strided subset:
+#: Above this many values the automatic limits are percentiles of a fixed random subset:
 #: the rank error of a 98th percentile from 200k values is ~0.03 %, and it saves the GUI
 #: thread ~50 ms per recolour of a 1M-point cloud (measured: np.percentile on 1M, 2 cores).
 LIMIT_SAMPLE = 200_000
+
+
+@lru_cache(maxsize=4)
+def _random_index(n: int, m: int) -> np.ndarray:
+    return np.sort(np.random.default_rng(0).choice(n, size=m, replace=False))
+
+
+def subsample(values: np.ndarray, m: int) -> np.ndarray:
+    """``values`` itself, or a fixed random subset of ``m`` of them (the same for every array
+    of that length; random, not strided: a scan's invalid rows can repeat with a period)."""
+    return values if len(values) <= m else values[_random_index(len(values), int(m))]
 
 
 def robust_limits(values: np.ndarray, *, signed: bool, clip: float = 2.0, floor: float = 0.0) -> tuple[float, float]:
@@ -217,7 +229,7 @@ def colouring(spec: FieldSpec, values: np.ndarray, *, clip: float = 2.0, floor: 
     one-signed ones (errors and angles from 0), the outlier score around its threshold,
     sizes on a log scale."""
     values = np.asarray(values, dtype=float)
-    sample = values[:: -(-len(values) // LIMIT_SAMPLE)] if len(values) > LIMIT_SAMPLE else values
+    sample = subsample(values, LIMIT_SAMPLE)
     signed = is_signed(spec, sample, floor)
     cmap = colormap_for(spec, signed)
     log = spec.scale == "log"

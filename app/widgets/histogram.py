@@ -8,6 +8,14 @@ from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
 from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
+from ..fields import subsample
+
+
+#: Above this many values the bars are counted on a fixed random subset and scaled (the
+#: bars' shape is the same to a pixel: ~0.2 % noise in a bin of 1 % of 200k); it saves the
+#: GUI thread ~40 ms per recolour of a 1M-point cloud (np.clip + np.histogram, measured).
+SAMPLE = 200_000
+
 
 class Histogram(FigureCanvasQTAgg):
     """Distribution of the shown values; the colour limits are marked, values beyond
@@ -87,8 +95,10 @@ class Histogram(FigureCanvasQTAgg):
         The bars, limit lines and ticks are made once and updated in place (``ax.clear()``
         and new bars cost the GUI thread ~0.1 s a change; updating them a few ms)."""
         values = np.asarray(values, dtype=float)
-        finite = values[np.isfinite(values)]
-        n_nan = values.size - finite.size
+        n_finite = int(np.count_nonzero(np.isfinite(values)))
+        n_nan = values.size - n_finite
+        finite = subsample(values, SAMPLE)
+        finite = finite[np.isfinite(finite)]
         lo, hi = float(clim[0]), float(clim[1])
         if finite.size == 0 or not hi > lo:
             self.counts = np.zeros(0)
@@ -99,6 +109,8 @@ class Histogram(FigureCanvasQTAgg):
         pad = 0.1 * (hi - lo)
         # a bin count and range, not an array of edges: numpy's equal-bin path (no sort of the values)
         counts, edges = np.histogram(np.clip(finite, lo - pad, hi + pad), bins=self.bins, range=(lo - pad, hi + pad))
+        if values.size > SAMPLE:  # counted on a fixed random subset: scaled to the whole
+            counts = np.rint(counts * (n_finite / finite.size)).astype(np.int64)
         centres = 0.5 * (edges[:-1] + edges[1:])
         colours = matplotlib.colormaps[cmap](np.clip((centres - lo) / (hi - lo), 0.0, 1.0))
         width = edges[1] - edges[0]
@@ -111,7 +123,7 @@ class Histogram(FigureCanvasQTAgg):
         self._show_bars(True)
         self.ax.set_xlim(edges[0], edges[-1])
         self.ax.set_ylim(0.0, 1.05 * max(int(counts.max()), 1))
-        title = f"{label}   ({finite.size:,} pts"
+        title = f"{label}   ({n_finite:,} pts"
         title += f", {n_nan:,} nan)" if n_nan else ")"
         self.ax.set_title(title, fontsize=8, color=self.text_colour)
         self.counts = counts
