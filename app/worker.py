@@ -182,23 +182,8 @@ class EstimateWorker(QObject):
         timings = {}
         reused = self._neighbours(req, points, _sub(callback, 0.0, 0.2, "neighbours"))
         timings["neighbours"] = time.perf_counter() - t0
-        normals = req.source.normals if req.use_input_normals else None
-        runs = [req.method] + ([req.compare_method] if req.compare_method else [])
         lo = 0.0 if reused else 0.2
-        span = (1.0 - lo) / len(runs)
-        results = []
-        main = self._caches.setdefault(req.method, StageCache())
-        before = dict(main.reused)
-        for i, method in enumerate(runs):
-            t = time.perf_counter()
-            passes = req.passes if core.METHODS[method].uses_passes else None
-            results.append(core.estimate(
-                points, normals, k=req.k_for(method), method=method, passes=passes, orientation=req.orientation,
-                neighbours=self._nb, progress=_sub(callback, lo + i * span, lo + (i + 1) * span, method),
-                cache=self._caches.setdefault(method, StageCache()),
-            ))
-            timings[method] = time.perf_counter() - t
-        kept = tuple(stage for stage, n in main.reused.items() if n > before.get(stage, 0))
+        results, kept = self._estimates(req, points, callback, lo, timings)
         sample = req.source.sample
         reference = sample.normals if sample is not None else req.source.normals
         fields = [compute_fields(r, reference_normals=reference, sample=sample) for r in results]
@@ -212,6 +197,27 @@ class EstimateWorker(QObject):
             compare_summary=summaries[1] if two else None, elapsed=time.perf_counter() - t0,
             reused_neighbours=reused, reused_stages=kept, timings=timings,
         )
+
+
+    def _estimates(self, req: EstimateRequest, points: np.ndarray, callback, lo: float, timings: dict):
+        """core.estimate of the method (and the compared one) over progress [lo, 1], each with
+        its own stage cache; returns the results and the stages the main one re-used."""
+        normals = req.source.normals if req.use_input_normals else None
+        runs = [req.method] + ([req.compare_method] if req.compare_method else [])
+        span = (1.0 - lo) / len(runs)
+        main = self._caches.setdefault(req.method, StageCache())
+        before = dict(main.reused)
+        results = []
+        for i, method in enumerate(runs):
+            t = time.perf_counter()
+            passes = req.passes if core.METHODS[method].uses_passes else None
+            results.append(core.estimate(
+                points, normals, k=req.k_for(method), method=method, passes=passes, orientation=req.orientation,
+                neighbours=self._nb, progress=_sub(callback, lo + i * span, lo + (i + 1) * span, method),
+                cache=self._caches.setdefault(method, StageCache()),
+            ))
+            timings[method] = time.perf_counter() - t
+        return results, tuple(stage for stage, n in main.reused.items() if n > before.get(stage, 0))
 
 
 def _sub(callback, start: float, stop: float, stage: str):
