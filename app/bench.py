@@ -8,7 +8,8 @@ Prints one table (Markdown) with, per cloud size:
 - the longest stall of the GUI thread (a 10 ms ``QTimer`` heartbeat) while the file
   is read and estimated, up to the final result arriving, and including its first draw;
 - cancel -> idle (busy flag down, progress hidden);
-- frame time while turning the camera (level of detail active), and still.
+- frame time while turning the camera (level of detail active), and still;
+- with ``--cycles N``, resident memory over N open/close cycles of the main window.
 
 Heavy: 1M/5M take minutes and GBs; pick sizes with ``--sizes``. Run it on a quiet machine.
 """
@@ -24,7 +25,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from PySide6.QtCore import QCoreApplication, QSettings, QTimer
+from PySide6.QtCore import QCoreApplication, QEvent, QSettings, QTimer
 from PySide6.QtWidgets import QApplication
 
 import core.io
@@ -191,6 +192,37 @@ def frames_only(label: str) -> dict:
         plotter.close()
 
 
+def cycles(n: int, tmp: Path, timeout: float) -> str:
+    """Resident memory over ``n`` open/estimate/close cycles of the main window (a 5000-point
+    torus each): a closed window must be freed (issue 10 saw 583 -> 2406 MB over 50)."""
+    import gc  # noqa: PLC0415 - only this measurement needs it
+
+    from .source import make_shape  # noqa: PLC0415
+    from .window import MainWindow  # noqa: PLC0415 - after QApplication exists
+
+    app = QApplication.instance() or QApplication([sys.argv[0]])
+    cloud, settings = make_shape("torus", 5000), QSettings(str(tmp / "cycles.ini"), QSettings.Format.IniFormat)
+    rss = []
+    for _ in range(n):
+        window, got = MainWindow(settings=settings, dialogs=False), {}
+        window.show()
+        window.result_shown.connect(lambda out: got.setdefault("done", True))
+        window.set_source(cloud)
+        _wait(app, lambda: "done" in got, timeout)
+        window.close()
+        window.deleteLater()
+        del window
+        for _ in range(3):
+            QCoreApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete)
+            QCoreApplication.processEvents()
+        gc.collect()
+        with open(f"/proc/{os.getpid()}/statm") as f:
+            rss.append(int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20)
+    warm = min(4, n - 1)
+    return (f"{n} open/close cycles: RSS {rss[0]:.0f} MB after the first, {rss[warm]:.0f} MB after cycle "
+            f"{warm + 1}, {rss[-1]:.0f} MB after the last ({rss[-1] - rss[warm]:+.0f} MB)")
+
+
 def startup(cold: bool, tmp: Path, timeout: float) -> float:
     """Seconds from ``python -m app --screenshot`` to the first full picture saved."""
     env = dict(os.environ)
@@ -218,6 +250,7 @@ def main(argv=None) -> int:
     p.add_argument("--sizes", default="bunny,200k", help=f"comma-separated from {', '.join(_SIZES)}")
     p.add_argument("--frames", default="", help="sizes to time turning only, without estimating (e.g. 5M)")
     p.add_argument("--startup", action="store_true", help="also time start-up, cold and warm numba cache")
+    p.add_argument("--cycles", type=int, default=0, help="also measure memory over N open/close cycles (e.g. 50)")
     p.add_argument("--timeout", type=float, default=600.0)
     args = p.parse_args(argv)
     sizes = [s.strip() for s in args.sizes.split(",") if s.strip()]
@@ -235,7 +268,10 @@ def main(argv=None) -> int:
             rows.append(bench_size(label, tmp, args.timeout))
             print(f"{label}: done", file=sys.stderr, flush=True)
         rows += [frames_only(label) for label in frames]
-        print(_table(rows))
+        if rows:
+            print(_table(rows))
+        if args.cycles > 0:
+            print("\n" + cycles(args.cycles, tmp, args.timeout))
     return 0
 
 

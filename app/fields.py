@@ -7,6 +7,7 @@ for :func:`robust_limits`).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -148,6 +149,32 @@ def compute_fields(result, *, reference_normals=None, sample=None) -> dict[str, 
     return {name: np.array(values, dtype=float, copy=True) for name, values in out.items()}
 
 
+#: Above this many values the automatic limits are percentiles of a fixed random subset:
+#: the rank error of a 98th percentile from 200k values is ~0.03 %, and it saves the GUI
+#: thread ~50 ms per recolour of a 1M-point cloud (measured: np.percentile on 1M, 2 cores).
+LIMIT_SAMPLE = 200_000
+
+
+@lru_cache(maxsize=4)
+def _random_index(n: int, m: int) -> np.ndarray:
+    # with replacement: as unbiased a sample; the loader draws it (prepare_sampling), not the GUI
+    return np.sort(np.random.default_rng(0).integers(0, n, size=m))
+
+
+def prepare_sampling(n: int) -> None:
+    """Draw the sample index of a cloud of ``n`` points ahead (the loader thread calls it:
+    ~15 ms at 1M, seen as a GUI-thread step of the first colouring in the 1M profile)."""
+    if n > LIMIT_SAMPLE:
+        _random_index(int(n), LIMIT_SAMPLE)
+
+
+def subsample(values: np.ndarray, m: int) -> np.ndarray:
+    """``values`` itself, or a fixed random sample of ``m`` of them (drawn with replacement;
+    the same for every array of that length; random, not strided: a scan's invalid rows can
+    repeat with a period)."""
+    return values if len(values) <= m else values[_random_index(len(values), int(m))]
+
+
 def robust_limits(values: np.ndarray, *, signed: bool, clip: float = 2.0, floor: float = 0.0) -> tuple[float, float]:
     """Colour limits that ignore the ``clip`` % most extreme values.
 
@@ -216,7 +243,9 @@ def colouring(spec: FieldSpec, values: np.ndarray, *, clip: float = 2.0, floor: 
     diverging and centred on 0 for signed fields, sequential over their own range for
     one-signed ones (errors and angles from 0), the outlier score around its threshold,
     sizes on a log scale."""
-    signed = is_signed(spec, values, floor)
+    values = np.asarray(values, dtype=float)
+    sample = subsample(values, LIMIT_SAMPLE)
+    signed = is_signed(spec, sample, floor)
     cmap = colormap_for(spec, signed)
     log = spec.scale == "log"
     if clim is not None:
@@ -231,7 +260,7 @@ def colouring(spec: FieldSpec, values: np.ndarray, *, clip: float = 2.0, floor: 
         if positive.size:
             lo, hi = float(positive.min()), float(positive.max())
             return Colouring((lo, hi if hi > lo else 2.0 * lo), cmap, True)
-    lo, hi = robust_limits(values, signed=signed, clip=clip, floor=floor)
+    lo, hi = robust_limits(sample, signed=signed, clip=clip, floor=floor)
     if not signed and (spec.unit == "deg" or spec.needs == "truth"):
         lo, hi = 0.0, max(hi, 1e-12)  # errors and angles start at 0
     return Colouring((lo, hi), cmap)

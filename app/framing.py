@@ -11,10 +11,11 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-__all__ = ["look_from", "VIEWS", "projection", "free_region", "fit_to_region", "cloud_spacing", "sprite_size", "FIT_SAMPLE"]
+__all__ = ["look_from", "VIEWS", "projection", "free_region", "fit_to_region", "cloud_spacing", "sprite_size",
+           "FIT_SAMPLE"]
 
 #: Points projected per fitting step: the cloud's extreme points along 13 directions plus
-#: a random subset; 4000 projections cost < 1 ms.
+#: a random subset (app/geometry.py); 4000 projections cost < 1 ms.
 FIT_SAMPLE = 4000
 #: Free margin around the fitted cloud, as a fraction of the free region (each side).
 FIT_PAD = 0.04
@@ -48,11 +49,11 @@ VIEWS = {
 }
 
 
-def look_from(renderer, points: np.ndarray, view: str) -> None:
-    """Point the camera at the cloud's box centre from the preset ``view`` (see VIEWS)."""
-    pts = points[np.isfinite(points).all(axis=1)]
-    centre = 0.5 * (pts.min(axis=0) + pts.max(axis=0))
-    radius = 0.5 * float(np.linalg.norm(np.ptp(pts, axis=0))) or 1.0
+def look_from(renderer, centre: np.ndarray, radius: float, view: str) -> None:
+    """Point the camera at the cloud's box ``centre`` from the preset ``view`` (see VIEWS),
+    ``radius`` (half the box diagonal) times 3.2 away."""
+    centre = np.asarray(centre, dtype=float)
+    radius = float(radius) or 1.0
     direction, up = (np.asarray(v, dtype=float) for v in VIEWS[view])
     direction /= np.linalg.norm(direction)
     cam = renderer.GetActiveCamera()
@@ -94,19 +95,6 @@ def free_region(renderer, inset: float = 0.0) -> tuple[float, float, float, floa
     pad_x, pad_y = FIT_PAD * w, FIT_PAD * (top - bar_top)
     pad_x, pad_y = pad_x + inset, pad_y + inset
     return x0 + pad_x, bar_top + pad_y, x0 + w - pad_x, top - pad_y
-
-
-def fit_sample(points: np.ndarray) -> np.ndarray:
-    """The points whose projection bounds the cloud's: extremes along 13 directions + a subset."""
-    pts = points[np.isfinite(points).all(axis=1)]
-    if len(pts) <= FIT_SAMPLE:
-        return pts
-    dirs = np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 0], [1, -1, 0], [1, 0, 1], [1, 0, -1],
-                     [0, 1, 1], [0, 1, -1], [1, 1, 1], [1, 1, -1], [1, -1, 1], [-1, 1, 1]], dtype=float)
-    proj = pts @ dirs.T
-    extremes = np.r_[proj.argmin(axis=0), proj.argmax(axis=0)]
-    rand = np.random.default_rng(0).choice(len(pts), size=FIT_SAMPLE, replace=False)
-    return pts[np.unique(np.r_[extremes, rand])]
 
 
 def fit_to_region(renderer, sample: np.ndarray, region=None, steps: int = 4) -> None:

@@ -15,6 +15,7 @@ from PySide6.QtCore import QObject, Signal, Slot
 import core.io
 
 from .jobs import JobThread
+from .fields import prepare_sampling
 from .source import display_name, load_file, make_shape
 
 __all__ = ["CloudLoader", "LoadTicket"]
@@ -101,6 +102,8 @@ def _run(relay: _Relay, ticket: LoadTicket, make, *, file: bool = False) -> None
     """Job thread: build the source, or report why not in one line."""
     try:
         source = make()
+        source.geometry  # noqa: B018 - framing facts computed here, not on the GUI thread
+        prepare_sampling(source.n_points)  # and the colour limits' sample index
     except (core.io.CloudFileError, OSError, ValueError) as exc:
         text = str(exc)
         if file and ticket.label not in text:

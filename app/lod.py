@@ -11,12 +11,17 @@ from __future__ import annotations
 import numpy as np
 import pyvista as pv
 
-__all__ = ["LevelOfDetail", "LOD_POINTS"]
+__all__ = ["LevelOfDetail", "LOD_POINTS", "STILL_POINTS"]
 
 #: Points drawn while the camera moves. Measured with llvmpipe on this 2-core VM under
 #: a load average of 8 (1100x850 view): 150k flat points 0.72 s per frame, 28k 0.15 s,
 #: roughly linear; 60k keeps a frame near 0.2 s even on the loaded machine.
 LOD_POINTS = 60_000
+#: Points a still frame draws at most (spheres; a random subset above it, sprites grown by
+#: sqrt(N / budget) to cover). Measured on this VM with llvmpipe, 1100x850, quiet machine:
+#: a frame costs ~45 ms plus ~0.45 us a sphere (1M: 0.49 s, 200k: 0.19 s), so 100k keeps a
+#: still frame, and with it any GUI-thread step that renders, near the 0.1 s target.
+STILL_POINTS = 100_000
 
 
 class LevelOfDetail:
@@ -27,12 +32,14 @@ class LevelOfDetail:
     plotter : pyvista plotter the scene draws in.
     lut : pyvista.LookupTable shared with the full cloud (same colours).
     limit : clouds with more points than this get a stand-in.
+    budget : a still frame draws at most this many points (read by the scene).
     """
 
-    def __init__(self, plotter, lut, limit: int = LOD_POINTS):
+    def __init__(self, plotter, lut, limit: int = LOD_POINTS, budget: int = STILL_POINTS):
         self.plotter = plotter
         self.lut = lut
         self.limit = int(limit)
+        self.budget = int(budget)
         self.index: np.ndarray | None = None
         self._mesh: pv.PolyData | None = None
         self._actor = None
@@ -41,15 +48,17 @@ class LevelOfDetail:
         self.held = False
         self._tags: list = []
 
-    def set_cloud(self, points: np.ndarray, full_actor, point_size: float, nan_colour: str) -> None:
-        """Build (or drop) the stand-in for a new cloud."""
+    def set_cloud(self, geometry, full_actor, point_size: float, nan_colour: str) -> None:
+        """Build (or drop) the stand-in for a new cloud (:class:`app.geometry.CloudGeometry`:
+        the stand-in is a prefix of its random drawing order). Its points and values
+        follow with :meth:`set_points` and :meth:`set_values`."""
         self._remove()
         self._full = full_actor
-        if len(points) <= self.limit:
+        if geometry.n_points <= self.limit:
             return
-        self.index = np.sort(np.random.default_rng(0).choice(len(points), size=self.limit, replace=False))
-        self._mesh = pv.PolyData(np.asarray(points[self.index], dtype=float))
-        self._mesh.point_data["values"] = np.full(self.limit, np.nan)
+        self.index = geometry.subset(self.limit)
+        self._mesh = pv.PolyData(np.zeros((len(self.index), 3)))
+        self._mesh.point_data["values"] = np.full(len(self.index), np.nan)
         self._actor = self.plotter.add_mesh(
             self._mesh, scalars="values", cmap=self.lut, clim=self.lut.scalar_range, point_size=max(point_size, 2.0),
             render_points_as_spheres=False, show_scalar_bar=False, nan_color=nan_colour, pickable=False,
@@ -65,9 +74,11 @@ class LevelOfDetail:
             n_full = self._full.GetMapper().GetInput().GetNumberOfPoints()
             self._actor.prop.point_size = min(float(size) * np.sqrt(max(n_full, 1) / self.limit), 48.0)
 
-    def set_values(self, values: np.ndarray) -> None:
+    def set_values(self, values: np.ndarray | None) -> None:
+        """Values of the whole cloud (None: not estimated yet, drawn grey)."""
         if self._mesh is not None:
-            self._mesh.point_data["values"] = np.asarray(values, dtype=float)[self.index]
+            self._mesh.point_data["values"] = (np.full(len(self.index), np.nan) if values is None
+                                               else np.asarray(values, dtype=float)[self.index])
             self._mesh.set_active_scalars("values")
 
     def set_points(self, points: np.ndarray) -> None:
@@ -99,8 +110,9 @@ class LevelOfDetail:
             if render:
                 self.plotter.render()
 
-    def attach(self) -> None:
-        """Follow the interactor style's start/end of interaction (drag, zoom, pan)."""
+    def attach(self, after_end=None) -> None:
+        """Follow the interactor style's start/end of interaction (drag, zoom, pan);
+        ``after_end()`` is called when an interaction ends (the scene's zoom detail)."""
         iren = getattr(self.plotter, "iren", None)
         style = iren.interactor.GetInteractorStyle() if iren is not None else None
         if style is None:
@@ -108,6 +120,8 @@ class LevelOfDetail:
         self._style = style
         self._tags = [style.AddObserver("StartInteractionEvent", self.begin),
                       style.AddObserver("EndInteractionEvent", self.end)]
+        if after_end is not None:
+            self._tags.append(style.AddObserver("EndInteractionEvent", lambda *_args: after_end()))
 
     def close(self) -> None:
         style = getattr(self, "_style", None)

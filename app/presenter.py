@@ -84,7 +84,7 @@ class ResultPresenter:
         values = out.fields[name]
         look = self._look(name, values)
         clim, cmap = look.clim, look.cmap
-        self.scene.set_cloud(out.points)
+        self.scene.set_cloud(out.points, geometry=out.request.source.geometry)
         self.scene.set_values(values, title=spec.title, cmap=cmap, clim=clim, log=look.log)
         self.scene.lod.hold(True)  # a big cloud shows its stand-in until the full result
         self.scene.set_title(f"{method_title(out.request.method)} — preview on {out.preview:,} points\n"
@@ -98,7 +98,7 @@ class ResultPresenter:
         self.scene.lod.hold(False)
         for scene, res, _fields in self._pairs():
             scene.spacing = out.spacing
-            scene.set_cloud(out.points)
+            scene.set_cloud(out.points, geometry=req.source.geometry)
             method = req.method if res is out.result else req.compare_method
             summary = out.summary if res is out.result else out.compare_summary
             scene.set_title(_title(out, method, res, summary))
@@ -201,8 +201,19 @@ def status_line(out) -> str:
     repaired = (getattr(res, "params", None) or {}).get("normals_repaired") or {}
     fixed = repaired.get("unusable", 0) + repaired.get("renormalised", 0)
     text += f"  ·  {fixed:,} file normals repaired" if fixed else ""
-    text += f"  ·  {out.elapsed:.2f} s" + (" (neighbours reused)" if out.reused_neighbours else "")
+    text += f"  ·  {out.elapsed:.2f} s" + _reused_text(out)
     return text
+
+
+#: How the status line names the stages re-used from the previous estimate (core.stage_cache).
+_STAGE_NAMES = {"initial": "initial normals", "orientation": "orientation", "scale": "chosen k"}
+
+
+def _reused_text(out) -> str:
+    """" (neighbours, initial normals, orientation, chosen k re-used)", or what of it was."""
+    names = (["neighbours"] if out.reused_neighbours else []) + [
+        text for stage, text in _STAGE_NAMES.items() if stage in getattr(out, "reused_stages", ())]
+    return f" ({', '.join(names)} re-used)" if names else ""
 
 
 def preview_line(out) -> str:

@@ -11,7 +11,10 @@ import numpy as np
 import pyvista as pv
 
 from . import framing, glyphs
+from .detail import VisibleDetail
+from .geometry import CloudGeometry
 from .lod import LevelOfDetail
+from .picking import Picking
 from .theme import LIGHT, Theme
 
 __all__ = ["CloudScene", "GLYPH_COLOURS", "FRAME_COLOURS"]
@@ -29,7 +32,7 @@ def _camera_state(renderer) -> tuple:
     return cam.GetPosition(), cam.GetFocalPoint(), cam.GetViewUp(), cam.GetViewAngle()
 
 
-class CloudScene:
+class CloudScene(Picking):
     """One cloud, its colours, glyphs, picked-point highlight and title in a plotter.
 
     Parameters
@@ -41,6 +44,10 @@ class CloudScene:
     def __init__(self, plotter):
         self.plotter = plotter
         self.points: np.ndarray | None = None
+        self.geometry: CloudGeometry | None = None
+        self.drawn: np.ndarray | None = None  # indices of the points a still frame draws
+        self._visible = 0  # of them, the points in view when they were chosen
+        self._values: np.ndarray | None = None  # the colours' values on every point
         self.spacing = 1.0
         self.point_size = 5.0  # the user's "Point size": the sprite size at the default density
         self.sprite_size = 5.0  # what is drawn: follows the point spacing on screen (app/framing.py)
@@ -63,7 +70,8 @@ class CloudScene:
         self.theme = LIGHT
         self._title_actor = None
         self.lod = LevelOfDetail(plotter, self._lut)
-        self.lod.attach()
+        self.detail = VisibleDetail(self, self._show_detail)
+        self.lod.attach(after_end=self.detail.request)
         self._render_tag = plotter.renderer.AddObserver("StartEvent", self._before_render)
         plotter.set_background(self.theme.background)
         # pyvista's key bindings that would fight the viewer's own state (point size,
@@ -75,66 +83,85 @@ class CloudScene:
                 pass
 
     # -- cloud and colours ----------------------------------------------------
-    def set_cloud(self, points: np.ndarray, values: np.ndarray | None = None, *, reset_camera: str | None = None):
-        """Show ``points`` (in place if the count did not change)."""
+    def set_cloud(self, points: np.ndarray, values: np.ndarray | None = None, *, reset_camera: str | None = None,
+                  geometry: CloudGeometry | None = None):
+        """Show ``points`` (in place if the count did not change).
+
+        ``geometry``: the cloud's :class:`app.geometry.CloudGeometry`, computed off the GUI
+        thread (computed here if None). Above :data:`app.lod.STILL_POINTS` points a still
+        frame draws that many (a random subset, sprites grown to cover): with software
+        OpenGL every frame then costs the GUI thread at most ~0.1 s. Zoomed in, the budget
+        goes to the points in view once the camera stops (:mod:`app.detail`).
+        """
         points = np.asarray(points, dtype=float)
-        vals = np.full(len(points), np.nan) if values is None else np.asarray(values, dtype=float)
-        if self._cloud is not None and self._cloud.n_points == len(points):
-            self._cloud.points = points.copy()
-            self._cloud.point_data["values"] = vals
-            self.lod.set_points(points)
-            self.lod.set_values(vals)
+        if geometry is None or geometry.n_points != len(points):
+            geometry = CloudGeometry.of(points)
+        same = self._cloud is not None and self.geometry is geometry  # same cloud: keep what is drawn
+        self.geometry, self.points = geometry, points
+        self._values = None if values is None else np.asarray(values, dtype=float)
+        if same:
+            self._draw(self.drawn, self._visible)
         else:
             if self._actor is not None:
                 self.plotter.remove_actor(self._actor, render=False)
-            self._cloud = pv.PolyData(points.copy())
-            self._sprite_spacing = framing.cloud_spacing(points)
-            self._cloud.point_data["values"] = vals
+            drawn = geometry.subset(self.lod.budget)
+            self._cloud = pv.PolyData(points[drawn])
+            self._cloud.point_data["values"] = np.full(len(drawn), np.nan)
             self._actor = self.plotter.add_mesh(
-                self._cloud,
-                scalars="values",
-                cmap=self._lut,
-                clim=self._lut.scalar_range,
-                render_points_as_spheres=True,
-                point_size=self.point_size,
-                show_scalar_bar=False,
-                nan_color=NAN_COLOUR,
-                pickable=False,
-                name="cloud",
-                reset_camera=False,
-                render=False,
+                self._cloud, scalars="values", cmap=self._lut, clim=self._lut.scalar_range, render_points_as_spheres=True,
+                point_size=self.point_size, show_scalar_bar=False, nan_color=NAN_COLOUR, pickable=False,
+                name="cloud", reset_camera=False, render=False,
             )
             self._actor.mapper.SetUseLookupTableScalarRange(True)
-            self.lod.set_cloud(points, self._actor, self.point_size, NAN_COLOUR)
-            if self._bar is None:
-                self._bar = self.plotter.add_scalar_bar(
-                    title=self._bar_title or " ",
-                    lookup_table=self._lut,
-                    vertical=False,
-                    position_x=0.25,
-                    position_y=0.03,
-                    width=0.5,
-                    height=0.075,
-                    title_font_size=14,
-                    label_font_size=12,
-                    n_labels=3,
-                    fmt="%.3g",
-                    color=self.theme.text,
-                    render=False,
-                )
-                self._bar.SetMaximumHeightInPixels(90)
-                # tick labels below the bar, the title above it: the title no longer
-                # sits on the middle tick label
-                self._bar.SetTextPositionToPrecedeScalarBar()
-        self.points = points
+            self._draw(drawn, geometry.n_points)
+            self.lod.set_cloud(geometry, self._actor, self.point_size, NAN_COLOUR)
+            self._add_bar()
+        self.lod.set_points(points)
+        self.lod.set_values(values)
         if reset_camera:
             self.reset_camera(reset_camera)
+        elif not same:
+            self.detail.request()  # a new cloud in a camera someone may have zoomed
+
+    def _draw(self, drawn: np.ndarray, visible: int) -> None:
+        """Draw the points ``drawn`` (indices) of the ``visible`` in view; sprites grow as the
+        drawn points get sparser than the cloud (spacing ~ 1 / sqrt(density))."""
+        values = np.full(len(drawn), np.nan) if self._values is None else self._values[drawn]
+        if self._cloud.n_points == len(drawn):
+            self._cloud.points = self.points[drawn]
+        else:
+            self._cloud = pv.PolyData(self.points[drawn])
+            self._actor.mapper.SetInputData(self._cloud)
+        self._cloud.point_data["values"] = values
+        self._cloud.set_active_scalars("values")
+        self.drawn, self._visible = drawn, visible
+        self._sprite_spacing = self.geometry.spacing * np.sqrt(max(visible, 1) / max(len(drawn), 1))
+
+    def _show_detail(self, drawn: np.ndarray, visible: int) -> None:
+        """The visible points the camera's stop selected (app/detail.py): draw them
+        (rendered now, unless the moving stand-in is on screen: its end renders)."""
+        self._draw(drawn, visible)
+        if not self.lod.active:
+            self.plotter.render()
+
+    def _add_bar(self) -> None:  # once per scene
+        if self._bar is not None:
+            return
+        self._bar = self.plotter.add_scalar_bar(
+            title=self._bar_title or " ", lookup_table=self._lut, vertical=False, position_x=0.25,
+            position_y=0.03, width=0.5, height=0.075, title_font_size=14, label_font_size=12, n_labels=3,
+            fmt="%.3g", color=self.theme.text, render=False,
+        )
+        self._bar.SetMaximumHeightInPixels(90)
+        # tick labels below the bar, the title above it: the title no longer sits on the middle tick label
+        self._bar.SetTextPositionToPrecedeScalarBar()
 
     def set_values(self, values: np.ndarray, *, title: str, cmap: str, clim: tuple[float, float], log: bool = False):
         """Colour the cloud by ``values`` (NaN drawn in a neutral grey), on a log scale if ``log``."""
         if self._cloud is None:
             return
-        self._cloud.point_data["values"] = np.asarray(values, dtype=float)
+        self._values = np.asarray(values, dtype=float)
+        self._cloud.point_data["values"] = self._values[self.drawn]
         self._cloud.set_active_scalars("values")
         self.lod.set_values(values)
         if self._lut.cmap is None or getattr(self._lut.cmap, "name", None) != cmap:
@@ -258,8 +285,7 @@ class CloudScene:
 
     def radius(self) -> float:
         """Half the diagonal of the cloud's bounding box."""
-        pts = self.points[np.isfinite(self.points).all(axis=1)]
-        return 0.5 * float(np.linalg.norm(np.ptp(pts, axis=0))) if len(pts) else 1.0
+        return self.geometry.radius if self.geometry is not None else 1.0
 
     # -- camera, text, render ------------------------------------------------------
     def set_title(self, text: str):
@@ -293,13 +319,14 @@ class CloudScene:
         """Frame the whole cloud, keeping the viewing direction."""
         self.plotter.renderer.reset_camera(render=False)  # Plotter.reset_camera renders regardless
         self._fit()
+        self.detail.request()
 
     def _fit(self) -> None:
         """Fill the view above the colour bar with the cloud's projection (app/framing.py)."""
         if self.points is None or not len(self.points):
             return
         renderer = self.plotter.renderer
-        sample = framing.fit_sample(self.points)
+        sample = self.points[self.geometry.fit_index]
         framing.fit_to_region(renderer, sample)
         # the sprites' size depends on the fit: fit again with half a sprite of room
         size = framing.sprite_size(renderer, sample.mean(axis=0), self._sprite_spacing, self.point_size)
@@ -321,63 +348,14 @@ class CloudScene:
         # pyvista's camera getter renders the whole scene once on a fresh renderer
         # (camera_set False): 6 s for 1M sprites with llvmpipe. We place it ourselves.
         self.plotter.renderer.camera_set = True
-        framing.look_from(self.plotter.renderer, self.points, view)
+        framing.look_from(self.plotter.renderer, self.geometry.centre, self.geometry.radius, view)
         self.plotter.renderer.reset_camera(render=False)  # Plotter.reset_camera renders regardless
         self._fit()
         self.view = view
+        self.detail.request()  # the whole cloud in view again: the uniform subset
 
     def render(self):
         self.plotter.render()
-
-    # -- picking ---------------------------------------------------------------------
-    def display_coords(self, index) -> tuple[np.ndarray, np.ndarray]:
-        """Display (x, y) pixel coordinates of cloud points (origin bottom-left)."""
-        x, y, _ = framing.projection(self.plotter.renderer, self.points[np.atleast_1d(index)])
-        return x, y
-
-    def pick(self, x: float, y: float, radius: float | None = None) -> int | None:
-        """Index of the front-most cloud point within ``radius`` px of display (x, y)."""
-        if self.points is None or not len(self.points):
-            return None
-        px, py, depth = framing.projection(self.plotter.renderer, self.points)
-        r = radius if radius is not None else max(4.0, 0.5 * self.sprite_size)
-        d2 = (px - x) ** 2 + (py - y) ** 2
-        near = np.flatnonzero((d2 <= r * r) & np.isfinite(depth) & (np.abs(depth) <= 1.0))
-        if not len(near):
-            return None
-        # front-most first; among points at about the same depth, the closest to the click
-        front = depth[near]
-        keep = near[front <= front.min() + 1e-3 * (1.0 + abs(front.min()))]
-        return int(keep[np.argmin(d2[keep])]) if len(keep) else int(near[np.argmin(front)])
-
-    def enable_picking(self, callback) -> None:
-        """Call ``callback(index)`` when the user clicks (press and release, no drag) a point."""
-        iren = getattr(self.plotter, "iren", None)
-        if iren is None:
-            return
-        self._pick_callback = callback
-        vtk_iren = iren.interactor
-
-        def on_press(*_args):
-            self._press = vtk_iren.GetEventPosition()
-
-        def on_release(*_args):
-            start, self._press = self._press, None
-            if start is None or self._pick_callback is None:
-                return
-            x, y = vtk_iren.GetEventPosition()
-            if abs(x - start[0]) + abs(y - start[1]) > 3:
-                return  # that was a drag (rotate), not a click
-            index = self.pick(x, y)
-            if index is not None:
-                self._pick_callback(index)
-
-        # pyvista registers release observers on the interactor style: the
-        # interactor swallows release events (pyvista issue #4976)
-        self._observers = [
-            iren.add_observer("LeftButtonPressEvent", on_press),
-            iren.add_observer("LeftButtonReleaseEvent", on_release),
-        ]
 
     def close(self):
         """Drop observers and references (the plotter itself is closed by its owner)."""
@@ -393,6 +371,7 @@ class CloudScene:
             self.plotter.renderer.RemoveObserver(self._render_tag)
             self._render_tag = None
         self.lod.close()
+        self.detail.close()
         self._pick_callback = None
         self._cloud = None
         self._title_actor = None

@@ -9,6 +9,7 @@ from __future__ import annotations
 import itertools
 import os
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -16,6 +17,7 @@ import numpy as np
 import core.io
 import core.shapes
 
+from .geometry import CloudGeometry
 from .text import display_name
 
 _uids = itertools.count(1)
@@ -59,6 +61,12 @@ class CloudSource:
     @property
     def has_truth(self) -> bool:
         return self.sample is not None
+
+    @cached_property
+    def geometry(self) -> CloudGeometry:
+        """Box, spacing, framing sample and drawing order (:mod:`app.geometry`); the loader
+        computes it on its thread, so the GUI thread only reads it."""
+        return CloudGeometry.of(self.points)
 
 
 def load_file(path) -> CloudSource:

@@ -201,7 +201,8 @@ class MainWindow(WindowActions, QMainWindow):
     def _on_source(self, source: CloudSource) -> None:
         self.presenter.clear()
         self.scene.spacing = 1.0
-        self.scene.set_cloud(source.points, reset_camera="oblique" if source.has_truth else "front")
+        self.scene.set_cloud(source.points, reset_camera="oblique" if source.has_truth else "front",
+                             geometry=source.geometry)
         self.scene.lod.hold(True)  # a big cloud: its stand-in until there are colours to show
         self.scene.set_title(f"{source.name}\nestimating…")
         self.setWindowTitle(f"Darboux — {source.name}")

@@ -22,6 +22,7 @@ import core
 import core.metrics
 import core.noise
 from core.spacing import mean_spacing
+from core.stage_cache import StageCache
 
 from .fields import compute_fields
 from .preview import PREVIEW_K, make_subsample, spread, wants_preview
@@ -54,6 +55,7 @@ class EstimateOutput:
     compare_summary: dict | None = None
     elapsed: float = 0.0
     reused_neighbours: bool = False
+    reused_stages: tuple = ()  # stages of core.estimate re-used from the last run (core.stage_cache)
     timings: dict = field(default_factory=dict)
     preview: int = 0  # points of the preview subsample; 0 for the full result
 
@@ -79,6 +81,11 @@ class EstimateWorker(QObject):
         self._nb_key = self._nb = None
         self._sub_key = self._sub = None
         self._sub_nb_key = self._sub_nb = None
+        #: method -> StageCache of the full estimate (and one for the preview): a change of
+        #: the passes re-runs only the fit (core.stage_cache); per method, so a compare run
+        #: does not evict the main method's stages
+        self._caches: dict[str, StageCache] = {}
+        self._sub_cache = StageCache()
         self._last_emit = 0.0
 
     # worker thread ---------------------------------------------------------
@@ -108,6 +115,8 @@ class EstimateWorker(QObject):
         pts.flags.writeable = False
         self._noisy_key, self._noisy = req.cloud_key, pts
         self._nb_key = self._nb = self._sub_nb_key = self._sub_nb = None
+        self._caches.clear()  # another cloud: free the old one's stages
+        self._sub_cache.clear()
         return pts
 
     def _neighbours(self, req: EstimateRequest, points: np.ndarray, progress) -> bool:
@@ -162,7 +171,7 @@ class EstimateWorker(QObject):
         passes = None if req.k_auto else (req.passes if core.METHODS[req.method].uses_passes else None)
         res = core.estimate(pts, normals, k=max(k, 3), method=req.method, passes=passes,
                             neighbours=self._sub_nb if self._sub_nb.k_max >= k else None,
-                            progress=_sub(callback, 0.0, 0.05, "preview"))
+                            progress=_sub(callback, 0.0, 0.05, "preview"), cache=self._sub_cache)
         fields = spread(compute_fields(res), sub)
         spacing = mean_spacing(pts, neighbours=self._sub_nb) if self._sub_nb.k_max > 1 else 1.0
         return EstimateOutput(gen=req.gen, request=req, points=points, result=res, fields=fields,
@@ -173,19 +182,8 @@ class EstimateWorker(QObject):
         timings = {}
         reused = self._neighbours(req, points, _sub(callback, 0.0, 0.2, "neighbours"))
         timings["neighbours"] = time.perf_counter() - t0
-        normals = req.source.normals if req.use_input_normals else None
-        runs = [req.method] + ([req.compare_method] if req.compare_method else [])
         lo = 0.0 if reused else 0.2
-        span = (1.0 - lo) / len(runs)
-        results = []
-        for i, method in enumerate(runs):
-            t = time.perf_counter()
-            passes = req.passes if core.METHODS[method].uses_passes else None
-            results.append(core.estimate(
-                points, normals, k=req.k_for(method), method=method, passes=passes, orientation=req.orientation,
-                neighbours=self._nb, progress=_sub(callback, lo + i * span, lo + (i + 1) * span, method),
-            ))
-            timings[method] = time.perf_counter() - t
+        results, kept = self._estimates(req, points, callback, lo, timings)
         sample = req.source.sample
         reference = sample.normals if sample is not None else req.source.normals
         fields = [compute_fields(r, reference_normals=reference, sample=sample) for r in results]
@@ -197,8 +195,29 @@ class EstimateWorker(QObject):
             spacing=spacing, summary=summaries[0],
             compare=results[1] if two else None, compare_fields=fields[1] if two else None,
             compare_summary=summaries[1] if two else None, elapsed=time.perf_counter() - t0,
-            reused_neighbours=reused, timings=timings,
+            reused_neighbours=reused, reused_stages=kept, timings=timings,
         )
+
+
+    def _estimates(self, req: EstimateRequest, points: np.ndarray, callback, lo: float, timings: dict):
+        """core.estimate of the method (and the compared one) over progress [lo, 1], each with
+        its own stage cache; returns the results and the stages the main one re-used."""
+        normals = req.source.normals if req.use_input_normals else None
+        runs = [req.method] + ([req.compare_method] if req.compare_method else [])
+        span = (1.0 - lo) / len(runs)
+        main = self._caches.setdefault(req.method, StageCache())
+        before = dict(main.reused)
+        results = []
+        for i, method in enumerate(runs):
+            t = time.perf_counter()
+            passes = req.passes if core.METHODS[method].uses_passes else None
+            results.append(core.estimate(
+                points, normals, k=req.k_for(method), method=method, passes=passes, orientation=req.orientation,
+                neighbours=self._nb, progress=_sub(callback, lo + i * span, lo + (i + 1) * span, method),
+                cache=self._caches.setdefault(method, StageCache()),
+            ))
+            timings[method] = time.perf_counter() - t
+        return results, tuple(stage for stage, n in main.reused.items() if n > before.get(stage, 0))
 
 
 def _sub(callback, start: float, stop: float, stage: str):

@@ -10,7 +10,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import degenerate, interop
+from . import degenerate, interop, stage_cache
 from ._progress import Progress
 from ._validate import as_normals, as_points
 from .planning import EstimatePlan
@@ -39,6 +39,7 @@ def estimate(
     drop_nonfinite=False,
     progress=None,
     plan=None,
+    cache=None,
 ) -> CurvatureResult:
     """Estimate normals, principal curvatures and directions of a point cloud.
 
@@ -89,6 +90,9 @@ def estimate(
         defaults). Through it the noise and the typical crease residual can be fixed
         rather than measured on this cloud (``params["noise"]``,
         ``params["crease_typical"]`` report what was used).
+    cache : :class:`core.stage_cache.StageCache`, optional. Passed to successive calls on
+        the same cloud, it keeps the stages a change does not touch (neighbours to the
+        chosen k when only ``passes`` or ``tol`` change); the result is bit-identical.
 
     Returns
     -------
@@ -119,12 +123,12 @@ def estimate(
         normals = as_normals(np.asarray(normals)[kept], len(pts), repair=True)
     report = Progress(progress)
 
-    front = prepare(pts, normals, plan, neighbours, report)
+    front = prepare(pts, normals, plan, neighbours, report, cache=cache)
     best = refine(front.pts, front.init, front.outlier, front.nb, front.scale, plan,
                   report.sub(0.7 if plan.auto else 0.45, 1.0))
     marks = flags(best.fit, front.scores, plan, front.reference, nb=front.nb, confidence=front.confidence)
     stages = front.order.to_caller((front.init, best, front.scale, marks))
-    nb = front.order.neighbours_to_caller(front.nb, pts)
+    nb = front.order.neighbours_to_caller(front.nb, pts, in_place=cache is None)  # a cache keeps the sorted graph
     report(1.0, "done")
     return _result(pts, kept, plan, stages=stages, neighbours=nb, repaired=front.repaired)
 
@@ -148,29 +152,32 @@ class Prepared(NamedTuple):
     order: SpatialOrder
 
 
-def prepare(pts, normals, plan, neighbours, report) -> Prepared:
+def prepare(pts, normals, plan, neighbours, report, *, cache=None) -> Prepared:
     """The stages before the fits: neighbours -> outlier scores -> initial normals ->
     orientation -> scale choice (shared by :func:`estimate` and the tiles of
     :mod:`core.tiled`, which run the fits' passes themselves). They run on the points in
-    spatial order (:mod:`core.spatial_order`; given ``neighbours``: in the caller's)."""
-    nb, order = spatial_neighbours(pts, plan, neighbours, report.sub(0.0, 0.3))
+    spatial order (:mod:`core.spatial_order`; given ``neighbours``: in the caller's), each
+    one run or re-used through ``cache`` (:mod:`core.stage_cache`)."""
+    run = stage_cache.memo(cache, pts, normals, plan)  # each stage: run, or re-used from the cache
+    nb, order = run.neighbours(lambda: spatial_neighbours(pts, plan, neighbours, report.sub(0.0, 0.3)), neighbours)
     pts, normals = nb.points, order.to_sorted(normals)  # the stages run in spatial order
     idx_p, _ = nb.take(plan.k_initial)
-    scores = outlier_scores(pts, idx_p)
+    scores = run("scores", lambda: outlier_scores(pts, idx_p))
     outlier = scores > OUTLIER_SCORE
-    repaired = None
     if normals is None:
-        init = initial_normals(pts, nb, plan, outlier, report)
+        init, repaired = run("initial", lambda: initial_normals(pts, nb, plan, outlier, report)), None
     else:
-        init, repaired = given_normals(pts, normals, nb, plan)
-    init, confidence = orient_signs(pts, init, idx_p, plan, rank=order.order)
+        init, repaired = run("initial", lambda: given_normals(pts, normals, nb, plan))
+    init, confidence = run("orientation", lambda: orient_signs(pts, init, idx_p, plan, rank=order.order))
     report(0.45, "orientation")
 
     reference = None
     if plan.auto:
-        reference = crease_reference(pts, init.normals, init.has_normal, nb, plan, report.sub(0.45, 0.47))
+        reference = run("reference", lambda: crease_reference(pts, init.normals, init.has_normal, nb, plan,
+                                                                report.sub(0.45, 0.47)))
     inliers = init.has_normal & ~outlier if plan.robust else init.has_normal  # outliers sit out the choice of k
-    kc = choose_scale(pts, init.normals, nb, inliers, plan, report.sub(0.47, 0.7), scores=scores, k_initial=init.k)
+    kc = run("scale", lambda: choose_scale(pts, init.normals, nb, inliers, plan, report.sub(0.47, 0.7), scores=scores,
+                                           k_initial=init.k))
     return Prepared(pts, nb, scores, outlier, init, repaired, confidence, reference, kc, order)
 
 

@@ -57,13 +57,14 @@ class SpatialOrder:
         # kernel on the ~20 small per-point arrays of a result (no thread start per array)
         return np.take(a, self._inverse, axis=0)
 
-    def neighbours_to_caller(self, nb: Neighbours, points: np.ndarray) -> Neighbours:
+    def neighbours_to_caller(self, nb: Neighbours, points: np.ndarray, *, in_place=True) -> Neighbours:
         """``nb`` (found on the sorted points) as neighbours of ``points``, the caller's;
-        large arrays are reordered in place (``nb`` must not be used afterwards)."""
+        large arrays are reordered in place (``nb`` must not be used afterwards) unless
+        ``in_place`` is False (a :class:`core.stage_cache.StageCache` keeps ``nb``)."""
         if self.order is None:
             return nb
         idx, dist = nb.indices, nb.distances
-        if idx.nbytes + dist.nbytes <= COPY_BYTES:
+        if idx.nbytes + dist.nbytes <= COPY_BYTES or not in_place:
             idx, dist = np.empty_like(nb.indices), np.empty_like(nb.distances)
             relabel_rows(nb.indices, nb.distances, self.order, idx, dist)
         else:

@@ -118,3 +118,81 @@ def test_cloud_spacing_of_a_grid():
     g[::7] += 0.001 * np.random.default_rng(1).normal(size=g[::7].shape)
     assert framing.cloud_spacing(g) == pytest.approx(0.01, rel=0.05)  # 20k queries against all points
     assert framing.cloud_spacing(g[:1]) == 0.0 and framing.cloud_spacing(np.full((5, 3), np.nan)) == 0.0
+
+
+def test_a_still_frame_draws_at_most_the_budget_with_sprites_grown_to_cover(scene):
+    points = make_shape("sphere", 4000).points
+    values = np.linspace(-1.0, 1.0, len(points))
+    _show(scene, points, "oblique")
+    full_size = scene.sprite_size
+    assert scene._cloud.n_points == 4000
+    scene.lod.budget = 1000
+    scene.set_cloud(points + 0.0, values, reset_camera="oblique")  # a new array: rebuilt with the budget
+    scene.set_values(values, title="H", cmap="RdBu_r", clim=(-1.0, 1.0))
+    _render(scene)
+    drawn = scene.drawn
+    assert scene._cloud.n_points == len(drawn) == 1000 and np.all(np.diff(drawn) > 0)
+    assert np.array_equal(scene._cloud.points, points[drawn])
+    assert np.array_equal(scene._cloud.point_data["values"], values[drawn])
+    # a quarter of the density: sprites twice as wide (spacing ~ 1 / sqrt(density))
+    assert scene.sprite_size == pytest.approx(2.0 * full_size, rel=0.15)
+    # a click picks among the points drawn
+    x, y = scene.display_coords(drawn[10])
+    assert scene.pick(float(x[0]), float(y[0])) in set(drawn.tolist())
+
+
+def test_cloud_geometry_ignores_non_finite_rows_and_nests_its_subsets():
+    from app.geometry import CloudGeometry
+
+    points = make_shape("cube", 3000).points.copy()
+    points[::7] = np.nan
+    g = CloudGeometry.of(points)
+    finite = np.isfinite(points).all(axis=1)
+    assert g.n_points == 3000 and set(g.order.tolist()) == set(np.flatnonzero(finite).tolist())
+    lo, hi = points[finite].min(axis=0), points[finite].max(axis=0)
+    assert np.allclose(g.centre, 0.5 * (lo + hi)) and g.radius == pytest.approx(0.5 * np.linalg.norm(hi - lo))
+    assert finite[g.fit_index].all() and g.spacing > 0
+    small, large = g.subset(100), g.subset(1000)
+    assert len(small) == 100 and set(small) <= set(large)  # the moving stand-in is part of the still frame
+    assert np.array_equal(CloudGeometry.of(points[1:6]).subset(10), np.arange(5))  # all finite: all drawn
+    empty = CloudGeometry.of(np.full((4, 3), np.nan))
+    assert empty.radius == 1.0 and len(empty.subset(10)) == 0
+
+
+def test_visible_subset_keeps_the_frustum_and_the_earliest_in_the_drawing_order():
+    from app.detail import visible_subset
+
+    points = np.random.default_rng(1).uniform(-2.0, 2.0, size=(5000, 3))
+    order = np.random.default_rng(2).permutation(5000)
+    inside = np.flatnonzero((np.abs(points) <= 1.0).all(axis=1))  # identity: clip = world, w = 1
+    chosen, seen = visible_subset(points, np.eye(4), order, budget=10_000)
+    assert seen == len(inside) and np.array_equal(chosen, inside)
+    chosen, seen = visible_subset(points, np.eye(4), order, budget=100)
+    rank = np.argsort(order)
+    assert seen == len(inside) and len(chosen) == 100 and set(chosen) <= set(inside)
+    assert rank[chosen].max() < np.sort(rank[inside])[100]  # the first 100 of them in the order
+
+
+def test_zoomed_in_the_still_budget_goes_to_the_points_in_view(scene, qtbot):
+    points = make_shape("plane", 8000).points
+    scene.lod.budget = 1000
+    _show(scene, points, "xy")
+    uniform = scene.drawn.copy()
+    scene.plotter.camera.Dolly(8.0)  # an eighth of the width: a few % of the plane in view
+    scene.plotter.renderer.ResetCameraClippingRange()  # as the interactor's zoom does
+    _render(scene)
+    before = scene.drawn
+    scene.detail.request()  # what the end of a drag or zoom does
+    qtbot.waitUntil(lambda: scene.drawn is not before, timeout=10_000)
+    x, y = scene.display_coords(np.arange(len(points)))
+    width, height = scene.plotter.window_size
+    in_view = np.flatnonzero((x >= 0) & (x <= width) & (y >= 0) & (y <= height))
+    assert 200 < len(in_view) < 1000 and set(scene.drawn) == set(in_view)  # every point in view is drawn
+    assert len(np.intersect1d(uniform, in_view)) < 0.3 * len(in_view)  # the uniform subset drew few of them
+    scene.plotter.camera.Dolly(0.125)  # back out: the same uniform subset as before
+    scene.plotter.renderer.ResetCameraClippingRange()
+    _render(scene)
+    before = scene.drawn
+    scene.detail.request()
+    qtbot.waitUntil(lambda: scene.drawn is not before, timeout=10_000)
+    assert np.array_equal(scene.drawn, uniform)

@@ -56,6 +56,9 @@ def test_preview_comes_first_then_the_full_result(make_window, qtbot, monkeypatc
     truth = 0.5 * (cloud.sample.k1 + cloud.sample.k2)
     assert np.nanmedian(np.abs(preview.fields["mean"] - truth)) < 0.15
     assert window.output is final and final.reused_neighbours  # passes only: neighbours kept
+    # ... and the initial normals, their orientation and the chosen k (core.stage_cache)
+    assert {"initial", "orientation", "scale"} <= set(final.reused_stages)
+    assert "initial normals, orientation, chosen k re-used" in window.status_label.text()
 
 
 def test_cancel_idles_at_once_and_a_cancelled_first_estimate_stays_usable(make_window, qtbot):

@@ -127,3 +127,21 @@ def test_dialog_pieces(qtbot):
     for ext in core.io.READ_FORMATS:
         assert f"*{ext}" in filt
     assert "*.ply" in _write_filter() and "*.csv" in _write_filter()
+
+
+def test_histogram_and_limits_of_many_values_use_a_random_subset_scaled_to_the_whole(qapp, monkeypatch):
+    import app.fields
+    import app.widgets.histogram as hist
+
+    monkeypatch.setattr(hist, "SAMPLE", 10_000)
+    h = hist.Histogram()
+    v = np.random.default_rng(0).normal(size=100_000)
+    v[::10] = np.nan  # a period that a strided subset would alias with
+    h.set_data(v, clim=(-2.0, 2.0), cmap="RdBu_r", label="H")
+    assert abs(h.counts.sum() - 90_000) < 900 and "90,000 pts, 10,000 nan" in h.ax.get_title()
+    exact, _ = np.histogram(np.clip(v[np.isfinite(v)], -2.4, 2.4), bins=h.bins, range=(-2.4, 2.4))
+    assert np.abs(h.counts - exact).max() < 0.25 * exact.max()  # the same shape
+    monkeypatch.setattr(app.fields, "LIMIT_SAMPLE", 2000)
+    look = app.fields.colouring(app.fields.FIELDS["mean"], v, clip=2.0)
+    truth = np.percentile(np.abs(v[np.isfinite(v)]), 98.0)
+    assert look.clim[1] == pytest.approx(truth, rel=0.1) and look.clim[0] == -look.clim[1]
