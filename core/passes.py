@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .tuning import RULE_SAMPLE
+from .tuning import PASS_DECAY, PASS_MIN_SHARE, RULE_SAMPLE
 
 
 def rule_sample(points, n_total=None, size=RULE_SAMPLE) -> np.ndarray:
@@ -53,3 +53,30 @@ def mean_turn_deg(a, b, mask) -> float:
     if not mask.any():
         return 0.0
     return float(turn_angles(a, b, mask).mean())
+
+
+class PassRule:
+    """When :func:`core.stages.refine` keeps a pass and stops, from each fit's mean turn of the
+    normals (a whole-cloud mean: a tiled run reduces it over the tiles and replays this
+    rule). ``n_fits``: fits at most (1 when NR fits too few points with noise)."""
+
+    def __init__(self, plan, few: bool):
+        self.plan, self.n_fits = plan, 1 if few else plan.passes + 1
+        self.measures = plan.adaptive or plan.tol is not None
+        self.last = None
+        self.converged = False
+
+    def step(self, p: int, change) -> tuple[bool, bool]:
+        """(keep fit ``p``, compute another): undo and stop at a pass that smoothed the shape."""
+        if self.plan.adaptive and self.last is not None and change > PASS_DECAY * self.last:
+            return False, False
+        self.last = change
+        more = p + 1 < self.n_fits and not self.converged
+        self.converged = self.plan.tol is not None and change < self.plan.tol
+        return True, more
+
+
+def few_fits(share: float, plan) -> bool:
+    """Whether NR fits too few points with noise for refinement passes: ``share`` of all
+    points have a normal and noise (not ``Scale.quiet``), below PASS_MIN_SHARE."""
+    return bool(plan.auto and share < PASS_MIN_SHARE)

@@ -10,6 +10,7 @@ from typing import NamedTuple
 import numpy as np
 
 from . import kernels, passes, scale
+from .passes import PassRule, few_fits
 from .frame import darboux_frame
 from .border import border_of_valid, served_by
 from .neighbours import Neighbours, search_in_spatial_order, search_neighbours
@@ -18,8 +19,7 @@ from .normals import jet_normals, pca_normals
 from .orientation import orient
 from .patch import Chunk
 from .spatial_order import SpatialOrder
-from .tuning import (CREASE_NOISE, CREASE_RATIO, CREASE_SPREAD, JET_SCORE, OUTLIER_FLOOR, PASS_DECAY,
-                     PASS_MIN_SHARE)
+from .tuning import CREASE_NOISE, CREASE_RATIO, CREASE_SPREAD, JET_SCORE, OUTLIER_FLOOR
 
 _CHUNK = 32_768
 
@@ -282,33 +282,6 @@ def refine(pts, initial: Initial, outlier, nb, sc: Scale, plan, report) -> Refin
         if not more:
             break
     return finish(best, sc, outlier, plan)
-
-
-class PassRule:
-    """When :func:`refine` keeps a pass and stops, from each fit's mean turn of the
-    normals (a whole-cloud mean: a tiled run reduces it over the tiles and replays this
-    rule). ``n_fits``: fits at most (1 when NR fits too few points with noise)."""
-
-    def __init__(self, plan, few: bool):
-        self.plan, self.n_fits = plan, 1 if few else plan.passes + 1
-        self.measures = plan.adaptive or plan.tol is not None
-        self.last = None
-        self.converged = False
-
-    def step(self, p: int, change) -> tuple[bool, bool]:
-        """(keep fit ``p``, compute another): undo and stop at a pass that smoothed the shape."""
-        if self.plan.adaptive and self.last is not None and change > PASS_DECAY * self.last:
-            return False, False
-        self.last = change
-        more = p + 1 < self.n_fits and not self.converged
-        self.converged = self.plan.tol is not None and change < self.plan.tol
-        return True, more
-
-
-def few_fits(share: float, plan) -> bool:
-    """Whether NR fits too few points with noise for refinement passes: ``share`` of all
-    points have a normal and noise (not ``Scale.quiet``), below PASS_MIN_SHARE."""
-    return bool(plan.auto and share < PASS_MIN_SHARE)
 
 
 def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n_fits, fitted=None, first=None):
