@@ -100,10 +100,12 @@ class _Memo:
         self.graph = None
 
     def neighbours(self, compute, given):
-        """The neighbour graph: ``given`` (the caller's) as is, else a kept search."""
-        nb = compute() if given is not None or self.cache is None else self._run("neighbours", compute)
+        """The neighbour graph and its spatial order, ``compute()``'s ``(nb, order)``: from
+        ``given`` (the caller's graph) as is, else a kept search; later stages are keyed by
+        the graph ``nb`` itself."""
+        nb, order = compute() if given is not None or self.cache is None else self._run("neighbours", compute)
         self.graph = None if self.cache is None else self.cache._token(nb)
-        return nb
+        return nb, order
 
     def __call__(self, stage: str, compute):
         return compute() if self.cache is None else self._run(stage, compute)
