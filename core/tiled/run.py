@@ -31,6 +31,10 @@ HALO_ALLOWANCE = 1.5
 #: what a worker process holds before any tile: Python, numpy, scipy, numba's compiled
 #: kernels, Dask (measured 210 MB after a first estimate), with room to spare
 RUNTIME_BYTES = 300_000_000
+#: share of the budget a tile is sized to fill: Dask's nanny pauses a worker at 80 % of its
+#: memory limit and kills it at 95 %; a 1.31M-point tile sized to fill all of 1.5GB peaked
+#: at 1.40 GB (k = 15, 2026-11-30), so tiles aim at 75 %
+FILL = 0.75
 DEFAULT_MEMORY = "1.5GB"
 _VERSION = 2  # bumped when the work directory's layout changes: old ones are cleared
 
@@ -71,7 +75,7 @@ def default_tile_points(k: int, memory) -> int:
     if budget < 2 * RUNTIME_BYTES:
         raise ValueError(f"memory {memory!r} is too small for a tile worker; give at least "
                          f"{2 * RUNTIME_BYTES // 1_000_000}MB (a worker alone holds about {RUNTIME_BYTES // 1_000_000}MB)")
-    return max(10_000, int((budget - RUNTIME_BYTES) / (bytes_per_point(k) * HALO_ALLOWANCE)))
+    return max(10_000, int((FILL * budget - RUNTIME_BYTES) / (bytes_per_point(k) * HALO_ALLOWANCE)))
 
 
 def _prepare(source, normals, k, *, method, passes, orientation, options, tile_points, workers, memory,
