@@ -63,17 +63,14 @@ def sample_las(path, budget: int, *, names=None, box=None, chunk: int = CHUNK, p
     budget = check_int(budget, name="budget", low=1, high=10**10)
     report = Progress(progress)
     info = open_las(path)
-    names = list(info.dims if names is None else names)
-    missing = [n for n in names if n not in info.dims]
-    if missing:
-        raise ValueError(f"{path}: no dimension {missing[0]!r}; the file has {list(info.dims)}")
+    names = _names(path, info, names)
     lo, hi = _box(box)
     stride = 1 if box is not None else max(1, -(-info.count // budget))  # the whole file: known count
     kept: list = []  # per chunk: (match ranks, rows, points, fields), thinned when over budget
     matched = 0
     for start, rec in iter_records(path, chunk=chunk, info=info):
         xyz = xyz_of(rec)
-        inside = np.flatnonzero(((xyz >= lo) & (xyz <= hi)).all(axis=1)) if box is not None else np.arange(len(xyz))
+        inside = np.arange(len(xyz)) if lo is None else np.flatnonzero(((xyz >= lo) & (xyz <= hi)).all(axis=1))
         rank = matched + np.arange(len(inside))
         take = rank % stride == 0  # every stride-th match
         pick = inside[take]
@@ -83,6 +80,18 @@ def sample_las(path, budget: int, *, names=None, box=None, chunk: int = CHUNK, p
         while sum(len(part[0]) for part in kept) > budget:
             stride *= 2
             kept = [_thin(part, stride) for part in kept]
+    return _joined(kept, names, matched, stride)
+
+
+def _names(path, info, names) -> list:
+    names = list(info.dims if names is None else names)
+    missing = [n for n in names if n not in info.dims]
+    if missing:
+        raise ValueError(f"{path}: no dimension {missing[0]!r}; the file has {list(info.dims)}")
+    return names
+
+
+def _joined(kept, names, matched, stride) -> LasSample:
     if not kept:
         return LasSample(np.zeros((0, 3)), {n: np.zeros(0) for n in names}, np.zeros(0, np.int64), 0, stride)
     rows = np.concatenate([part[1] for part in kept]).astype(np.int64)
