@@ -143,15 +143,12 @@ def estimate_tiled(source, output, *, normals=None, k=15, method="nr", passes=No
     src, spec, rule, budget, tile_points = _prepare(
         source, normals, k, method=method, passes=passes, orientation=orientation, options=options,
         tile_points=tile_points, workers=workers, memory=memory, ignore_normals=ignore_normals)
-    output = pathlib.Path(os.fspath(output))
-    if src.identity[0] == os.path.abspath(output):
-        raise ValueError(f"output {output} is the input; the input is never overwritten")
+    output = _output(src, output)
     store = TileStore(workdir or directory_for(output))
     same_run = {**spec.__dict__, "threads": None}  # any number of workers may resume a run
     resumed = store.open({"input": list(map(str, src.identity)), "spec": repr(same_run), "rule": rule,
                           "tile_points": tile_points, "version": _VERSION})
-    plan = binning.plan_tiles(src, store, tile_points, report.sub(0.0, 0.05))
-    sizes = binning.bin_points(src, store, plan, report.sub(0.05, 0.15))
+    plan, sizes = _binned(src, store, tile_points, report)
     todo = [t for t in range(plan.n_tiles) if not store.finished(t)]
     engine.run_tasks(store.root, todo, sizes, spec, client=client, scheduler=scheduler, workers=workers,
                      memory=budget, label=src.name, progress=report.sub(0.15, 0.9))
@@ -164,6 +161,28 @@ def estimate_tiled(source, output, *, normals=None, k=15, method="nr", passes=No
     report(1.0, "done")
     skipped = plan.n_tiles - len(todo) if resumed else 0
     return TiledRun(out, plan.n_points, plan.n_tiles, skipped, agreement, time.perf_counter() - t0)
+
+
+def _output(src, output) -> pathlib.Path:
+    """The output path, checked before any work: not the input, in an existing folder."""
+    output = pathlib.Path(os.fspath(output))
+    if src.identity[0] == os.path.abspath(output):
+        raise ValueError(f"output {output} is the input; the input is never overwritten")
+    if not output.parent.is_dir():
+        raise ValueError(f"output {output}: the folder {output.parent} does not exist")
+    return output
+
+
+def _binned(src, store, tile_points, report):
+    """Plan the tiles and bin the points; a failure here (an unreadable or truncated input,
+    Ctrl-C) leaves no work directory behind, unless it holds finished tiles to resume."""
+    try:
+        plan = binning.plan_tiles(src, store, tile_points, report.sub(0.0, 0.05))
+        return plan, binning.bin_points(src, store, plan, report.sub(0.05, 0.15))
+    except BaseException:
+        if not any(store.root.glob("results/*.done")):
+            store.remove()
+        raise
 
 
 def _spec(k, method, passes, orientation, options, normals_given, in_process, views=False):
