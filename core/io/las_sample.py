@@ -5,6 +5,11 @@ tiled result, :mod:`app.big_result`): :func:`sample_las` streams the file in chu
 keeps every s-th point (inside the box, if one is given), doubling s whenever more than
 ``budget`` points are kept, so that memory stays within ``budget`` points plus one chunk
 and the sample is uniform over the points it stands for, in file order.
+
+A layered LAZ (point format >= 6, as the tiled run writes) is read in two passes: the
+coordinates alone choose the rows (they decompress ~10x faster than the float64 fields),
+then only the LAZ chunks holding chosen rows are decompressed whole: a region of a scan
+stored in scan order touches few of them.
 """
 
 from __future__ import annotations
@@ -15,7 +20,11 @@ import numpy as np
 
 from .._progress import Progress
 from .._validate import check_int
+from .cloud import CloudFileError
 from .las_stream import CHUNK, iter_records, open_las, xyz_of
+
+#: points read after each seek of the second pass: a LAZ chunk as laspy and lazrs write it
+BLOCK = 50_000
 
 
 @dataclass(frozen=True)
@@ -66,21 +75,76 @@ def sample_las(path, budget: int, *, names=None, box=None, chunk: int = CHUNK, p
     names = _names(path, info, names)
     lo, hi = _box(box)
     stride = 1 if box is not None else max(1, -(-info.count // budget))  # the whole file: known count
+    if info.layered:
+        rank, rows, matched, stride = _choose(path, info, budget, lo, hi, stride, chunk, report.sub(0.0, 0.5))
+        pts, fields = _fetch(path, info, rows, names, report.sub(0.5, 1.0))
+        return LasSample(pts, fields, rows, matched, stride)
     kept: list = []  # per chunk: (match ranks, rows, points, fields), thinned when over budget
     matched = 0
     for start, rec in iter_records(path, chunk=chunk, info=info):
         xyz = xyz_of(rec)
-        inside = np.arange(len(xyz)) if lo is None else np.flatnonzero(((xyz >= lo) & (xyz <= hi)).all(axis=1))
-        rank = matched + np.arange(len(inside))
-        take = rank % stride == 0  # every stride-th match
-        pick = inside[take]
-        kept.append((rank[take], start + pick, xyz[pick], {n: np.array(rec[n])[pick] for n in names}))
-        matched += len(inside)
+        rank, pick, n_inside = _picks(xyz, lo, hi, matched, stride)
+        kept.append((rank, start + pick, xyz[pick], {n: np.array(rec[n])[pick] for n in names}))
+        matched += n_inside
         report((start + len(xyz)) / max(info.count, 1), "reading")
         while sum(len(part[0]) for part in kept) > budget:
             stride *= 2
             kept = [_thin(part, stride) for part in kept]
     return _joined(kept, names, matched, stride)
+
+
+def _picks(xyz, lo, hi, matched, stride):
+    """Ranks (among all matches so far) and chunk rows of this chunk's every stride-th
+    match, and the number of matches in the chunk."""
+    inside = np.arange(len(xyz)) if lo is None else np.flatnonzero(((xyz >= lo) & (xyz <= hi)).all(axis=1))
+    rank = matched + np.arange(len(inside))
+    take = rank % stride == 0
+    return rank[take], inside[take], len(inside)
+
+
+def _choose(path, info, budget, lo, hi, stride, chunk, report):
+    """First pass, coordinates only: the rows of the sample (ranks, rows, matches, stride)."""
+    ranks, rows, matched = [], [], 0
+    for start, rec in iter_records(path, chunk=chunk, info=info, coordinates_only=True):
+        xyz = xyz_of(rec)
+        rank, pick, n_inside = _picks(xyz, lo, hi, matched, stride)
+        ranks.append(rank)
+        rows.append(start + pick)
+        matched += n_inside
+        report((start + len(xyz)) / max(info.count, 1), "choosing")
+        while sum(len(r) for r in ranks) > budget:
+            stride *= 2
+            keep = [r % stride == 0 for r in ranks]
+            ranks, rows = [r[k] for r, k in zip(ranks, keep)], [w[k] for w, k in zip(rows, keep)]
+    rank = np.concatenate(ranks) if ranks else np.zeros(0, np.int64)
+    return rank, (np.concatenate(rows) if rows else np.zeros(0, np.int64)).astype(np.int64), matched, stride
+
+
+def _fetch(path, info, rows, names, report):
+    """Second pass: the points and fields of ``rows`` (sorted), decompressing only the
+    BLOCKs that hold some."""
+    import laspy
+
+    parts, blocks = [], np.unique(rows // BLOCK)
+    at = where = 0  # the block read, and the reader's position
+    try:
+        with laspy.open(path) as reader:
+            for i, b in enumerate(blocks):
+                at = int(b) * BLOCK
+                if where != at:
+                    reader.seek(at)
+                rec = reader.read_points(min(BLOCK, info.count - at))
+                where = at + len(rec)
+                lo, hi = np.searchsorted(rows, [at, at + len(rec)])
+                pick = rows[lo:hi] - at
+                parts.append((xyz_of(rec)[pick], {n: np.array(rec[n])[pick] for n in names}))
+                report((i + 1) / len(blocks), "reading")
+    except (laspy.errors.LaspyException, ValueError, EOFError, OSError, RuntimeError, IndexError) as exc:
+        raise CloudFileError(path, f"unreadable near point {at} of {info.count} (truncated or corrupt "
+                                   f"LAS/LAZ): {exc}") from None
+    if not parts:
+        return np.zeros((0, 3)), {n: np.zeros(0) for n in names}
+    return np.concatenate([p for p, _ in parts]), {n: np.concatenate([f[n] for _, f in parts]) for n in names}
 
 
 def _names(path, info, names) -> list:

@@ -40,6 +40,7 @@ class LasInfo:
     normals: tuple | None  # the three dimension names holding normals, if any
     version: str
     dims: tuple = ()  # every dimension name but X, Y, Z (standard and extra bytes)
+    layered: bool = False  # LAZ of point format >= 6: coordinates decompress apart from the rest
 
 
 def open_las(path) -> LasInfo:
@@ -62,7 +63,7 @@ def open_las(path) -> LasInfo:
             names = [n for n in h.point_format.dimension_names if n not in ("X", "Y", "Z")]
             return LasInfo(str(path), int(h.point_count), np.asarray(h.mins, float), np.asarray(h.maxs, float),
                            scales, np.asarray(h.offsets, float), find_normals(names), str(h.version),
-                           tuple(names))
+                           tuple(names), bool(h.are_points_compressed and h.point_format.id >= 6))
     except CloudFileError:
         raise
     except (laspy.errors.LaspyException, ValueError, EOFError, OSError) as exc:
@@ -84,15 +85,18 @@ def iter_las(path, *, chunk: int = CHUNK):
         yield start, xyz_of(pts), nrm
 
 
-def iter_records(path, *, chunk: int = CHUNK, info: LasInfo | None = None):
+def iter_records(path, *, chunk: int = CHUNK, info: LasInfo | None = None, coordinates_only: bool = False):
     """Yield ``(start, laspy point record)`` chunks of a LAS/LAZ file in file order; a
-    file that ends early raises :class:`CloudFileError` naming it and the point."""
+    file that ends early raises :class:`CloudFileError` naming it and the point.
+    ``coordinates_only`` decompresses only x, y, z of a layered LAZ (the other fields read 0)."""
     import laspy
 
     info = info or open_las(path)
     start = 0
+    select = laspy.DecompressionSelection
     try:
-        with laspy.open(path) as reader:
+        with laspy.open(path, decompression_selection=select.XY_RETURNS_CHANNEL | select.Z if coordinates_only
+                        else select.all()) as reader:
             for pts in reader.chunk_iterator(chunk):
                 yield start, pts
                 start += len(pts)
