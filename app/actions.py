@@ -85,7 +85,7 @@ class WindowActions:
     def open_file(self, path, *, remember: bool = True):
         """Read a file on the loader thread; the current cloud stays until it arrives."""
         if big_result.wants(path):  # a stored result larger than the budget: a level-of-detail view
-            return big_result.view_of(self).open(path)
+            return big_result.view_of(self).open(path, remember=remember)
         ticket = self.loader.open_file(path, remember=remember)
         self.estimator.cancel()
         self.status_label.setText(f"reading {ticket.label}…")

@@ -172,9 +172,12 @@ class BigResultView(QObject):
         """Whether this view's result is on screen."""
         return is_stored(self.window.state.source) and self.window.state.source.path == self.path
 
-    def open(self, path):
-        """Read the overview of ``path`` (returns at once; :attr:`shown` follows)."""
+    def open(self, path, *, remember: bool = False):
+        """Read the overview of ``path`` (returns at once; :attr:`shown` follows);
+        ``remember`` lists it in File > Open recent."""
         self.window.estimator.cancel()
+        if remember:
+            self.window.recent_menu.add(path)
         self.path, self.overview = path, None
         self.window.status_label.setText(f"reading a {self.budget:,}-point preview of {display_name(path)}…")
         self.window.progress.set_progress(-1.0, "reading…")

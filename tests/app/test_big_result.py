@@ -61,6 +61,7 @@ def test_a_result_over_the_budget_opens_as_a_sample_with_its_stored_fields(make_
     assert window.presenter.output is out and window.shown["field"] == "mean"
     assert window.request_estimate() is None and not window.estimator.busy  # nothing to estimate
     assert "6,000 points stored" in window.status_label.text()
+    assert window.recent_menu.paths()[0] == str(result_laz.resolve())
 
 
 def test_zooming_in_rereads_the_region_in_view_and_zooming_out_returns(make_window, qtbot, monkeypatch, result_laz):
