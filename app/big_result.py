@@ -215,10 +215,10 @@ class BigResultView(QObject):
 
     def _read(self, box) -> None:
         self._gen += 1
-        gen, path, budget, relay = self._gen, self.path, self.budget, self._relay
+        gen, path, budget, relay, window = self._gen, self.path, self.budget, self._relay, self.window
 
         def still_wanted(_fraction, _stage):
-            return gen == self._gen  # a newer read or another cloud cancels this one
+            return gen == self._gen and not window._closed  # a newer read, another cloud or closing stops it
 
         def job():
             try:
