@@ -15,7 +15,7 @@ from PySide6.QtWidgets import QFileDialog, QMessageBox
 import core.io
 import core.shapes
 
-from . import DEFAULT_CLOUD
+from . import DEFAULT_CLOUD, big_result
 from .text import safe_text
 from .widgets import RecentFilesMenu, ShapeDialog
 
@@ -84,6 +84,8 @@ class WindowActions:
     # -- loading (answers arrive in _on_loaded / _on_load_failed) -------------------
     def open_file(self, path, *, remember: bool = True):
         """Read a file on the loader thread; the current cloud stays until it arrives."""
+        if big_result.wants(path):  # a stored result larger than the budget: a level-of-detail view
+            return big_result.view_of(self).open(path, remember=remember)
         ticket = self.loader.open_file(path, remember=remember)
         self.estimator.cancel()
         self.status_label.setText(f"reading {ticket.label}…")

@@ -23,6 +23,7 @@ from pyvistaqt import QtInteractor
 
 from . import ICON, _refguard
 from .actions import WindowActions
+from .big_result import is_stored
 from .compiling import COMPILE_MESSAGE, CompileWatch
 from .errors import Notifier
 from .estimator import Estimator
@@ -185,8 +186,8 @@ class MainWindow(WindowActions, QMainWindow):
 
     def request_estimate(self) -> EstimateRequest | None:
         """Send the current parameters to the worker (normally via the debounce timer)."""
-        if self.state.source is None or self._closed:
-            return None
+        if self.state.source is None or self._closed or is_stored(self.state.source):
+            return None  # (a stored result, app.big_result, is shown as it is)
         self._debounce.stop()
         return self.estimator.submit_request(EstimateRequest.from_state(self.state, self.estimator.next_gen()))
 

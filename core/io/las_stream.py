@@ -3,7 +3,8 @@
 For scans larger than memory (:mod:`core.tiled`): :func:`open_las` checks the header
 (point count, a zero scale, a missing LAZ backend, a truncated LAS) before any work is
 done; :func:`iter_las` yields the scaled coordinates (and normals stored as extra bytes)
-``chunk`` points at a time; :class:`LasResultWriter` writes a curvature result as LAZ/LAS
+``chunk`` points at a time (:func:`iter_records`: the raw point records, for other
+dimensions); :class:`LasResultWriter` writes a curvature result as LAZ/LAS
 with one extra-bytes dimension per result property, named as in the PLY output
 (``nx ny nz k1 k2 e1_x .. e2_z gaussian mean valid k``), readable by laspy, PDAL and
 CloudCompare.
@@ -42,6 +43,8 @@ class LasInfo:
     offsets: np.ndarray
     normals: tuple | None  # the three dimension names holding normals, if any
     version: str
+    dims: tuple = ()  # every dimension name but X, Y, Z (standard and extra bytes)
+    layered: bool = False  # LAZ of point format >= 6: coordinates decompress apart from the rest
 
 
 def open_las(path) -> LasInfo:
@@ -63,7 +66,8 @@ def open_las(path) -> LasInfo:
                                            "(every scale must be finite and non-zero)")
             names = [n for n in h.point_format.dimension_names if n not in ("X", "Y", "Z")]
             return LasInfo(str(path), int(h.point_count), np.asarray(h.mins, float), np.asarray(h.maxs, float),
-                           scales, np.asarray(h.offsets, float), find_normals(names), str(h.version))
+                           scales, np.asarray(h.offsets, float), find_normals(names), str(h.version),
+                           tuple(names), bool(h.are_points_compressed and h.point_format.id >= 6))
     except CloudFileError:
         raise
     except (laspy.errors.LaspyException, ValueError, EOFError, OSError) as exc:
@@ -77,19 +81,29 @@ def iter_las(path, *, chunk: int = CHUNK):
     None. A file that ends early (a truncated LAZ) raises :class:`CloudFileError`
     naming the file and the point where it ended.
     """
+    info = open_las(path)
+    for start, pts in iter_records(path, chunk=chunk, info=info):
+        nrm = None
+        if info.normals:
+            nrm = np.column_stack([np.asarray(pts[n], dtype=np.float64) for n in info.normals])
+        yield start, xyz_of(pts), nrm
+
+
+def iter_records(path, *, chunk: int = CHUNK, info: LasInfo | None = None, coordinates_only: bool = False):
+    """Yield ``(start, laspy point record)`` chunks of a LAS/LAZ file in file order; a
+    file that ends early raises :class:`CloudFileError` naming it and the point.
+    ``coordinates_only`` decompresses only x, y, z of a layered LAZ (the other fields read 0)."""
     import laspy
 
-    info = open_las(path)
+    info = info or open_las(path)
     start = 0
+    select = laspy.DecompressionSelection
     try:
-        with laspy.open(path) as reader:
+        with laspy.open(path, decompression_selection=select.XY_RETURNS_CHANNEL | select.Z if coordinates_only
+                        else select.all()) as reader:
             for pts in reader.chunk_iterator(chunk):
-                xyz = np.column_stack([np.asarray(pts.x, float), np.asarray(pts.y, float), np.asarray(pts.z, float)])
-                nrm = None
-                if info.normals:
-                    nrm = np.column_stack([np.asarray(pts[n], dtype=np.float64) for n in info.normals])
-                yield start, xyz, nrm
-                start += len(xyz)
+                yield start, pts
+                start += len(pts)
     except CloudFileError:
         raise
     except (laspy.errors.LaspyException, ValueError, EOFError, OSError, RuntimeError) as exc:
@@ -97,6 +111,11 @@ def iter_las(path, *, chunk: int = CHUNK):
                                    f"LAS/LAZ): {exc}") from None
     if start != info.count:
         raise CloudFileError(path, f"truncated: the header declares {info.count} points but only {start} could be read")
+
+
+def xyz_of(points) -> np.ndarray:
+    """(m, 3) float64 scaled coordinates of a laspy point record."""
+    return np.column_stack([np.asarray(points.x, float), np.asarray(points.y, float), np.asarray(points.z, float)])
 
 
 def quantisation(lo, hi):

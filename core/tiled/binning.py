@@ -18,7 +18,7 @@ def plan_tiles(source, store: TileStore, tile_points: int, progress) -> TilePlan
     seen = 0
     for start, pts, *_ in source.chunks():
         first = (-start) % stride
-        parts.append(pts[first::stride])
+        parts.append(pts[first::stride].copy())  # a view would keep each whole chunk alive (1.2 GB at 50M)
         _check_finite(source, start, pts)
         seen = start + len(pts)
         progress(seen / max(source.count, seen), "sampling")

@@ -35,6 +35,10 @@ HALO_ALLOWANCE = 1.5
 #: what a worker process holds before any tile: Python, numpy, scipy, numba's compiled
 #: kernels, Dask (measured 210 MB after a first estimate), with room to spare
 RUNTIME_BYTES = 300_000_000
+#: share of the budget a tile is sized to fill: Dask's nanny pauses a worker at 80 % of its
+#: memory limit and kills it at 95 %; a 1.31M-point tile sized to fill all of 1.5GB peaked
+#: at 1.40 GB (k = 15, 2026-11-30), so tiles aim at 75 %
+FILL = 0.75
 DEFAULT_MEMORY = "1.5GB"
 #: k="auto" holds more than NR at its largest candidate (the jets, the scale choice, every
 #: pass's result of its own points until the whole cloud chooses one): counted as this many
@@ -82,7 +86,7 @@ def default_tile_points(k: int, memory) -> int:
     if budget < 2 * RUNTIME_BYTES:
         raise ValueError(f"memory {memory!r} is too small for a tile worker; give at least "
                          f"{2 * RUNTIME_BYTES // 1_000_000}MB (a worker alone holds about {RUNTIME_BYTES // 1_000_000}MB)")
-    return max(10_000, int((budget - RUNTIME_BYTES) / (bytes_per_point(k) * HALO_ALLOWANCE)))
+    return max(10_000, int((FILL * budget - RUNTIME_BYTES) / (bytes_per_point(k) * HALO_ALLOWANCE)))
 
 
 def _prepare(source, normals, k, *, method, passes, orientation, options, tile_points, workers, memory,
@@ -172,15 +176,12 @@ def estimate_tiled(source, output, *, normals=None, k="auto", method="nr", passe
     src, spec, rule, budget, tile_points = _prepare(
         source, normals, k, method=method, passes=passes, orientation=orientation, options=options,
         tile_points=tile_points, workers=workers, memory=memory, ignore_normals=ignore_normals)
-    output = pathlib.Path(os.fspath(output))
-    if src.identity[0] == os.path.abspath(output):
-        raise ValueError(f"output {output} is the input; the input is never overwritten")
+    output = _output(src, output)
     store = TileStore(workdir or directory_for(output))
     same_run = {**spec.__dict__, "threads": None}  # any number of workers may resume a run
     resumed = store.open({"input": list(map(str, src.identity)), "spec": repr(same_run), "rule": rule,
                           "tile_points": tile_points, "version": _VERSION, "auto": _auto_rules(spec)})
-    plan = binning.plan_tiles(src, store, tile_points, report.sub(0.0, 0.05))
-    sizes = binning.bin_points(src, store, plan, report.sub(0.05, 0.15))
+    plan, sizes = _binned(src, store, tile_points, report)
     tasks = dict(client=client, scheduler=scheduler, workers=workers, memory=budget, label=src.name)
     spec, results, params = _estimate(store, plan, sizes, spec, tasks, report.sub(0.15, 0.9))
     report(0.9, "orientation across tiles")
@@ -217,6 +218,28 @@ def _estimate(store, plan, sizes, spec, tasks, report):
     kept = kept_pass(store, plan.n_tiles, whole)
     params.update(dict(spec.fixed), passes_run=kept, **wholecloud.reduce(store, plan.n_tiles, whole, "after"))
     return spec, PassView(store.root, kept), params
+
+
+def _output(src, output) -> pathlib.Path:
+    """The output path, checked before any work: not the input, in an existing folder."""
+    output = pathlib.Path(os.fspath(output))
+    if src.identity[0] == os.path.abspath(output):
+        raise ValueError(f"output {output} is the input; the input is never overwritten")
+    if not output.parent.is_dir():
+        raise ValueError(f"output {output}: the folder {output.parent} does not exist")
+    return output
+
+
+def _binned(src, store, tile_points, report):
+    """Plan the tiles and bin the points; a failure here (an unreadable or truncated input,
+    Ctrl-C) leaves no work directory behind, unless it holds finished tiles to resume."""
+    try:
+        plan = binning.plan_tiles(src, store, tile_points, report.sub(0.0, 0.05))
+        return plan, binning.bin_points(src, store, plan, report.sub(0.05, 0.15))
+    except BaseException:
+        if not any(store.root.glob("results/*.done")):
+            store.remove()
+        raise
 
 
 def _spec(k, method, passes, orientation, options, normals_given, in_process, views=False):

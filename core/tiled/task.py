@@ -10,10 +10,8 @@ import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
-
 from ..estimate import estimate
+from ..kernels.sign_evidence import knn_components
 from ..neighbours import build_neighbours
 from ..normals import pca_normals
 from ..orientation import ORIENT_K
@@ -98,8 +96,10 @@ def run_tile(root, tile: int, spec: TileSpec) -> dict:
     links = np.empty(int(halo.sum()), LINK_DTYPE)
     links["index"], links["owner"] = rec["index"][halo], owner[halo]
     links["comp"], links["n"] = comp[halo], res.normals[halo]
+    loaded = len(pts)
+    del res, nb, rec, pts  # the tile's largest arrays: what is left needs only the rows (peak memory)
     store.save_result(tile, rows, links, _nodes(rows))
-    return {"tile": tile, "skipped": False, "points": int(own.sum()), "loaded": len(pts)}
+    return {"tile": tile, "skipped": False, "points": int(own.sum()), "loaded": loaded}
 
 
 def _load_with_halo(store, plan, tile, spec):
@@ -128,17 +128,11 @@ def load_with_halo(store, plan, tile, k_max, chain):
 
 def _components(idx, ok, exact) -> np.ndarray:
     """Connected parts of the orientation graph (ORIENT_K nearest, as :func:`orient_normals`),
-    using only edges from points whose neighbours are exact; -1 where a point has no normal."""
-    n = len(idx)
-    src = np.flatnonzero(ok & exact)
-    nbr = idx[src, 1:ORIENT_K]
-    rows = np.repeat(src, nbr.shape[1])
-    cols = nbr.ravel().astype(np.int64)
-    keep = ok[cols] & (cols != rows)
-    graph = coo_matrix((np.ones(int(keep.sum()), np.int8), (rows[keep], cols[keep])), shape=(n, n))
-    _, labels = connected_components(graph, directed=False)
-    labels = labels.astype(np.int32)
-    labels[~ok] = -1
+    using only edges from points whose neighbours are exact; -1 where a point has no normal.
+    Labelled 0, 1, ... in order of each part's lowest index."""
+    roots = knn_components(idx, ok & exact, ok, ORIENT_K)
+    labels = np.full(len(idx), -1, dtype=np.int32)
+    _, labels[ok] = np.unique(roots[ok], return_inverse=True)
     return labels
 
 
@@ -168,17 +162,18 @@ def _face_viewpoints(rows, initial, views) -> None:
 
 def _nodes(rows) -> np.ndarray:
     """Per connected part of the own points: count, coordinate sum and highest point."""
-    have = rows[rows["comp"] >= 0]
-    labels, inverse = np.unique(have["comp"], return_inverse=True)
+    have = np.flatnonzero(rows["comp"] >= 0)  # rows by index, not a copy of the records (peak memory)
+    labels, inverse = np.unique(rows["comp"][have], return_inverse=True)
     nodes = np.zeros(len(labels), NODE_DTYPE)
     nodes["comp"] = labels
     nodes["count"] = np.bincount(inverse, minlength=len(labels))
+    xyz = rows["xyz"][have]
     for j in range(3):
-        nodes["sum"][:, j] = np.bincount(inverse, have["xyz"][:, j], len(labels))
+        nodes["sum"][:, j] = np.bincount(inverse, xyz[:, j], len(labels))
     # the highest point of each part (lowest input row among equals, as the in-memory seed)
-    order = np.lexsort((have["index"], -have["xyz"][:, 2], inverse))
-    first = order[np.searchsorted(inverse[order], np.arange(len(labels)))]
-    nodes["top_z"], nodes["top_index"], nodes["top_nz"] = have["xyz"][first, 2], have["index"][first], have["n"][first, 2]
+    order = np.lexsort((rows["index"][have], -xyz[:, 2], inverse))
+    first = have[order[np.searchsorted(inverse[order], np.arange(len(labels)))]]
+    nodes["top_z"], nodes["top_index"], nodes["top_nz"] = rows["xyz"][first, 2], rows["index"][first], rows["n"][first, 2]
     return nodes
 
 
