@@ -88,6 +88,7 @@ def read_view(path, budget: int, box=None, progress=None) -> EstimateOutput:
                        points=sample.points, normals=_stack(f, "n"), path=path, file_points=info.count,
                        matched=sample.matched, box=None if box is None else tuple(map(tuple, box)),
                        rows=sample.rows)
+    src.geometry  # box, spacing, drawing order: computed here, on the reading thread, not on the GUI's
     res = _result(sample.points, f)
     req = EstimateRequest(gen=0, source=src, k=int(np.median(res.k_point)) if len(res.k_point) else 0, method="stored")
     return EstimateOutput(gen=0, request=req, points=sample.points, result=res, fields=compute_fields(res),

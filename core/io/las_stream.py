@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .cloud import CloudFileError, find_normals
+from .write import RESULT_FLAGS
 
 #: points per chunk read or written (about 30 MB of float64 coordinates)
 CHUNK = 1_000_000
@@ -124,6 +125,17 @@ def quantisation(lo, hi):
     extent = float(np.max(np.asarray(hi, float) - np.asarray(lo, float)))
     scale = 10.0 ** np.ceil(np.log10((extent if extent > 0 else 1.0) * 1e-9))
     return np.full(3, scale), np.floor(np.asarray(lo, float) / scale) * scale
+
+
+def result_columns(res) -> dict:
+    """The :data:`RESULT_DIMS` columns of a whole :class:`core.CurvatureResult`, as
+    :class:`LasResultWriter` writes them (the tiled run assembles the same from its tiles)."""
+    cols = {"k1": res.k1, "k2": res.k2, "gaussian": res.gaussian, "mean": res.mean, "valid": res.valid,
+            "k": res.k_point}
+    for name, arr in (("n", res.normals), ("e1_", res.e1), ("e2_", res.e2)):
+        cols.update({f"{name}{c}": arr[:, j] for j, c in enumerate("xyz")})
+    cols.update({name: getattr(res, attr) for name, attr in RESULT_FLAGS.items() if name in RESULT_DIMS})
+    return cols
 
 
 class LasResultWriter:

@@ -96,9 +96,7 @@ def _whole_to_las(args, orientation) -> int:
     """k="auto" on a cloud that fits in memory, written as LAS/LAZ."""
     import core
     from ..io.atomic import atomic_write
-    from ..io.las_stream import RESULT_DIMS, LasResultWriter, quantisation
-    from ..io.write import RESULT_FLAGS
-
+    from ..io.las_stream import LasResultWriter, quantisation, result_columns
     cloud = core.io.read_cloud(args.input, drop_nonfinite=args.drop_nonfinite)
     normals = None if args.ignore_normals else cloud.normals
     res = core.estimate(cloud.points, normals, k=args.k, method=args.method, passes=args.passes,
@@ -108,11 +106,7 @@ def _whole_to_las(args, orientation) -> int:
         scales, offsets = info.scales, info.offsets
     else:
         scales, offsets = quantisation(res.points.min(axis=0), res.points.max(axis=0))
-    cols = {"k1": res.k1, "k2": res.k2, "gaussian": res.gaussian, "mean": res.mean, "valid": res.valid,
-            "k": res.k_point}
-    for name, arr in (("n", res.normals), ("e1_", res.e1), ("e2_", res.e2)):
-        cols.update({f"{name}{c}": arr[:, j] for j, c in enumerate("xyz")})
-    cols.update({name: getattr(res, attr) for name, attr in RESULT_FLAGS.items() if name in RESULT_DIMS})
+    cols = result_columns(res)
     with atomic_write(args.output) as f, LasResultWriter(f, scales=scales, offsets=offsets,
                                                          laz=str(args.output).lower().endswith(".laz")) as w:
         w.write(res.points, cols)

@@ -8,7 +8,7 @@ import pytest
 
 import core
 from core.io.atomic import atomic_write
-from core.io.las_stream import LasResultWriter
+from core.io.las_stream import LasResultWriter, result_columns
 
 from app import big_result
 
@@ -24,10 +24,7 @@ def result_laz(tmp_path_factory):
     x, y = rng.uniform(0, 10, (2, 6000))
     pts = np.column_stack([x, y, 0.5 * np.sin(x) * np.cos(y)])
     res = core.estimate(pts, k=15)
-    cols = {"k1": res.k1, "k2": res.k2, "gaussian": res.gaussian, "mean": res.mean, "valid": res.valid,
-            "k": res.k_point}
-    for name, arr in (("n", res.normals), ("e1_", res.e1), ("e2_", res.e2)):
-        cols.update({f"{name}{c}": arr[:, j] for j, c in enumerate("xyz")})
+    cols = result_columns(res)
     path = tmp_path_factory.mktemp("big") / "terrain_curv.laz"
     with atomic_write(path) as f, LasResultWriter(f, scales=np.full(3, 1e-4), offsets=np.zeros(3), laz=True) as w:
         w.write(pts, cols)
