@@ -17,7 +17,6 @@ Heavy: 1M/5M take minutes and GBs; pick sizes with ``--sizes``. Run it on a quie
 from __future__ import annotations
 
 import argparse
-import gc
 import os
 import subprocess
 import sys
@@ -193,29 +192,11 @@ def frames_only(label: str) -> dict:
         plotter.close()
 
 
-def dispose(window) -> None:
-    """Close ``window`` and have Qt delete it (drop your references, then :func:`settle`)."""
-    window.close()
-    window.deleteLater()
-
-
-def settle() -> None:
-    """Run Qt's pending deferred deletes now, then Python's collector."""
-    for _ in range(3):
-        QCoreApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete)
-        QCoreApplication.processEvents()
-    gc.collect()
-
-
-def resident_mb() -> float:
-    """This process's resident memory in MB (Linux /proc)."""
-    with open(f"/proc/{os.getpid()}/statm") as f:
-        return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
-
-
 def cycles(n: int, tmp: Path, timeout: float) -> str:
     """Resident memory over ``n`` open/estimate/close cycles of the main window (a 5000-point
     torus each): a closed window must be freed (issue 10 saw 583 -> 2406 MB over 50)."""
+    import gc  # noqa: PLC0415 - only this measurement needs it
+
     from .source import make_shape  # noqa: PLC0415
     from .window import MainWindow  # noqa: PLC0415 - after QApplication exists
 
@@ -228,10 +209,15 @@ def cycles(n: int, tmp: Path, timeout: float) -> str:
         window.result_shown.connect(lambda out: got.setdefault("done", True))
         window.set_source(cloud)
         _wait(app, lambda: "done" in got, timeout)
-        dispose(window)
+        window.close()
+        window.deleteLater()
         del window
-        settle()
-        rss.append(resident_mb())
+        for _ in range(3):
+            QCoreApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete)
+            QCoreApplication.processEvents()
+        gc.collect()
+        with open(f"/proc/{os.getpid()}/statm") as f:
+            rss.append(int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20)
     warm = min(4, n - 1)
     return (f"{n} open/close cycles: RSS {rss[0]:.0f} MB after the first, {rss[warm]:.0f} MB after cycle "
             f"{warm + 1}, {rss[-1]:.0f} MB after the last ({rss[-1] - rss[warm]:+.0f} MB)")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import gc
 import os
 import time
 import weakref
@@ -9,8 +10,8 @@ import weakref
 import numpy as np
 import pytest
 from app_testutils import wait_result
+from PySide6.QtCore import QCoreApplication, QEvent, QSettings
 
-from app.bench import dispose, resident_mb, settle
 from app.source import make_shape
 
 
@@ -185,11 +186,16 @@ def test_closed_windows_are_freed(qtbot, settings):
         window.show()
         with wait_result(qtbot, window, 60_000):
             window.set_source(tiny)
+        window.close()
+        window.deleteLater()
         refs.append(weakref.ref(window))
-        dispose(window)
         del window
-        settle()
-        rss.append(resident_mb())
+        for _ in range(3):
+            QCoreApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete)
+            QCoreApplication.processEvents()
+        gc.collect()
+        with open(f"/proc/{os.getpid()}/statm") as f:
+            rss.append(int(f.read().split()[1]) * 4096 / 2**20)
     assert all(r() is None for r in refs), "a closed window is still referenced"
     assert rss[-1] - rss[1] < 40, rss  # MB over the last three cycles
     qtbot.waitUntil(lambda: not Estimator.running_threads(), timeout=10_000)
