@@ -3,7 +3,10 @@ holds them and the first estimate of a session, or the viewer's first view, star
 
 from __future__ import annotations
 
+import numpy as np
+
 from . import shapes
+from .anisotropy import ANISO_K, anisotropy
 from .estimate import estimate
 from .methods import METHODS
 
@@ -24,7 +27,18 @@ def warm_up(n_points: int = 400) -> int:
             estimate(cloud.points, k=15, method=name, options=options)
             runs += 1
         if name in ("nf", "nr"):
-            estimate(cloud.points, method=name).anisotropy  # noqa: B018 (compiles the lazy flag's kernels)
+            _lazy_flags(estimate(cloud.points, method=name))
             estimate(cloud.points, cloud.normals, method=name)
             runs += 2
     return runs
+
+
+def _lazy_flags(res) -> None:
+    """Compile the kernels of the result's lazy anisotropy for both array types it meets:
+    neighbour arrays come back from an estimate read-only, a type of its own for numba
+    (else the viewer's first result compiles them on its job thread)."""
+    idx = res.neighbours.take(ANISO_K)[0]
+    for writable in (True, False):
+        rows = np.array(idx)  # a copy whose flag can be set either way
+        rows.setflags(write=writable)
+        anisotropy(res.points, res.normals, rows)
