@@ -85,10 +85,10 @@ def _save(store, tile, outputs, stats, samples) -> None:
     """Every pass's arrays, the tile's shares of the whole-cloud reductions, then the marker."""
     for p, arrays in enumerate(outputs):
         for part, arr in zip(("", ".links", ".nodes"), arrays):
-            wholecloud.write_npy(store, store.result_path(tile, f".pass{p}{part}"), arr)
+            store.save_array(store.result_path(tile, f".pass{p}{part}"), arr)
     wholecloud.save_samples(store, tile, "after", samples)
-    wholecloud.write_npy(store, store.result_path(tile, ".stats"), stats)
-    store._write_bytes(store.root / "results" / f"tile_{tile:06d}.done", b"")
+    store.save_array(store.result_path(tile, ".stats"), stats)
+    store.mark_finished(tile)
 
 
 def kept_pass(store: TileStore, n_tiles: int, plan: EstimatePlan) -> int:

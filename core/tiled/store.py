@@ -103,15 +103,26 @@ class TileStore:
         return self.root / "results" / f"tile_{tile:06d}{part}.npy"
 
     def finished(self, tile: int) -> bool:
-        return (self.root / "results" / f"tile_{tile:06d}.done").exists()
+        return self._done_path(tile).exists()
+
+    def mark_finished(self, tile: int) -> None:
+        """The marker written after every file of a tile's result: a rerun skips the tile."""
+        self._write_bytes(self._done_path(tile), b"")
+
+    def _done_path(self, tile: int) -> pathlib.Path:
+        return self.root / "results" / f"tile_{tile:06d}.done"
 
     def save_result(self, tile: int, rows: np.ndarray, links: np.ndarray, nodes: np.ndarray) -> None:
         """Write a tile's result (three arrays), then its marker: all or nothing."""
         for part, arr in (("", rows), (".links", links), (".nodes", nodes)):
-            buf = io.BytesIO()
-            np.save(buf, arr)
-            self._write_bytes(self.result_path(tile, part), buf.getvalue())
-        self._write_bytes(self.root / "results" / f"tile_{tile:06d}.done", b"")
+            self.save_array(self.result_path(tile, part), arr)
+        self.mark_finished(tile)
+
+    def save_array(self, path, arr: np.ndarray) -> None:
+        """``arr`` as a .npy file at ``path``, written atomically."""
+        buf = io.BytesIO()
+        np.save(buf, arr)
+        self._write_bytes(path, buf.getvalue())
 
     def load_result(self, tile: int, part: str = "", mmap: bool = True) -> np.ndarray:
         return np.load(self.result_path(tile, part), mmap_mode="r" if mmap else None)

@@ -141,8 +141,8 @@ def _rows(rec, res, comp, own) -> np.ndarray:
     rows["index"], rows["xyz"], rows["n"] = rec["index"][own], rec["xyz"][own], res.normals[own]
     rows["k1"], rows["k2"], rows["e1"], rows["e2"] = res.k1[own], res.k2[own], res.e1[own], res.e2[own]
     rows["valid"], rows["k"], rows["comp"] = res.valid[own], res.k_point[own], comp[own]
-    for field, attr in ROW_FLAGS.items():
-        rows[field] = getattr(res, attr)[own]
+    for name, attr in ROW_FLAGS.items():
+        rows[name] = getattr(res, attr)[own]
     return rows
 
 

@@ -16,7 +16,6 @@ the main tile tasks and reported), its samples per tile and its reduction.
 from __future__ import annotations
 
 import dataclasses
-import io
 import json
 from dataclasses import dataclass
 from typing import Callable
@@ -128,15 +127,9 @@ def save_samples(store, tile: int, when: str, samples: dict) -> None:
     counts = {}
     for field, (groups, n) in samples.items():
         for name, values in groups.items():
-            write_npy(store, _path(store, tile, when, f"{field}.{name}"), np.sort(values))
+            store.save_array(_path(store, tile, when, f"{field}.{name}"), np.sort(values))
         counts[field] = {"groups": sorted(groups), "counts": n}
     store._write_bytes(_path(store, tile, when), json.dumps(counts).encode())
-
-
-def write_npy(store, path, arr) -> None:
-    buf = io.BytesIO()
-    np.save(buf, arr)
-    store._write_bytes(path, buf.getvalue())
 
 
 def _path(store, tile, when, part=None):

@@ -126,7 +126,7 @@ def test_the_pass_rule_is_replayed_on_whole_cloud_means(tmp_path):
         stats = np.zeros((plan.passes + 2, 2))
         stats[:-1, 0], stats[:-1, 1] = sums, 500
         stats[-1, 0] = 500  # points NR fits with noise
-        wholecloud.write_npy(store, store.result_path(t, ".stats"), stats)
+        store.save_array(store.result_path(t, ".stats"), stats)
     assert auto.kept_pass(store, 2, plan) == 2  # means 0.11, 0.011, 0.0069, 0.0067 (> 0.7 x 0.0069): undone
 
 
