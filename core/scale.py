@@ -225,8 +225,8 @@ def _higher_degrees(f, k3, sigma2):
                             coef)
     cubic = chosen == len(degrees)  # also -1 (no fit: the cubic's own coefficients stay)
     higher = (chosen >= 0) & ~cubic
-    k = np.where(higher, kd[np.clip(chosen, 0, len(kd) - 1)], k3)
-    return k, np.where(higher, degrees[np.clip(chosen, 0, len(kd) - 1)], JET_DEGREE), coef
+    pick = np.clip(chosen, 0, len(kd) - 1)
+    return np.where(higher, kd[pick], k3), np.where(higher, degrees[pick], JET_DEGREE), coef
 
 
 def aligned_jets(jets, normals):
