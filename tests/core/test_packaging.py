@@ -98,3 +98,22 @@ def test_no_writable_cache_dir_turns_caching_off():
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.strip() == "off 2"
     assert proc.stderr.count("\n") == 1 and "numba's cache" in proc.stderr
+
+
+def test_numba_cache_is_keyed_by_every_kernel_source(tmp_path):
+    """A kernel's cache is stamped by its own file only: editing a callee in another file must
+    start a new cache directory, or callers would load stale machine code."""
+    site = tmp_path / "site"
+    shutil.copytree(ROOT / "core", site / "core", ignore=shutil.ignore_patterns("__pycache__"))
+    code = "import core._numba_cache as c; print(c.source_key())"
+    env = {**os.environ, "PYTHONPATH": str(site)}
+
+    def key() -> str:
+        return subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True,
+                              text=True, env=env, check=True).stdout.strip()
+
+    before = key()
+    assert before == key()
+    callee = site / "core" / "kernels" / "algebra.py"
+    callee.write_text(callee.read_text() + "\n# edited\n")
+    assert key() != before
