@@ -15,6 +15,7 @@ from ._validate import as_points, check_int
 from .kernels.kdtree import build_tree, query_sorted
 from .kernels.knn import keep_nearest
 from .spacing import mean_spacing
+from .tuning import SEARCH_LEAF, SEARCH_RADIUS_NODE
 
 #: ``progress(fraction, stage)``; returning False cancels
 ProgressCallback = Callable[[float, str], Union[bool, None]]
@@ -22,11 +23,6 @@ _CHUNK = 200_000
 #: a kd-tree query inside a group of c identical points costs O(c): 80k copies take 17 s
 #: for k=20 (4x per doubling). Larger groups are searched once, on the distinct points.
 MAX_DUPLICATES = 256
-#: points per leaf of the search's own tree (:mod:`core.kernels.kdtree`)
-LEAF_SIZE = 16
-#: the radius of a query is found among the points of a node of at least this many
-#: (or k): more points, a tighter radius, fewer candidates gathered
-RADIUS_NODE = 64
 #: rows per step when neighbours are re-ordered (bounds the temporary arrays)
 _ROWS = 65_536
 
@@ -192,8 +188,8 @@ def _query_in_order(pts, rank, idx, dist, report) -> None:
     :mod:`core.kernels.kdtree` (indices into ``pts``, ties by ``rank``, the caller's index):
     the same rows, bit for bit, at a fraction of the cost for k in the hundreds."""
     n, k_max = idx.shape
-    tree = build_tree(pts, LEAF_SIZE)
-    want = max(k_max, RADIUS_NODE)
+    tree = build_tree(pts, SEARCH_LEAF)
+    want = max(k_max, SEARCH_RADIUS_NODE)
     for start in range(0, n, _CHUNK):
         stop = min(n, start + _CHUNK)
         query_sorted(pts, tree, rank, start, dist[start:stop], idx[start:stop], want)
