@@ -17,7 +17,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .linalg import symmetric_eig2
+from .kernels.frame import frame_curvatures, frame_directions
 from .tuning import MAX_TILT2
 
 
@@ -54,46 +54,17 @@ def darboux_frame(t1, t2, z, mu, W):
     plane, with P = B^T [r_u r_v], the matrix is S = P W P^-1, symmetric for exact data
     (the symmetry constraint, eq. 22). It is symmetrised and diagonalised; the
     eigenvalues are k1 >= k2 (eq. 5), with the sign convention k = +1/R on a sphere
-    with outward normals.
+    with outward normals. Computed per point in :mod:`core.kernels.frame`.
     """
-    mu = np.asarray(mu, dtype=np.float64)
-    X, Y = mu[:, 0], mu[:, 1]
-    tilt2 = X * X + Y * Y
-    ok = np.isfinite(tilt2) & (tilt2 < MAX_TILT2) & np.isfinite(W).all(axis=(1, 2))
-    X = np.where(ok, X, 0.0)
-    Y = np.where(ok, Y, 0.0)
-    Z0 = np.sqrt(1.0 - X * X - Y * Y)
-    Wc = np.where(ok[:, None, None], W, 0.0)
-
-    # Local coordinates: n = (X, Y, Z0), r_u = (1, 0, fu), r_v = (0, 1, fv).
-    fu, fv = -X / Z0, -Y / Z0
-    ru_len = np.sqrt(1.0 + fu * fu)
-    b1 = np.stack([1.0 / ru_len, np.zeros_like(X), fu / ru_len], axis=1)
-    n_loc = np.stack([X, Y, Z0], axis=1)
-    b2 = np.cross(n_loc, b1)
-    # P = B^T [r_u r_v]: r_u . b2 = 0 by construction.
-    p11 = ru_len
-    p12 = b1[:, 2] * fv  # r_v . b1 = (0, 1, fv) . b1
-    p22 = b2[:, 1] + b2[:, 2] * fv
-    # S = P W P^-1 with P upper triangular.
-    w11, w12, w21, w22 = Wc[:, 0, 0], Wc[:, 0, 1], Wc[:, 1, 0], Wc[:, 1, 1]
-    pw11 = p11 * w11 + p12 * w21
-    pw12 = p11 * w12 + p12 * w22
-    pw21 = p22 * w21
-    pw22 = p22 * w22
-    # P^-1 = [[1/p11, -p12/(p11 p22)], [0, 1/p22]]
-    s11 = pw11 / p11
-    s12 = (-pw11 * p12 / p11 + pw12) / p22
-    s21 = pw21 / p11
-    s22 = (-pw21 * p12 / p11 + pw22) / p22
-    k1, k2, c, s = symmetric_eig2(s11, 0.5 * (s12 + s21), s22)
-
-    e1_loc = c[:, None] * b1 + s[:, None] * b2
-    e2_loc = -s[:, None] * b1 + c[:, None] * b2
-    to_world = np.stack([t1, t2, z], axis=1)  # (M, 3 local, 3 world)
-    normal = np.einsum("mi,mij->mj", n_loc, to_world)
-    e1 = np.einsum("mi,mij->mj", e1_loc, to_world)
-    e2 = np.einsum("mi,mij->mj", e2_loc, to_world)
+    t1, t2, z = (np.ascontiguousarray(a, dtype=np.float64) for a in (t1, t2, z))
+    mu = np.ascontiguousarray(mu, dtype=np.float64)
+    W = np.ascontiguousarray(W, dtype=np.float64)
+    m = len(mu)
+    normal, e1, e2 = np.empty((m, 3)), np.empty((m, 3)), np.empty((m, 3))
+    k1, k2, yx, ok = np.empty(m), np.empty(m), np.empty((m, 2)), np.empty(m, dtype=bool)
+    frame_curvatures(t1, t2, z, mu, W, MAX_TILT2, normal, k1, k2, yx, ok)
+    phi = 0.5 * np.arctan2(yx[:, 0], yx[:, 1])
+    frame_directions(t1, t2, z, mu, ok, np.cos(phi), np.sin(phi), e1, e2)
     ok &= np.isfinite(k1) & np.isfinite(k2)
     return DarbouxFrame(normal, k1, k2, e1, e2, ok)
 

@@ -12,8 +12,10 @@ from scipy.spatial import cKDTree
 
 from ._progress import Progress
 from ._validate import as_points, check_int
+from .kernels.kdtree import build_tree, query_sorted
 from .kernels.knn import keep_nearest
 from .spacing import mean_spacing
+from .tuning import SEARCH_LEAF, SEARCH_RADIUS_NODE
 
 #: ``progress(fraction, stage)``; returning False cancels
 ProgressCallback = Callable[[float, str], Union[bool, None]]
@@ -136,13 +138,11 @@ def _search(pts, k_max, progress, *, spatial):
     else:
         tree = cKDTree(pts)
         order = np.asarray(tree.indices, dtype=idx.dtype)  # the leaf order
-        _query_distinct(tree, pts, order if spatial else None, idx, dist, report)
-    if spatial:
-        inverse = np.empty_like(order)
-        inverse[order] = np.arange(n, dtype=order.dtype)
-        for start in range(0, n, _ROWS):  # caller's indices -> indices into pts[order]
-            idx[start:start + _ROWS] = inverse[idx[start:start + _ROWS]]
-        pts = pts[order]
+        if spatial:
+            pts = pts[order]
+            _query_in_order(pts, order, idx, dist, report)
+        else:
+            _query_distinct(tree, pts, None, idx, dist, report)
     idx.setflags(write=False)
     dist.setflags(write=False)
     return Neighbours(points=pts, indices=idx, distances=dist), (order if spatial else None)
@@ -181,6 +181,20 @@ def _query_distinct(tree, pts, order, idx, dist, report) -> None:
         _ties_by_index(dist[start:stop], idx[start:stop], np.flatnonzero(tied))
         report(stop / n, "neighbours")
     _self_first(idx, dist, np.arange(n) if order is None else order)
+
+
+def _query_in_order(pts, rank, idx, dist, report) -> None:
+    """:func:`_query_distinct`'s answer for points in the kd-tree's leaf order, found by
+    :mod:`core.kernels.kdtree` (indices into ``pts``, ties by ``rank``, the caller's index):
+    the same rows, bit for bit, at a fraction of the cost for k in the hundreds."""
+    n, k_max = idx.shape
+    tree = build_tree(pts, SEARCH_LEAF)
+    want = max(k_max, SEARCH_RADIUS_NODE)
+    for start in range(0, n, _CHUNK):
+        stop = min(n, start + _CHUNK)
+        query_sorted(pts, tree, rank, start, dist[start:stop], idx[start:stop], want)
+        report(stop / n, "neighbours")
+    _self_first(idx, dist, np.arange(n))
 
 
 def _duplicate_groups(pts):

@@ -14,6 +14,7 @@ robust, the passes auto kept) at the largest candidate k is printed too, the cos
 from __future__ import annotations
 
 import argparse
+import os
 import time
 
 import numpy as np
@@ -62,10 +63,13 @@ class _PeakRSS(Sampler):
 
 
 def _timed(fn):
+    """(result, wall seconds, memory sampler); the sampler also carries ``cpu``, the
+    process's CPU seconds (all threads: on a shared machine the steadier figure)."""
     with _PeakRSS() as mem:
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         out = fn()
         dt = time.perf_counter() - t0
+        mem.cpu = time.process_time() - c0
     return out, dt, mem
 
 
@@ -139,14 +143,17 @@ def run(sizes=(100_000, 1_000_000), k=15, seed=0, out=print):
                        title=f"\n{n:,} points (torus), k = {k}"))
         summary.append(dict(n=n, ratio=t_all / t_ref, peak_mb=max(mem_all.peak_mb, mem_auto.peak_mb, mem_same.peak_mb),
                             reestimate=t_re, invalid=invalid, auto=t_auto / t_same,
-                            auto_paper=t_auto / t_all, k_top=k_top))
+                            auto_paper=t_auto / t_all, k_top=k_top, cpu_ratio=mem_all.cpu / mem_ref.cpu,
+                            cpu_auto=mem_auto.cpu / mem_all.cpu, load=os.getloadavg()[0]))
     out("")
     for s in summary:
         out(f"{s['n']:>9,} points: NR k={k} / search = {s['ratio']:.2f} (target <= 1.5), "
             f"peak {s['peak_mb']:.0f} MB (target <= 2048 at 1M), "
             f"re-estimate {s['reestimate']:.3f} s (target < 0.5 s at 100k), "
             f"auto / NR k={k} = {s['auto_paper']:.1f} (target <= 3), "
-            f"auto / same fit at fixed k={s['k_top']} = {s['auto']:.2f}, invalid {s['invalid']}")
+            f"auto / same fit at fixed k={s['k_top']} = {s['auto']:.2f}, invalid {s['invalid']}; "
+            f"in CPU time: NR / search = {s['cpu_ratio']:.2f}, auto / NR = {s['cpu_auto']:.1f}; "
+            f"load average {s['load']:.1f}")
     return summary
 
 
