@@ -39,6 +39,29 @@ better than the jet (1.2-1.8x). Quiet but sparse points, whose 15 neighbours rea
 ``res.k_point`` and ``res.degree_point`` hold the choice. (Values and reasons of the
 constants: :mod:`core.tuning`.)
 
+**The principal direction with noise (measured; not solved).** With noise of 0.1-0.2 mean
+spacing, e1 is the quantity the default still loses (to a cubic jet on 240 neighbours on
+some hold-out surfaces). Four explanations were tested on the tuning surfaces and a private
+set (``python -m core bench holdout --probe``), then on the hold-out, and none holds across
+surfaces: (1) *k too small*: no, NR fits the largest candidate (226) at 76-100 % of the
+points of every noisy graph, and forcing 226 everywhere moves e1 by <= 2 % there; (2) *the
+refinement passes bias the direction*: no, they are what makes it good (the first fit
+alone: 1.0-3.0x worse), and more passes help e1 on some surfaces only, while smoothing the
+curvatures; (3) *e1 from the
+position jet's Hessian*: at the jet rule's own k its e1 is 0.6-1.0x NR's on most hold-out
+and private graphs at 0.05 spacing, but 1.2-1.9x on the torus, ellipsoid and chirp and
+worse nearly everywhere at 0.2; averaging the two traceless shape operators (fixed weights,
+gated by their agreement, or weighted by each field's roughness) gains up to 25 % on the
+hold-out at 0.05-0.1 but loses 20-40 % on the ellipsoid and chirp and 14-42 % at 0.5: a net
+loss on the tuning set, so adopting it would be fitting the hold-out; the jet's
+relative error does not fall with its reach h|k| either, so no per-point choice follows;
+(4) *a wider scale for the direction alone* (NR's shape operator averaged over nearby
+points): worse, 1.6x on the torus with 8 points, because the lines of curvature turn by
+about 2 degrees between nearest neighbours there, more than the 0.4 degree error being
+averaged. What remains is a model difference that depends on the surface; choosing between
+the two models per point would need NR's own variance, which its least squares
+underestimates (neighbouring estimated normals share their neighbours).
+
 **The NF rule** (:func:`choose_k`, issue 4; now only for those sparse points): small
 neighbourhoods give unbiased but noisy normal derivatives; large ones average the
 noise away but the model of the normal field bends over a curved patch: the bias of W

@@ -9,7 +9,7 @@ import pytest
 
 from core import shapes
 from core.bench import holdout
-from core.bench.holdout import harness, surfaces
+from core.bench.holdout import harness, probe, surfaces
 
 
 def _numeric_derivatives(terrain, x, y, h=1e-4):
@@ -23,7 +23,7 @@ def _numeric_derivatives(terrain, x, y, h=1e-4):
 
 
 @pytest.mark.parametrize("terrain", [surfaces._monkey, surfaces._bump, surfaces._eggcrate, surfaces._paraboloid,
-                                     surfaces._ridge])
+                                     surfaces._ridge, surfaces._waves, surfaces._swell, surfaces._dimple])
 def test_graph_terrains_give_their_own_derivatives(terrain):
     rng = np.random.default_rng(1)
     x, y = rng.uniform(-0.9, 0.9, 50), rng.uniform(-0.9, 0.9, 50)
@@ -44,6 +44,32 @@ def test_holdout_surfaces_are_not_core_shapes_and_have_sane_truth():
     mid = np.abs(cap.points[:, 0]) < 0.05  # the middle is a cylinder of radius 1
     np.testing.assert_allclose(cap.k1[mid], 1.0, atol=0.02)
     np.testing.assert_allclose(cap.k2[mid], 0.0, atol=0.02)
+
+
+def test_private_surfaces_are_apart_and_have_sane_truth():
+    assert not set(surfaces.PRIVATE) & (set(shapes.SHAPES) | set(surfaces.HOLDOUT) | set(surfaces.TUNING))
+    wob = surfaces.wobble(4000, 0)
+    # x^2+y^2+z^2+0.9xyz=1 at (1,0,0): grad (2,0,0), Hessian on (y,z) [[2,0.9],[0.9,2]] / 2 -> 1.45, 0.55
+    at = np.argmax(wob.points[:, 0] - np.abs(wob.points[:, 1]) - np.abs(wob.points[:, 2]))
+    assert np.linalg.norm(wob.points[at] - [1, 0, 0]) < 0.08
+    assert abs(wob.k1[at] - 1.45) < 0.1 and abs(wob.k2[at] - 0.55) < 0.1
+    assert np.all(wob.k1 >= wob.k2 - 1e-12) and wob.interior.all()
+
+
+def test_probe_prints_the_alternatives_as_ratios():
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        assert holdout.main(["--probe", "--shapes", "paraboloid", "--levels", "0,0.2", "--points", "1500",
+                             "--evaluate", "300"]) == 0
+    lines = [ln for ln in buf.getvalue().splitlines() if ln.startswith("paraboloid")]
+    assert len(lines) == 1  # the noise-free level has no NR direction to probe
+    for key in ("first fit", "jet", "half jet", "8 nearest", "on largest k"):
+        assert key in lines[0]
+    r = probe.probe_case(surfaces.HOLDOUT["paraboloid"], "paraboloid", 0.2, 1500, 0, 300)
+    assert 0 < r["nr"] < 20  # degrees
+    assert all(0.2 < r[key] < 5 for key in ("first fit", "jet", "half jet", "8 nearest"))
+    assert r["first fit"] > 1  # the refinement passes make NR's direction (core/scale.py)
+    assert 0 <= r["on largest k"] <= 1
 
 
 def test_score_counts_lost_and_far_cells():

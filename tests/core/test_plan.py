@@ -6,6 +6,7 @@ from __future__ import annotations
 import dataclasses
 import pickle
 import re
+import sys
 
 import numpy as np
 import pytest
@@ -114,3 +115,25 @@ def test_fixing_the_measured_quantities_reproduces_the_run(sample):
     assert noisier.params["noise"] == 0.2 and noisier.params["initial_k"] > ref.params["initial_k"]
     strict = core.estimate(sample.points, plan=core.plan(len(sample.points), crease_typical=0.0))
     assert strict.params["crease_typical"] == 0.0 and strict.crease.sum() >= ref.crease.sum()
+
+
+@pytest.mark.parametrize("options, match", [
+    ({"degree": 4}, r"degree 4 is invalid; must be one of \[1, 2, 3\]"),  # 4 exists only inside the jet rule
+    ({"degree": 2.5}, r"degree 2.5 is invalid"),
+    ({"degree": "cubic"}, r"degree 'cubic' is invalid"),
+    ({"degree": 3, "bogus": 1}, r"option\(s\) \['bogus'\] do not apply to method 'nr'"),
+])
+@pytest.mark.parametrize("k", ["auto", 20])
+def test_bad_options_are_refused_before_any_compiled_kernel_runs(monkeypatch, sample, options, match, k):
+    """The refusal comes from the checks, not from a kernel: every step that would touch the
+    points (the degenerate-cloud probe, the neighbour search, the stages) is made to fail."""
+    import core.degenerate as degenerate
+    est = sys.modules["core.estimate"]
+
+    def ran(*args, **kwargs):
+        raise AssertionError("a computation ran before the options were checked")
+
+    monkeypatch.setattr(degenerate, "reason", ran)
+    monkeypatch.setattr(est, "prepare", ran)
+    with pytest.raises(ValueError, match=match):
+        core.estimate(sample.points, k=k, options=options)

@@ -9,6 +9,7 @@ import time
 from .._args import levels as _levels
 from .._args import positive as _positive
 from .harness import FAR, LEVELS, LOST, QKEYS, Cache, auto_run, best, make_case, oracle_errors, score
+from . import probe
 from .surfaces import SETS
 
 _SHORT = {"gaussian": "K", "mean": "H", "direction_deg": "e1"}
@@ -27,6 +28,8 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="seed of the samples and the noise (default 0)")
     p.add_argument("--no-apss", action="store_true", help="leave MeshLab's APSS out of the oracles")
     p.add_argument("--cache", default=None, help="JSON file keeping the oracles' errors between runs")
+    p.add_argument("--probe", action="store_true", help="instead of the race: where the default's principal "
+                   "direction comes from with noise and what the alternatives give (core.bench.holdout.probe)")
     return p
 
 
@@ -63,6 +66,9 @@ def main(argv=None) -> int:
     args = parser().parse_args(argv)
     surfaces = SETS[args.set]
     names = _names(args, surfaces)
+    if args.probe:
+        probe.main(names, args.levels, surfaces, args)
+        return 0
     cache = Cache(args.cache)
     t0 = time.perf_counter()
     print(f"set {args.set}: default / best peer per cell (best peer's setting in brackets)")

@@ -89,4 +89,60 @@ TUNING = {
     "graded": lambda n, seed: shapes.graded(n, seed=seed),
     "range_scan": lambda n, seed: shapes.range_scan(n, seed=seed),
 }
-SETS = {"holdout": HOLDOUT, "tuning": TUNING}
+
+
+# ----------------------------------------------------------------------------- a third, private check set
+def _waves(x, y):
+    a, b, u, v = 0.15, 0.08, 3.0, 5.0  # two crossed waves of different wavelength and height
+    s, c, t, d = np.sin(u * x + 1.0), np.cos(u * x + 1.0), np.cos(v * y), np.sin(v * y)
+    return (a * s + b * t, a * u * c, -b * v * d, -a * u * u * s, 0 * x, -b * v * v * t)
+
+
+def _swell(x, y):
+    a, b = 0.3, 0.2  # a skewed product of sines plus a twist: directions rotate across the patch
+    s, c, t, d = np.sin(2 * x), np.cos(2 * x), np.sin(1.5 * y), np.cos(1.5 * y)
+    return (a * s * t + b * x * y, 2 * a * c * t + b * y, 1.5 * a * s * d + b * x, -4 * a * s * t,
+            3 * a * c * d + b, -2.25 * a * s * t)
+
+
+def _dimple(x, y):
+    a = 0.6  # a saddle damped by a Gaussian: curvature and anisotropy both fade outwards
+    g = np.exp(-(x * x + y * y))
+    q = x * x - y * y
+    fx, fy = a * g * (2 * x - 2 * x * q), a * g * (-2 * y - 2 * y * q)
+    fxx = a * g * (2 - 2 * q - 4 * x * x - 2 * x * (2 * x - 2 * x * q))
+    fyy = a * g * (-2 - 2 * q + 4 * y * y - 2 * y * (-2 * y - 2 * y * q))
+    fxy = a * g * (4 * x * y - 2 * y * (2 * x - 2 * x * q))
+    return a * g * q, fx, fy, fxx, fxy, fyy
+
+
+def wobble(n, seed):
+    """x^2 + y^2 + z^2 + 0.9 xyz = 1: a sphere pushed out into four lobes and in at four others."""
+    a = 0.9
+    F = lambda p: (p * p).sum(1) + a * p[:, 0] * p[:, 1] * p[:, 2] - 1.0  # noqa: E731
+
+    def grad(p):
+        x, y, z = p.T
+        return 2 * p + a * np.column_stack([y * z, x * z, x * y])
+
+    def hess(p):
+        x, y, z = p.T
+        h = np.zeros((len(p), 3, 3))
+        h[:, 0, 0] = h[:, 1, 1] = h[:, 2, 2] = 2.0
+        h[:, 0, 1] = h[:, 1, 0] = a * z
+        h[:, 0, 2] = h[:, 2, 0] = a * y
+        h[:, 1, 2] = h[:, 2, 1] = a * x
+        return h
+
+    return _implicit_sample("wobble", F, grad, hess, n, np.random.default_rng(seed), 1.6)
+
+
+#: name -> sampler(n, seed): a private check of a mechanism before it meets the hold-out set
+#: (neither tuned on nor part of the issue's score)
+PRIVATE = {
+    "waves": _graph("waves", _waves),
+    "swell": _graph("swell", _swell),
+    "dimple": _graph("dimple", _dimple),
+    "wobble": wobble,
+}
+SETS = {"holdout": HOLDOUT, "tuning": TUNING, "private": PRIVATE}
