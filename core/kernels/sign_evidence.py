@@ -287,28 +287,34 @@ def _vote_level(parent, parity, size, ea, eb, ew, nd, rank, limit):
     n = len(parent)
     key = np.empty(nd, dtype=np.int64)
     w = np.empty(nd)
-    for t in range(nd):
+    live = 0
+    for t in range(nd):  # still between two parts: kept (in order), with its sign now
         ra, pa = _find(parent, parity, ea[t])
         rb, pb = _find(parent, parity, eb[t])
+        if ra == rb:
+            continue
         if rank[ra] > rank[rb]:
             ra, rb = rb, ra
-        key[t] = rank[ra] * n + rank[rb] if ra != rb else -1
-        ea[t], eb[t], w[t] = ra, rb, ew[t] * (1.0 - 2.0 * (pa ^ pb))
-    by_pair = np.argsort(key, kind="mergesort")
+        key[live] = rank[ra] * n + rank[rb]
+        ea[live], eb[live], w[live] = ra, rb, ew[t] * (1.0 - 2.0 * (pa ^ pb))
+        live += 1
+    key = key[:live]
+    by_pair = np.argsort(key)  # the same keys in the same order in any memory order: the same sums
+    head = np.empty(live, dtype=np.int64)
+    total = np.empty(live)
     pairs = 0
     t = 0
-    while t < nd:  # sum each pair's run of edges into slot `pairs` (key -1: inside one part, dropped)
-        first = by_pair[t]
-        total = 0.0
-        while t < nd and key[by_pair[t]] == key[first]:
-            total += w[by_pair[t]]
+    while t < live:  # sum each pair's run of edges
+        head[pairs] = by_pair[t]
+        total[pairs] = 0.0
+        while t < live and key[by_pair[t]] == key[head[pairs]]:
+            total[pairs] += w[by_pair[t]]
             t += 1
-        if key[first] >= 0:
-            key[pairs], ew[pairs] = first, total
-            pairs += 1
-    a, b, total = ea[key[:pairs]], eb[key[:pairs]], ew[:pairs].copy()  # copies: the slots are reused below
+        pairs += 1
+    a, b = ea[head[:pairs]], eb[head[:pairs]]  # copies: ea, eb, ew are reused below
+    total = total[:pairs]
     again = 0
-    for p in np.argsort(-np.abs(total), kind="mergesort"):
+    for p in np.argsort(-np.abs(total)):
         ra, pa = _find(parent, parity, a[p])
         rb, pb = _find(parent, parity, b[p])
         if ra == rb:
