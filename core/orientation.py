@@ -8,7 +8,10 @@ every kNN edge carries a signed evidence that also reads the chord between the p
 (:func:`core.kernels.sign_evidence.sign_evidence`): along a sheet it is Hoppe's test, across a
 gap, a thin part or a crease it is the side of the chord each normal faces. Signs are
 fixed along the maximum spanning forest of |evidence| (Kruskal with a parity
-union-find), then every component is turned outward by its points farthest from the
+union-find), except that two parts of :data:`core.tuning.VOTE_SIZE` points or more are
+joined by the summed evidence of all the edges between them, not by their strongest
+one (:func:`core.kernels.sign_evidence.voted_signs`: one wrong edge on a plate's rim
+flipped its whole other side, 50 % agreement at k="auto"), then every component is turned outward by its points farthest from the
 cloud's centre (on a closed surface the point farthest from any centre has its normal
 pointing away from it). A point that most of its evidence disagrees with is then flipped
 (a local majority, a few sweeps). Each point's ``confidence`` is the evidence-weighted share of
@@ -22,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .kernels import sign_evidence as kern
+from .tuning import VOTE_GROWTH, VOTE_SIZE
 
 #: neighbours per point in the orientation graph. 10 rather than Hoppe's 8: the chord
 #: test needs the graph to reach across a thin part's edges; measured on the thin shapes
@@ -93,7 +97,7 @@ def orient(points, normals, idx, mode="outward", *, ok=None, rank=None) -> Orien
         rows[rank] = np.arange(n)
         order = kern.strongest_first(ev, first, SORT_LEVELS, rows)
         flip = np.zeros(n, dtype=np.int8)
-        roots = kern.kruskal_signs(order, graph, ev, flip)
+        roots = kern.voted_signs(order, graph, ev, flip, rank, VOTE_SIZE, VOTE_GROWTH)
         sign[flip == 1] = -1.0
         labels = np.where(ok, _numbered(roots), -1)
         _global_signs(pts, nrm * sign[:, None], labels, mode, sign, rank)

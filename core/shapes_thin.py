@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from .neighbours import build_neighbours
+from .noise import add_noise
 from .shapes import Sample, _ordered, _rng_n, _unit, torus
 
 
@@ -180,6 +181,35 @@ def orientation_agreement(normals, truth, parts=None):
         d = dots[parts == p]
         good += max(np.count_nonzero(d > 0), np.count_nonzero(d < 0))
     return good / len(dots)
+
+
+def sign_agreement(normals, sample, *, min_cos=0.5):
+    """How an oriented estimate is judged on a thin shape, as ``(clear, face, off)``:
+    ``clear``, the share facing the same side as the truth (its face's own normal; per part
+    where ``params["parts"]`` makes a part's sign a convention) among the points whose
+    normal is within acos(``min_cos``) = 60 degrees of the truth's line, the points where a
+    sign means something; ``face``, the same over all points (NaN rows wrong); ``off``, the
+    share left out of ``clear``: normals more than 60 degrees off, blends across a sharp
+    rim or a thin gap, whose sign is a coin toss whatever the orientation does."""
+    dots = np.einsum("ij,ij->i", np.nan_to_num(normals), sample.normals)
+    parts = sample.params.get("parts")
+    if parts is not None:
+        for p in np.unique(parts):
+            rows = parts == p
+            if np.count_nonzero(dots[rows] < 0) > np.count_nonzero(dots[rows] > 0):
+                dots[rows] *= -1.0
+    clear = np.abs(dots) >= min_cos
+    agree = float(np.mean(dots[clear] > 0)) if clear.any() else 0.0
+    return agree, float(np.mean(dots > 0)), float(np.mean(~clear))
+
+
+def noisy(sample, sigma_spacings, seed):
+    """The sample's points with isotropic Gaussian noise of ``sigma_spacings`` x its
+    ``params["spacing"]`` (in the points' units, not :func:`core.noise.add_noise`'s
+    relative unit, the mean nearest-neighbour distance, about half the spacing)."""
+    if not sigma_spacings:
+        return sample.points
+    return add_noise(sample.points, sigma_spacings * sample.params["spacing"], relative=False, seed=seed)
 
 
 def cone_normals(sample, k=15):

@@ -224,3 +224,104 @@ def knn_components(idx, source, ok, width):
         if ok[x]:
             roots[x] = _find(parent, parity, x)[0]
     return roots
+
+
+@njit(**_OPTS)
+def _join(parent, parity, size, a, b, s):
+    """Hang root b under root a (or a under b, the smaller under the larger) with the relative sign s."""
+    if size[a] < size[b]:
+        a, b = b, a
+    parent[b] = a
+    parity[b] = s
+    size[a] += size[b]
+
+
+@njit(**_OPTS)
+def voted_signs(order, idx, evidence, flip, rank, min_size, growth):
+    """:func:`kruskal_signs` where two parts both of at least ``min_size`` points are not
+    joined by their strongest edge alone: such edges are set aside, and once the pass is
+    over, the evidence of all set-aside edges between the same two parts is summed (signed
+    by the parts' current parities) and the parts are joined strongest sum first, parts of
+    ``min_size x growth`` points again by a sum, and so on. Kruskal's one strongest edge
+    decides which way a small part hangs; between large parts (the two sides of a plate
+    met along its rim, a tube's halves) one wrong edge would flip a whole side, and the
+    vote of the whole seam does not. ``rank``: each point's index in the caller's order
+    (the sums are taken in an order that does not depend on the order in memory)."""
+    n, k = idx.shape
+    parent = np.arange(n)
+    parity = np.zeros(n, dtype=np.int8)
+    size = np.ones(n, dtype=np.int64)
+    ea = np.empty(len(order), dtype=np.int64)
+    eb = np.empty(len(order), dtype=np.int64)
+    ew = np.empty(len(order))
+    nd = 0
+    for e in order:
+        i, m = e // k, e % k
+        ri, pi = _find(parent, parity, i)
+        rj, pj = _find(parent, parity, idx[i, m])
+        if ri == rj:
+            continue
+        if min(size[ri], size[rj]) >= min_size:
+            ea[nd], eb[nd], ew[nd] = ri, rj, evidence[i, m] * (1.0 - 2.0 * (pi ^ pj))
+            nd += 1
+            continue
+        _join(parent, parity, size, ri, rj, pi ^ pj ^ (1 if evidence[i, m] < 0.0 else 0))
+    limit = min_size
+    while nd > 0:
+        limit *= growth
+        nd = _vote_level(parent, parity, size, ea, eb, ew, nd, rank, limit)
+    roots = np.empty(n, dtype=np.int64)
+    for x in range(n):
+        r, p = _find(parent, parity, x)
+        roots[x] = r
+        flip[x] = p
+    return roots
+
+
+@njit(**_OPTS)
+def _vote_level(parent, parity, size, ea, eb, ew, nd, rank, limit):
+    """One level of :func:`voted_signs`: the set-aside edges ``ea, eb, ew[:nd]`` (roots
+    then, and their signed evidence) summed per pair of parts now, the sums taken
+    strongest first, those joining two parts of ``limit`` points or more set aside again
+    (written back into ``ea, eb, ew``); returns how many were set aside."""
+    n = len(parent)
+    key = np.empty(nd, dtype=np.int64)
+    w = np.empty(nd)
+    live = 0
+    for t in range(nd):  # still between two parts: kept (in order), with its sign now
+        ra, pa = _find(parent, parity, ea[t])
+        rb, pb = _find(parent, parity, eb[t])
+        if ra == rb:
+            continue
+        if rank[ra] > rank[rb]:
+            ra, rb = rb, ra
+        key[live] = rank[ra] * n + rank[rb]
+        ea[live], eb[live], w[live] = ra, rb, ew[t] * (1.0 - 2.0 * (pa ^ pb))
+        live += 1
+    key = key[:live]
+    by_pair = np.argsort(key)  # the same keys in the same order in any memory order: the same sums
+    head = np.empty(live, dtype=np.int64)
+    total = np.empty(live)
+    pairs = 0
+    t = 0
+    while t < live:  # sum each pair's run of edges
+        head[pairs] = by_pair[t]
+        total[pairs] = 0.0
+        while t < live and key[by_pair[t]] == key[head[pairs]]:
+            total[pairs] += w[by_pair[t]]
+            t += 1
+        pairs += 1
+    a, b = ea[head[:pairs]], eb[head[:pairs]]  # copies: ea, eb, ew are reused below
+    total = total[:pairs]
+    again = 0
+    for p in np.argsort(-np.abs(total)):
+        ra, pa = _find(parent, parity, a[p])
+        rb, pb = _find(parent, parity, b[p])
+        if ra == rb:
+            continue
+        if min(size[ra], size[rb]) >= limit:
+            ea[again], eb[again], ew[again] = ra, rb, total[p] * (1.0 - 2.0 * (pa ^ pb))
+            again += 1
+            continue
+        _join(parent, parity, size, ra, rb, pa ^ pb ^ (1 if total[p] < 0.0 else 0))
+    return again

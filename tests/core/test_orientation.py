@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import core
-from core import noise, shapes
+from core import noise, shapes, shapes_thin
 
 
 def _agree(r, s):
@@ -106,3 +106,61 @@ def test_viewpoint_inside_sphere_gives_inward_normals(given):
     r = core.estimate(s.points, s.normals if given else None, k=15, orientation=[0, 0, 0])
     assert np.all(np.einsum("ij,ij->i", r.normals, s.normals) < 0)
     assert np.all(r.mean < 0)  # k = -1/R with inward normals
+
+
+# ----------------------------------------------------------------------------- thin parts (issue 12)
+
+def _seam_graph(part):
+    """Two chains of ``part`` points each (strong agreeing links, evidence 1), joined by one
+    strong edge that says "flip" (-0.9) and four weaker ones that say "agree" (+0.5)."""
+    n, k = 2 * part, 3
+    idx = np.repeat(np.arange(n)[:, None], k, axis=1)
+    ev = np.zeros((n, k))
+    for i in range(n - 1):
+        if i != part - 1:
+            idx[i, 1], ev[i, 1] = i + 1, 1.0
+    idx[0, 2], ev[0, 2] = part, -0.9
+    for i in range(1, 5):
+        idx[i, 2], ev[i, 2] = part + i, 0.5
+    return idx, ev
+
+
+@pytest.mark.parametrize("part, flipped", [(20, False), (5, True)])
+def test_large_parts_are_joined_by_their_whole_seam(part, flipped):
+    """Two parts of >= VOTE_SIZE points are joined by the sum of their seam's evidence
+    (+1.1: agree), not by its one strongest edge (-0.9), which Kruskal follows; parts
+    smaller than VOTE_SIZE still hang by their strongest edge."""
+    from core.kernels import sign_evidence as kern
+    from core.tuning import VOTE_GROWTH, VOTE_SIZE
+
+    assert 5 < VOTE_SIZE <= 20
+    idx, ev = _seam_graph(part)
+    n = len(idx)
+    order = kern.strongest_first(ev, np.ones(ev.shape, dtype=np.bool_), 4096, np.arange(n))
+    flip = np.zeros(n, dtype=np.int8)
+    kern.voted_signs(order, idx, ev, flip, np.arange(n), VOTE_SIZE, VOTE_GROWTH)
+    assert np.all(flip[:part] == flip[0]) and np.all(flip[part:] == flip[part])
+    assert (flip[0] != flip[part]) == flipped
+    plain = np.zeros(n, dtype=np.int8)
+    kern.kruskal_signs(order, idx, ev, plain)
+    assert plain[0] != plain[part]  # the single-edge forest flips either way
+
+
+THIN_SEEDS = (0, 1, 2)
+
+
+@pytest.mark.parametrize("k", [15, "auto"])
+@pytest.mark.parametrize("sigma", [0.0, 0.2])
+@pytest.mark.parametrize("name", sorted(shapes_thin.THIN_SHAPES))
+def test_thin_parts_meet_the_orientation_target(name, sigma, k):
+    """Issue 12's target on a tube of radius 2 spacings, a plate 3 thick, two sheets 4 apart
+    and a bowl 3 thick (20k points, the default method): >= 99.5 % of the final normals on
+    the outward side of the truth, judged where a sign means something (normal within 60
+    degrees of the truth's line, shapes_thin.sign_agreement; README "Real scans").
+    Measured, seeds 0-4: >= 99.68 %. Before the seam vote k="auto" gave 50 % on the noisy
+    plate (seed 2: its whole bottom flipped by one rim edge) and 80 % on the tube (seed 1)."""
+    for seed in THIN_SEEDS if (sigma or k == 15) else THIN_SEEDS[:1]:
+        s = shapes_thin.THIN_SHAPES[name](20000, seed=seed)
+        r = core.estimate(shapes_thin.noisy(s, sigma, seed + 1), k=k)
+        clear, face, off = shapes_thin.sign_agreement(r.normals, s)
+        assert clear >= 0.995, (name, seed, clear, face, off)

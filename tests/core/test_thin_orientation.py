@@ -6,12 +6,15 @@ import numpy as np
 import pytest
 
 import core
-from core import build_neighbours, noise, orientation, shapes_thin
+from core import build_neighbours, orientation, shapes_thin
 from core.normals import pca_normals
 
 
 def _noisy(s, sigma_spacings, seed=1):
-    return noise.add_noise(s.points, sigma_spacings * s.params["spacing"], seed=seed) if sigma_spacings else s.points
+    """Noise of ``sigma_spacings`` x the shape's spacing. (It was passed to add_noise as a
+    relative sigma, which multiplied it by the mean spacing once more: ~1e-5 spacing, so
+    the "noisy" cases here ran noise-free.)"""
+    return shapes_thin.noisy(s, sigma_spacings, seed)
 
 
 @pytest.fixture(scope="module", params=sorted(shapes_thin.THIN_SHAPES))
