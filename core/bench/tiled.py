@@ -75,21 +75,18 @@ class _WorkerPeaks(Sampler):
 
 
 _IN_MEMORY = """
-import resource, sys, time, numpy as np, laspy, core
+import resource, sys, time, numpy as np, core
 from core.io.atomic import atomic_write
-from core.io.las_stream import LasResultWriter
+from core.io.las_stream import LasResultWriter, open_las, result_columns
 t0 = time.perf_counter()
-info = laspy.read(sys.argv[1])
-pts = np.asarray(info.xyz)
+cloud = core.io.read_cloud(sys.argv[1])
 t1 = time.perf_counter()
-res = core.estimate(pts, k=int(sys.argv[2]))
+res = core.estimate(cloud.points, k=int(sys.argv[2]))
 t2 = time.perf_counter()
-cols = {"k1": res.k1, "k2": res.k2, "gaussian": res.gaussian, "mean": res.mean, "valid": res.valid, "k": res.k_point}
-for name, arr in (("n", res.normals), ("e1_", res.e1), ("e2_", res.e2)):
-    cols.update({f"{name}{c}": arr[:, j] for j, c in enumerate("xyz")})
-with atomic_write(sys.argv[3] + ".laz") as f, LasResultWriter(f, scales=info.header.scales,
-                                                             offsets=info.header.offsets, laz=True) as w:
-    w.write(pts, cols)
+info = open_las(sys.argv[1])
+with atomic_write(sys.argv[3] + ".laz") as f, LasResultWriter(f, scales=info.scales, offsets=info.offsets,
+                                                             laz=True) as w:
+    w.write(res.points, result_columns(res))  # every column, the lazy flags included: the CLI's in-memory path
 t3 = time.perf_counter()
 np.savez(sys.argv[3], n=res.normals, k1=res.k1, k2=res.k2, e1=res.e1, valid=res.valid)
 print(t2 - t1, t3 - t0, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024)
@@ -156,7 +153,8 @@ def run_size(n, args, tmp):
         run = estimate_tiled(scan, tmp / f"out_{n}.laz", k=args.k, tile_points=args.tile_points,
                              workers=args.workers, memory=args.memory, progress=_StageLog(n) if args.log else None)
     row = dict(n=n, tiles=run.n_tiles, t_tiled=run.seconds, cpu_tiled=_cpu() - cpu, cpu_seen=sum(peaks.cpu.values()),
-               worker_gb=max(peaks.peaks.values(), default=0) / 1e9, main_gb=peaks.own / 1e9)
+               worker_gb=max(peaks.peaks.values(), default=0) / 1e9, main_gb=peaks.own / 1e9,
+               **{f"cpu {stage}": round(sec, 2) for stage, sec in run.cpu.items()})
     if n <= args.memory_max:
         cpu = _cpu()
         row["t_est"], row["t_mem"], rss = _in_memory(scan, args.k, tmp / f"ref_{n}.npz")
@@ -164,6 +162,7 @@ def run_size(n, args, tmp):
         row["diff"], row["agree"] = _agreement(tmp / f"out_{n}.laz", tmp / f"ref_{n}.npz")
     for f in tmp.glob(f"*_{n}.*"):
         f.unlink()
+    row["load"] = round(os.getloadavg()[0], 1)  # the machine's load: the wall times' context
     return row
 
 

@@ -60,6 +60,9 @@ class TiledRun:
     agreement: float  # share of halo points whose orientations agree across tiles
     seconds: float
     params: dict = field(default_factory=dict)  # k="auto": the whole cloud's noise, crease_typical, passes_run
+    #: CPU seconds of this process per stage (plan, bin, tiles: the scheduler and the
+    #: waiting, signs, assemble) and "tile tasks": of the tasks, summed over the workers
+    cpu: dict = field(default_factory=dict)
 
 
 def bytes_per_point(k: int) -> int:
@@ -181,19 +184,37 @@ def estimate_tiled(source, output, *, normals=None, k="auto", method="nr", passe
     same_run = {**spec.__dict__, "threads": None}  # any number of workers may resume a run
     resumed = store.open({"input": list(map(str, src.identity)), "spec": repr(same_run), "rule": rule,
                           "tile_points": tile_points, "version": _VERSION, "auto": _auto_rules(spec)})
-    plan, sizes = _binned(src, store, tile_points, report)
+    cpu = _StageCPU()
+    plan, sizes = _binned(src, store, tile_points, report, cpu)
     tasks = dict(client=client, scheduler=scheduler, workers=workers, memory=budget, label=src.name)
     spec, results, params = _estimate(store, plan, sizes, spec, tasks, report.sub(0.15, 0.9))
+    cpu.mark("tiles")
     report(0.9, "orientation across tiles")
     tile_signs, agreement = signs.tile_signs(results, plan.n_tiles, rule)
+    cpu.mark("signs")
     report(0.93, "writing")
     out = assemble.assemble(results, plan.n_tiles, plan.n_points, tile_signs, output, src)
+    cpu.mark("assemble")
     if not keep_workdir:
         store.remove()
     report(1.0, "done")
     todo = params.pop("todo")
+    cpu.seconds["tile tasks"] = params.pop("tile cpu")
     skipped = plan.n_tiles - todo if resumed else 0
-    return TiledRun(out, plan.n_points, plan.n_tiles, skipped, agreement, time.perf_counter() - t0, params)
+    return TiledRun(out, plan.n_points, plan.n_tiles, skipped, agreement, time.perf_counter() - t0, params,
+                    cpu.seconds)
+
+
+class _StageCPU:
+    """CPU seconds of this process (all its threads: Dask's scheduler too) per stage."""
+
+    def __init__(self):
+        self.seconds, self.t = {}, time.process_time()
+
+    def mark(self, stage: str) -> None:
+        now = time.process_time()
+        self.seconds[stage] = self.seconds.get(stage, 0.0) + now - self.t
+        self.t = now
 
 
 def _estimate(store, plan, sizes, spec, tasks, report):
@@ -204,14 +225,14 @@ def _estimate(store, plan, sizes, spec, tasks, report):
     if auto:
         spec = dataclasses.replace(spec, n_points=plan.n_points)
         todo = [t for t in range(plan.n_tiles) if not wholecloud.sampled(store, t, "before")]
-        engine.run_tasks(store.root, todo, sizes, spec, fn=wholecloud.run_before, stage="whole-cloud medians",
-                         progress=report.sub(0.0, 0.1), **tasks)
+        before = engine.run_tasks(store.root, todo, sizes, spec, fn=wholecloud.run_before,
+                                  stage="whole-cloud medians", progress=report.sub(0.0, 0.1), **tasks)
         fixed = wholecloud.reduce(store, plan.n_tiles, auto_plan(spec), "before")
         spec = dataclasses.replace(spec, fixed=tuple(sorted(fixed.items())))
     todo = [t for t in range(plan.n_tiles) if not store.finished(t)]
-    engine.run_tasks(store.root, todo, sizes, spec, fn=run_auto_tile if auto else None,
-                     progress=report.sub(0.1 if auto else 0.0, 1.0), **tasks)
-    params = {"todo": len(todo)}
+    done = engine.run_tasks(store.root, todo, sizes, spec, fn=run_auto_tile if auto else None,
+                            progress=report.sub(0.1 if auto else 0.0, 1.0), **tasks)
+    params = {"todo": len(todo), "tile cpu": sum(s.get("cpu", 0.0) for s in done + (before if auto else []))}
     if not auto:
         return spec, store, params
     whole = auto_plan(spec)
@@ -230,12 +251,15 @@ def _output(src, output) -> pathlib.Path:
     return output
 
 
-def _binned(src, store, tile_points, report):
+def _binned(src, store, tile_points, report, cpu):
     """Plan the tiles and bin the points; a failure here (an unreadable or truncated input,
     Ctrl-C) leaves no work directory behind, unless it holds finished tiles to resume."""
     try:
         plan = binning.plan_tiles(src, store, tile_points, report.sub(0.0, 0.05))
-        return plan, binning.bin_points(src, store, plan, report.sub(0.05, 0.15))
+        cpu.mark("plan")
+        sizes = binning.bin_points(src, store, plan, report.sub(0.05, 0.15))
+        cpu.mark("bin")
+        return plan, sizes
     except BaseException:
         if not any(store.root.glob("results/*.done")):
             store.remove()

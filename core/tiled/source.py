@@ -45,6 +45,11 @@ class Source:
     _points: object = None
     _normals: object = None
 
+    @property
+    def is_file(self) -> bool:
+        """Read from a file (each pass over it decompresses it again), not an array."""
+        return self._path is not None
+
     def chunks(self, chunk: int = CHUNK):
         """Yield ``(start, points (m, 3), normals (m, 3) or None, viewpoints (m, 3) or None)``
         in input order."""

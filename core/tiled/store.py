@@ -6,6 +6,7 @@ Layout of the work directory (``.<output name>.tiles`` next to the output by def
     plan.npz               the tiles (:class:`core.tiled.plan.TilePlan`)
     bins/fields.json       which of BIN_FIELDS the records hold (normals, viewpoints if any)
     bins/tile_000007.bin   the tile's own points (input order), raw records of those fields
+    bins/spill.bin         the sampling pass's records in input order (removed once binned)
     bins/done.json         written last: the binning pass is complete
     results/tile_000007.npy, .links.npy, .nodes.npy, .done   one finished tile
 
@@ -70,6 +71,11 @@ class TileStore:
     # -- binned input ---------------------------------------------------------------------
     def bin_path(self, tile: int) -> pathlib.Path:
         return self.root / "bins" / f"tile_{tile:06d}.bin"
+
+    @property
+    def spill_path(self) -> pathlib.Path:
+        """Every record in input order, written by the sampling pass (until binned)."""
+        return self.root / "bins" / "spill.bin"
 
     def set_bin_dtype(self, dtype: np.dtype) -> None:
         self._write_bytes(self.root / "bins" / "fields.json", json.dumps(list(dtype.names)).encode())
