@@ -153,8 +153,8 @@ class WindowActions:
             self.export_result(path)
 
     def save_screenshot(self, path, *, whole_window: bool = False) -> bool:
-        """Save a PNG of the 3D view(s), or of the whole window."""
-        self.render_all()
+        """Save a PNG of the 3D view(s), or of the whole window (``grab`` renders the 3D views)."""
+        self.histogram.flush()  # a draw still waiting for its own turn (app/widgets/histogram.py)
         widget = self if whole_window else self.splitter
         ok = widget.grab().save(str(path))
         if not ok:

@@ -165,13 +165,11 @@ def bench_size(label: str, tmp: Path, timeout: float) -> dict:
 
 def frames_only(label: str) -> dict:
     """Frame times of a big cloud without estimating it (5M: the estimate alone takes minutes)."""
-    from pyvistaqt import QtInteractor  # noqa: PLC0415 - after QApplication exists
-
-    from .scene import CloudScene  # noqa: PLC0415
+    from .scene import CloudScene, make_plotter  # noqa: PLC0415 - after QApplication exists
 
     app = QApplication.instance() or QApplication([sys.argv[0]])
     pts = core.shapes.torus(_SIZES[label] or 28_088, seed=1).points
-    plotter = QtInteractor(auto_update=False)
+    plotter = make_plotter()
     plotter.resize(1100, 850)
     plotter.show()
     _wait(app, plotter.isVisible, 10)

@@ -27,6 +27,7 @@ from core.io.las_sample import sample_las
 from core.io.las_stream import open_las
 
 from . import framing
+from .jobs import lower_priority
 from .fields import compute_fields
 from .request import EstimateRequest
 from .source import CloudSource
@@ -222,6 +223,7 @@ class BigResultView(QObject):
             return gen == self._gen and not window._closed  # a newer read, another cloud or closing stops it
 
         def job():
+            lower_priority()
             try:
                 relay.done.emit(gen, read_view(path, budget, box, progress=still_wanted))
             except core.Cancelled:

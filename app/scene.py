@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 import pyvista as pv
+from pyvistaqt import QtInteractor
 
 from . import framing, glyphs
 from .detail import VisibleDetail
@@ -17,7 +18,7 @@ from .lod import LevelOfDetail
 from .picking import Picking
 from .theme import LIGHT, Theme
 
-__all__ = ["CloudScene", "GLYPH_COLOURS", "FRAME_COLOURS"]
+__all__ = ["CloudScene", "GLYPH_COLOURS", "FRAME_COLOURS", "MULTI_SAMPLES", "make_plotter"]
 
 #: Colours of the ± glyphs and of the picked frame: the same everywhere (app/glyphs.py).
 FRAME_COLOURS = glyphs.FRAME_COLOURS
@@ -25,6 +26,20 @@ GLYPH_COLOURS = {"e1": FRAME_COLOURS["e1"], "e2": FRAME_COLOURS["e2"], "normals"
 NAN_COLOUR = "#b0b0b0"
 HIGHLIGHT_COLOUR = "#ffd92f"
 TEXT_COLOUR = "#222222"
+#: Samples per pixel of the 3D views' frame buffer: one. pyvista's default of 8 made every
+#: llvmpipe frame cost 1.7-1.9x (bunny and a 100k-sphere still frame of 1M, 760x850 and
+#: 1100x850, 2 and 8 samples alike; measured in one run, app.bench), and a frame that renders
+#: on the GUI thread is what the GUI stall is made of. It smoothed only true edges: the seams
+#: where two point spheres cut each other, glyph segments, the colour bar's ends. A sphere's
+#: outline is cut out per pixel by the fragment shader (an impostor), which multisampling
+#: does not resolve.
+MULTI_SAMPLES = 0
+
+
+def make_plotter(parent=None) -> QtInteractor:
+    """A 3D view of the viewer: rendered only when asked (no auto-update timer), one sample
+    a pixel (:data:`MULTI_SAMPLES`)."""
+    return QtInteractor(parent, auto_update=False, multi_samples=MULTI_SAMPLES)
 
 
 def _camera_state(renderer) -> tuple:
@@ -97,10 +112,11 @@ class CloudScene(Picking):
         if geometry is None or geometry.n_points != len(points):
             geometry = CloudGeometry.of(points)
         same = self._cloud is not None and self.geometry is geometry  # same cloud: keep what is drawn
+        moved = not same or points is not self.points  # a new result on the same array: positions kept
         self.geometry, self.points = geometry, points
         self._values = None if values is None else np.asarray(values, dtype=float)
         if same:
-            self._draw(self.drawn, self._visible)
+            self._draw(self.drawn, self._visible, moved=moved)
         else:
             if self._actor is not None:
                 self.plotter.remove_actor(self._actor, render=False)
@@ -116,19 +132,22 @@ class CloudScene(Picking):
             self._draw(drawn, geometry.n_points)
             self.lod.set_cloud(geometry, self._actor, self.point_size, NAN_COLOUR)
             self._add_bar()
-        self.lod.set_points(points)
+        if moved:
+            self.lod.set_points(points)
         self.lod.set_values(values)
         if reset_camera:
             self.reset_camera(reset_camera)
         elif not same:
             self.detail.request()  # a new cloud in a camera someone may have zoomed
 
-    def _draw(self, drawn: np.ndarray, visible: int) -> None:
+    def _draw(self, drawn: np.ndarray, visible: int, *, moved: bool = True) -> None:
         """Draw the points ``drawn`` (indices) of the ``visible`` in view; sprites grow as the
-        drawn points get sparser than the cloud (spacing ~ 1 / sqrt(density))."""
+        drawn points get sparser than the cloud (spacing ~ 1 / sqrt(density)). ``moved``
+        False: the drawn points' positions are those on screen (only the values change)."""
         values = np.full(len(drawn), np.nan) if self._values is None else self._values[drawn]
         if self._cloud.n_points == len(drawn):
-            self._cloud.points = self.points[drawn]
+            if moved or drawn is not self.drawn:
+                self._cloud.points = self.points[drawn]
         else:
             self._cloud = pv.PolyData(self.points[drawn])
             self._actor.mapper.SetInputData(self._cloud)

@@ -19,7 +19,6 @@ import logging
 from PySide6.QtCore import QSettings, Qt, QTimer, Signal
 from PySide6.QtGui import QIcon
 from PySide6.QtWidgets import QLabel, QMainWindow, QMessageBox, QSplitter
-from pyvistaqt import QtInteractor
 
 from . import ICON, _refguard
 from .actions import WindowActions
@@ -32,7 +31,7 @@ from .loader import CloudLoader
 from .persist import save_layout, save_state
 from .presenter import ResultPresenter, preview_line, status_line, summary_line
 from .request import ESTIMATE_KEYS, EstimateRequest
-from .scene import CloudScene
+from .scene import CloudScene, make_plotter
 from .source import CloudSource
 from .state import ViewerState
 from .teach import install_teach
@@ -98,14 +97,18 @@ class MainWindow(WindowActions, QMainWindow):
         self._debounce.setSingleShot(True)
         self._debounce.setInterval(DEBOUNCE_MS)
         self._debounce.timeout.connect(self.request_estimate)
-        self._render_timer = QTimer(self)  # coalesces renders requested by status changes
+        self._render_timer = QTimer(self)  # render_all: one repaint, after the current pass of the event loop
         self._render_timer.setSingleShot(True)
         self._render_timer.setInterval(0)
-        self._render_timer.timeout.connect(self.render_all)
+        self._render_timer.timeout.connect(self._repaint)
         self._build_views()
         build_controls(self)
         self.presenter = ResultPresenter(self.state, self.scene, field_panel=self.field_panel,
                                          histogram=self.histogram, inspector=self.inspector)
+        # a changed histogram draws in a pass of the event loop after the 3D frame, not with it
+        self._frame_due = False
+        self.histogram.frame_due = lambda: self._frame_due
+        self._frame_tag = self.plotter.render_window.AddObserver("EndEvent", self._frame_done)
         self._build_status()
         self._build_menus()
         self._connect()
@@ -117,7 +120,7 @@ class MainWindow(WindowActions, QMainWindow):
 
     # -- construction ---------------------------------------------------------
     def _build_views(self) -> None:
-        self.plotter = QtInteractor(self, auto_update=False)
+        self.plotter = make_plotter(self)
         self.plotter.setAcceptDrops(False)  # the window handles drops
         self.plotter.setMinimumSize(320, 240)
         self.scene = CloudScene(self.plotter)
@@ -260,7 +263,7 @@ class MainWindow(WindowActions, QMainWindow):
                                       "(cancelled or failed; change a parameter or press F5)")
             self.scene.set_title(f"{source.name}\nnot estimated")
             self.scene.lod.hold(False)
-            self._render_timer.start()  # after the GUI went idle
+            self.render_all()
         elif source is None:
             self.status_label.setText("No cloud")
 
@@ -312,9 +315,23 @@ class MainWindow(WindowActions, QMainWindow):
         self.state.set(picked=int(index))
 
     def render_all(self) -> None:
-        """Schedule one repaint of the 3D view(s).
+        """Schedule one repaint of the 3D view(s), after the current pass of the event loop.
 
-        ``update()``, not ``render()``: the interactor widget renders VTK in its own
+        Deferred (a 0 ms timer): the step that asked (a new result swapped in, ~10-70 ms
+        of GUI thread at 1M points) and the frame (~50-100 ms with llvmpipe) are then two
+        turns of the event loop, with input and timers served between them, instead of
+        one stall of their sum. Requests before it make one repaint.
+        """
+        if not self._closed:
+            self._frame_due = True
+            self._render_timer.start()
+
+    def _frame_done(self, *_args) -> None:
+        self._frame_due = False
+        self.histogram.after_frame()
+
+    def _repaint(self) -> None:
+        """``update()``, not ``render()``: the interactor widget renders VTK in its own
         ``paintGL``, and a ``render()`` schedules that paint as well, so each explicit
         render drew the whole cloud twice (0.4 s each for the bunny with llvmpipe).
         Qt also merges several updates before the next paint into one.
@@ -365,6 +382,7 @@ class MainWindow(WindowActions, QMainWindow):
         self._debounce.stop()
         self.teach.shutdown()
         self._render_timer.stop()
+        self.plotter.render_window.RemoveObserver(self._frame_tag)
         self.compile_watch.close()
         self.loader.shutdown()
         self.estimator.shutdown()

@@ -2,9 +2,12 @@
 
 :class:`EstimateWorker` takes a frozen :class:`app.request.EstimateRequest` and emits
 an :class:`EstimateOutput` (numpy arrays and frozen core results only). It re-uses
-what a change does not touch: the noisy copy (same cloud, noise, seed), the neighbour
-graph (k within its ``k_max``) and the preview subsample. A stale job is cancelled
-cooperatively: core calls our progress callback between chunks and we answer
+what a change does not touch: the noisy copy (same cloud, noise, seed) and the preview
+subsample here; the neighbour graph (k within its head room ``K_MAX_HEADROOM``), the
+outlier scores, initial normals, orientation and chosen k through one
+:class:`core.stage_cache.StageCache` (and one for the preview), which searches the
+neighbours on the points in spatial order as a fresh estimate does. A stale job is
+cancelled cooperatively: core calls our progress callback between chunks and we answer
 ``False`` once a newer request exists (core then raises ``core.Cancelled``).
 """
 
@@ -35,8 +38,11 @@ LOG = logging.getLogger(__name__)
 #: Neighbour graphs are built for at least this many neighbours, so moving the k
 #: slider below it re-uses the graph instead of querying the KD-tree again.
 K_MAX_HEADROOM = 32
-#: Progress signals at most this often (s): enough for a smooth bar, few queued events.
-_PROGRESS_EVERY = 0.05
+#: Progress signals at most this often (s). Every visible change of the bar repaints the
+#: window, which Qt composes whole with OpenGL once it holds a 3D view (25 ms of GUI thread
+#: for 1440x900 with llvmpipe, measured at load average 15): at 20 a second that was half a
+#: core taken from the estimate; 4 a second still moves the bar smoothly enough.
+_PROGRESS_EVERY = 0.25
 
 
 @dataclass(frozen=True, eq=False)
@@ -78,14 +84,12 @@ class EstimateWorker(QObject):
         super().__init__()
         self.latest = 0
         self._noisy_key = self._noisy = None
-        self._nb_key = self._nb = None
         self._sub_key = self._sub = None
-        self._sub_nb_key = self._sub_nb = None
-        #: method -> StageCache of the full estimate (and one for the preview): a change of
-        #: the passes re-runs only the fit (core.stage_cache); per method, so a compare run
-        #: does not evict the main method's stages
-        self._caches: dict[str, StageCache] = {}
-        self._sub_cache = StageCache()
+        #: the stages of the full estimate (and of the preview): a change of the passes re-runs
+        #: only the fit, of k only what follows the search (core.stage_cache); two kept per
+        #: stage, so a compare run does not evict the main method's
+        self._cache = StageCache(k_max=K_MAX_HEADROOM, keep=2)
+        self._sub_cache = StageCache(k_max=K_MAX_HEADROOM)
         self._last_emit = 0.0
 
     # worker thread ---------------------------------------------------------
@@ -114,21 +118,9 @@ class EstimateWorker(QObject):
         pts = np.array(pts, dtype=float, copy=True)
         pts.flags.writeable = False
         self._noisy_key, self._noisy = req.cloud_key, pts
-        self._nb_key = self._nb = self._sub_nb_key = self._sub_nb = None
-        self._caches.clear()  # another cloud: free the old one's stages
+        self._cache.clear()  # another cloud: free the old one's stages
         self._sub_cache.clear()
         return pts
-
-    def _neighbours(self, req: EstimateRequest, points: np.ndarray, progress) -> bool:
-        """Make sure the neighbour graph serves ``req``; True if the cached one did."""
-        need = req.k_needed(len(points))
-        if self._nb is not None and self._nb_key == req.cloud_key and self._nb.k_max >= need:
-            return True
-        k_max = max(need, K_MAX_HEADROOM)
-        k_max = min(k_max, len(points) - 1) if len(points) > need else need
-        self._nb = core.build_neighbours(points, k_max, progress=progress)
-        self._nb_key = req.cloud_key
-        return False
 
     def run(self, req: EstimateRequest) -> None:
         """Estimate one request (job thread): a preview first when it is slow, then the full result."""
@@ -164,60 +156,56 @@ class EstimateWorker(QObject):
         sub = self._sub
         pts = points[sub.index]
         k = min(PREVIEW_K if req.k_auto else int(req.k), len(pts) - 1)
-        if self._sub_nb_key != req.cloud_key:
-            self._sub_nb = core.build_neighbours(pts, min(max(k, K_MAX_HEADROOM), len(pts) - 1))
-            self._sub_nb_key = req.cloud_key
         normals = req.source.normals[sub.index] if (req.use_input_normals and req.source.normals is not None) else None
         passes = None if req.k_auto else (req.passes if core.METHODS[req.method].uses_passes else None)
         res = core.estimate(pts, normals, k=max(k, 3), method=req.method, passes=passes,
-                            neighbours=self._sub_nb if self._sub_nb.k_max >= k else None,
                             progress=_sub(callback, 0.0, 0.05, "preview"), cache=self._sub_cache)
         fields = spread(compute_fields(res), sub)
-        spacing = mean_spacing(pts, neighbours=self._sub_nb) if self._sub_nb.k_max > 1 else 1.0
         return EstimateOutput(gen=req.gen, request=req, points=points, result=res, fields=fields,
-                              spacing=spacing, elapsed=time.perf_counter() - t0, preview=len(pts))
+                              spacing=_spacing(res), elapsed=time.perf_counter() - t0, preview=len(pts))
 
     def _full(self, req: EstimateRequest, points: np.ndarray, callback) -> EstimateOutput:
         t0 = time.perf_counter()
         timings = {}
-        reused = self._neighbours(req, points, _sub(callback, 0.0, 0.2, "neighbours"))
-        timings["neighbours"] = time.perf_counter() - t0
-        lo = 0.0 if reused else 0.2
-        results, kept = self._estimates(req, points, callback, lo, timings)
+        results, kept = self._estimates(req, points, callback, timings)
         sample = req.source.sample
         reference = sample.normals if sample is not None else req.source.normals
         fields = [compute_fields(r, reference_normals=reference, sample=sample) for r in results]
         summaries = [core.metrics.summary(r, sample) if sample is not None else None for r in results]
         two = len(results) > 1
-        spacing = mean_spacing(points, neighbours=self._nb) if self._nb.k_max > 1 else 1.0
         return EstimateOutput(
             gen=req.gen, request=req, points=points, result=results[0], fields=fields[0],
-            spacing=spacing, summary=summaries[0],
+            spacing=_spacing(results[0]), summary=summaries[0],
             compare=results[1] if two else None, compare_fields=fields[1] if two else None,
             compare_summary=summaries[1] if two else None, elapsed=time.perf_counter() - t0,
-            reused_neighbours=reused, reused_stages=kept, timings=timings,
+            reused_neighbours="neighbours" in kept, reused_stages=kept, timings=timings,
         )
 
-
-    def _estimates(self, req: EstimateRequest, points: np.ndarray, callback, lo: float, timings: dict):
-        """core.estimate of the method (and the compared one) over progress [lo, 1], each with
-        its own stage cache; returns the results and the stages the main one re-used."""
+    def _estimates(self, req: EstimateRequest, points: np.ndarray, callback, timings: dict):
+        """core.estimate of the method (and the compared one), through the stage cache;
+        returns the results and the stages the main one re-used."""
         normals = req.source.normals if req.use_input_normals else None
         runs = [req.method] + ([req.compare_method] if req.compare_method else [])
-        span = (1.0 - lo) / len(runs)
-        main = self._caches.setdefault(req.method, StageCache())
-        before = dict(main.reused)
-        results = []
+        # one search serves both runs (and k slider moves within the head room)
+        self._cache.k_max = max(K_MAX_HEADROOM, min(req.k_needed(len(points)), len(points)))
+        results, kept = [], ()
         for i, method in enumerate(runs):
-            t = time.perf_counter()
+            t, before = time.perf_counter(), dict(self._cache.reused)
             passes = req.passes if core.METHODS[method].uses_passes else None
             results.append(core.estimate(
                 points, normals, k=req.k_for(method), method=method, passes=passes, orientation=req.orientation,
-                neighbours=self._nb, progress=_sub(callback, lo + i * span, lo + (i + 1) * span, method),
-                cache=self._caches.setdefault(method, StageCache()),
+                progress=_sub(callback, i / len(runs), (i + 1) / len(runs), method), cache=self._cache,
             ))
             timings[method] = time.perf_counter() - t
-        return results, tuple(stage for stage, n in main.reused.items() if n > before.get(stage, 0))
+            if i == 0:
+                kept = tuple(stage for stage, n in self._cache.reused.items() if n > before.get(stage, 0))
+        return results, kept
+
+
+def _spacing(result) -> float:
+    """Mean distance to the nearest neighbour, from the graph the result carries."""
+    nb = result.neighbours
+    return mean_spacing(nb.points, neighbours=nb) if nb is not None and nb.k_max > 1 else 1.0
 
 
 def _sub(callback, start: float, stop: float, stage: str):

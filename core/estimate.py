@@ -128,7 +128,7 @@ def estimate(
                   report.sub(0.7 if plan.auto else 0.45, 1.0))
     marks = flags(best.fit, front.scores, plan, front.reference, nb=front.nb, confidence=front.confidence)
     stages = front.order.to_caller((front.init, best, front.scale, marks))
-    nb = front.order.neighbours_to_caller(front.nb, pts, in_place=cache is None)  # a cache keeps the sorted graph
+    nb = stage_cache.caller_neighbours(cache, front.order, front.nb, pts)  # a cache keeps the sorted graph
     report(1.0, "done")
     return _result(pts, kept, plan, stages=stages, neighbours=nb, repaired=front.repaired)
 
@@ -159,7 +159,8 @@ def prepare(pts, normals, plan, neighbours, report, *, cache=None) -> Prepared:
     spatial order (:mod:`core.spatial_order`; given ``neighbours``: in the caller's), each
     one run or re-used through ``cache`` (:mod:`core.stage_cache`)."""
     run = stage_cache.memo(cache, pts, normals, plan)  # each stage: run, or re-used from the cache
-    nb, order = run.neighbours(lambda: spatial_neighbours(pts, plan, neighbours, report.sub(0.0, 0.3)), neighbours)
+    nb, order = run.neighbours(lambda k: spatial_neighbours(pts, plan, neighbours, report.sub(0.0, 0.3), k=k),
+                               neighbours)
     pts, normals = nb.points, order.to_sorted(normals)  # the stages run in spatial order
     idx_p, _ = nb.take(plan.k_initial)
     scores = run("scores", lambda: outlier_scores(pts, idx_p))

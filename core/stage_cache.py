@@ -10,9 +10,16 @@ when the key matches. The pipeline itself stays in :func:`core.estimate`: the ca
 only decides whether a stage function runs. The result is bit-identical with and
 without a cache (tests/core/test_stage_cache.py).
 
-Only the last output of each stage is kept (memory: one cloud's worth, e.g. ~0.3 GB
-for 1M points with k = "auto"). Kept arrays are made read-only, so a caller editing a
-result's ``k_point`` gets an error instead of silently changing the next result.
+The neighbour stage searches ``max(k, k_max)`` neighbours (``StageCache(k_max=...)``, head
+room) and serves every later call on the same cloud whose plan needs at most that many,
+on the points in spatial order as a call without a cache (:mod:`core.spatial_order`):
+an interactive k slider then never searches again. The first k neighbours of a larger
+search are those of a search for k (ties go to the lowest index either way).
+
+Only the last ``keep`` outputs of each stage are kept (``keep=2``: a method and the one it
+is compared with), and one neighbour graph (memory: one cloud's worth per kept output,
+e.g. ~0.3 GB for 1M points with k = "auto"). Kept arrays are made read-only, so a caller
+editing a result's ``k_point`` gets an error instead of silently changing the next result.
 """
 
 from __future__ import annotations
@@ -46,6 +53,9 @@ class StageCache:
     ----------
     computed, reused : collections.Counter
         How many times each stage (a key of :data:`STAGE_FIELDS`) ran or was re-used.
+    k_max : int
+        The neighbour search finds at least this many neighbours (head room for a later
+        call with a larger k; set it before a call).
 
     Examples
     --------
@@ -58,8 +68,12 @@ class StageCache:
     (1, 1)
     """
 
-    def __init__(self):
-        self._entries: dict[str, tuple[tuple, object]] = {}
+    def __init__(self, *, k_max: int = 0, keep: int = 1):
+        self.k_max = int(k_max)
+        self.keep = max(int(keep), 1)
+        self._entries: dict[str, list[tuple[tuple, object]]] = {}
+        self._graph = None  # (inputs, (nb, order)) of the last search
+        self._caller = None  # (nb, the same graph in the caller's order)
         self._nb = None
         self._nb_token = 0
         self.computed: Counter = Counter()
@@ -68,7 +82,7 @@ class StageCache:
     def clear(self) -> None:
         """Forget every kept output (the counters stay)."""
         self._entries.clear()
-        self._nb = None
+        self._graph = self._caller = self._nb = None
 
     def bind(self, points: np.ndarray, normals: np.ndarray | None, plan) -> "_Memo":
         """The memo of one :func:`core.estimate` call on ``points`` (validated) with ``plan``."""
@@ -79,17 +93,40 @@ class StageCache:
         """A number naming the neighbour graph ``nb`` while it is the one in use."""
         if nb is not self._nb:
             self._nb, self._nb_token = nb, self._nb_token + 1
+            self._entries.clear()  # every later stage is keyed by the graph: the old outputs are dead
         return self._nb_token
 
     def _get(self, stage: str, key: tuple, compute):
-        kept = self._entries.get(stage)
-        if kept is not None and kept[0] == key:
-            self.reused[stage] += 1
-            return kept[1]
+        kept = self._entries.setdefault(stage, [])
+        for i, (k, value) in enumerate(kept):
+            if k == key:
+                kept.append(kept.pop(i))  # the most recently used last
+                self.reused[stage] += 1
+                return value
         value = _read_only(compute())
-        self._entries[stage] = (key, value)
+        kept.append((key, value))
+        del kept[:-self.keep]
         self.computed[stage] += 1
         return value
+
+    def _search(self, inputs: tuple, k: int, n: int, compute):
+        """The kept graph if it holds ``k`` neighbours of these points, else ``compute(k')``,
+        ``k'`` = ``k`` raised to :attr:`k_max` (at most ``n``), kept instead."""
+        if self._graph is not None and self._graph[0] == inputs and self._graph[1][0].k_max >= k:
+            self.reused["neighbours"] += 1
+            return self._graph[1]
+        self._graph = self._caller = None  # the old graph goes before the new one is searched
+        found = compute(min(max(k, self.k_max), n))
+        self._graph = (inputs, found)
+        self.computed["neighbours"] += 1
+        return found
+
+    def caller_neighbours(self, order, nb, points):
+        """``order.neighbours_to_caller(nb, points)`` kept with ``nb``: the results of one
+        graph share one copy in the caller's order."""
+        if self._caller is None or self._caller[0] is not nb:
+            self._caller = (nb, order.neighbours_to_caller(nb, points, in_place=False))
+        return self._caller[1]
 
 
 class _Memo:
@@ -100,10 +137,13 @@ class _Memo:
         self.graph = None
 
     def neighbours(self, compute, given):
-        """The neighbour graph and its spatial order, ``compute()``'s ``(nb, order)``: from
-        ``given`` (the caller's graph) as is, else a kept search; later stages are keyed by
-        the graph ``nb`` itself."""
-        nb, order = compute() if given is not None or self.cache is None else self._run("neighbours", compute)
+        """The neighbour graph and its spatial order, ``compute(k)``'s ``(nb, order)`` for
+        ``k`` neighbours: from ``given`` (the caller's graph) as is, else a kept search with
+        head room (:attr:`StageCache.k_max`); later stages are keyed by the graph ``nb`` itself."""
+        if given is not None or self.cache is None:
+            nb, order = compute(self.plan.k_search)
+        else:
+            nb, order = self.cache._search(self.inputs[0], self.plan.k_search, self.plan.n_points, compute)
         self.graph = None if self.cache is None else self.cache._token(nb)
         return nb, order
 
@@ -122,6 +162,15 @@ def memo(cache: StageCache | None, points, normals, plan) -> _Memo:
     if not isinstance(cache, StageCache):
         raise ValueError(f"cache must be a core.stage_cache.StageCache or None, got {type(cache).__name__}")
     return cache.bind(points, normals, plan)
+
+
+def caller_neighbours(cache: StageCache | None, order, nb, points):
+    """The neighbour graph ``nb`` (on the points in spatial ``order``) as neighbours of the
+    caller's ``points``: reordered in place without a cache, kept with it
+    (:meth:`StageCache.caller_neighbours`)."""
+    if cache is None:
+        return order.neighbours_to_caller(nb, points)
+    return cache.caller_neighbours(order, nb, points)
 
 
 def _field(plan, name: str):

@@ -83,12 +83,13 @@ def find_neighbours(pts, plan, neighbours, report) -> Neighbours:
     return neighbours
 
 
-def spatial_neighbours(pts, plan, neighbours, report) -> tuple[Neighbours, SpatialOrder]:
+def spatial_neighbours(pts, plan, neighbours, report, *, k=None) -> tuple[Neighbours, SpatialOrder]:
     """:func:`find_neighbours`, searched on the points in spatial order (the stages then run
-    on ``nb.points``, :mod:`core.spatial_order`); given neighbours are used as they are."""
+    on ``nb.points``, :mod:`core.spatial_order`); given neighbours are used as they are.
+    ``k``: search that many (>= ``plan.k_search``, a cache's head room) instead."""
     if neighbours is not None:
         return find_neighbours(pts, plan, neighbours, report), SpatialOrder(None)
-    nb, order = search_in_spatial_order(pts, plan.k_search, progress=report)
+    nb, order = search_in_spatial_order(pts, plan.k_search if k is None else k, progress=report)
     return nb, SpatialOrder(order)
 
 

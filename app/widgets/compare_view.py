@@ -5,9 +5,8 @@ from __future__ import annotations
 
 from PySide6.QtCore import QTimer
 from PySide6.QtWidgets import QVBoxLayout, QWidget
-from pyvistaqt import QtInteractor
 
-from ..scene import CloudScene
+from ..scene import CloudScene, make_plotter
 
 
 def _pose(camera) -> tuple:
@@ -47,7 +46,7 @@ class CompareView(QWidget):
 
     def __init__(self, parent=None):
         super().__init__(parent)
-        self.plotter = QtInteractor(self, auto_update=False)
+        self.plotter = make_plotter(self)
         self.plotter.setAcceptDrops(False)  # drops go to the main window
         self.scene = CloudScene(self.plotter)
         self.link: CameraLink | None = None

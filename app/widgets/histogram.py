@@ -5,6 +5,7 @@ from __future__ import annotations
 import matplotlib
 import numpy as np
 from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
+from PySide6.QtCore import QTimer
 from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
@@ -15,6 +16,16 @@ from ..fields import subsample
 #: bars' shape is the same to a pixel: ~0.2 % noise in a bin of 1 % of 200k); it saves the
 #: GUI thread ~40 ms per recolour of a 1M-point cloud (np.clip + np.histogram, measured).
 SAMPLE = 200_000
+#: A changed histogram is drawn this many ms after the change and after the last 3D frame
+#: (:meth:`Histogram.after_frame`), in a pass of the event loop of its own: the 3D view's
+#: repaint of the same change runs first, input and timers are served, then the figure's
+#: ~15-30 ms Agg draw. Drawn in the same pass as the 3D render, both added up into one GUI
+#: stall (matplotlib's draw_idle posts its draw at 0 ms, which Qt delivered with the
+#: repaint). Changes within the delay make one draw.
+DRAW_DELAY_MS = 30
+#: While a 3D frame is on its way (:attr:`Histogram.frame_due`) the draw waits for it, at most
+#: this many delays (a hidden 3D view never renders).
+MAX_WAITS = 10
 
 
 class Histogram(FigureCanvasQTAgg):
@@ -32,6 +43,13 @@ class Histogram(FigureCanvasQTAgg):
         self.ax = self.figure.add_subplot(111)
         self.counts = np.zeros(0)
         self.text_colour, self.axes_colour = "#222222", "#444444"
+        self._draw_timer = QTimer(self)
+        self._draw_timer.setSingleShot(True)
+        self._draw_timer.setInterval(DRAW_DELAY_MS)
+        self._draw_timer.timeout.connect(self._on_timer)
+        self._waits = 0
+        #: set by the window: whether a 3D frame has been asked for and not rendered yet
+        self.frame_due = lambda: False
         # made once, updated in place by set_data
         self._bars = list(self.ax.bar(np.arange(bins), np.zeros(bins), width=1.0, linewidth=0))
         self._limits = [self.ax.axvline(x, linewidth=0.8, linestyle="--") for x in (0.0, 1.0)]
@@ -46,6 +64,36 @@ class Histogram(FigureCanvasQTAgg):
     #: Margins in pixels around the axes: tick labels (7 pt) below, the title (8 pt) above,
     #: room for half a tick label at the sides.
     MARGINS_PX = dict(left=16, right=16, bottom=26, top=22)
+
+    def draw_later(self) -> None:
+        """Draw the figure in a later pass of the event loop (:data:`DRAW_DELAY_MS`);
+        several changes before it make one draw."""
+        if not self._draw_timer.isActive():
+            self._waits = 0
+            self._draw_timer.start()
+
+    def _on_timer(self) -> None:
+        if self.frame_due() and self._waits < MAX_WAITS:
+            self._waits += 1  # the frame first: after_frame starts the delay again
+            self._draw_timer.start()
+            return
+        self.draw()
+
+    def after_frame(self) -> None:
+        """A 3D frame was just rendered: a pending draw waits :data:`DRAW_DELAY_MS` from now,
+        so that the event loop serves input and timers between the two."""
+        if self._draw_timer.isActive():
+            self._draw_timer.start()
+
+    @property
+    def draw_pending(self) -> bool:
+        return self._draw_timer.isActive()
+
+    def flush(self) -> None:
+        """Draw now if a draw is pending (before a screenshot of the window)."""
+        if self._draw_timer.isActive():
+            self._draw_timer.stop()
+            self.draw()
 
     def _place(self) -> None:
         """The axes inside :data:`MARGINS_PX` of the figure, whatever its size."""
@@ -74,14 +122,14 @@ class Histogram(FigureCanvasQTAgg):
         self.figure.set_facecolor(theme.background)
         self.ax.set_facecolor(theme.background)
         self._style()
-        self.draw_idle()
+        self.draw_later()
 
     def clear(self) -> None:
         """No data (a new cloud is being estimated)."""
         self._show_bars(False)
         self.ax.set_title("")
         self.counts = np.zeros(0)
-        self.draw_idle()
+        self.draw_later()
 
     def _show_bars(self, on: bool, message: str = "") -> None:
         for artist in (*self._bars, *self._limits):
@@ -104,7 +152,7 @@ class Histogram(FigureCanvasQTAgg):
             self.counts = np.zeros(0)
             self._show_bars(False, "no finite values")
             self.ax.set_title("")
-            self.draw_idle()
+            self.draw_later()
             return
         pad = 0.1 * (hi - lo)
         # a bin count and range, not an array of edges: numpy's equal-bin path (no sort of the values)
@@ -127,4 +175,4 @@ class Histogram(FigureCanvasQTAgg):
         title += f", {n_nan:,} nan)" if n_nan else ")"
         self.ax.set_title(title, fontsize=8, color=self.text_colour)
         self.counts = counts
-        self.draw_idle()
+        self.draw_later()

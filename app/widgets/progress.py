@@ -67,4 +67,5 @@ class EstimateProgress(QWidget):
         else:
             self.bar.setRange(0, 0)
             self.inner.setVisible(True)
-        self.stage.setText(stage)
+        if stage != self.stage.text():  # each repaint composes the whole window (app/worker.py)
+            self.stage.setText(stage)

@@ -79,6 +79,26 @@ def test_cancel_idles_at_once_and_a_cancelled_first_estimate_stays_usable(make_w
     assert blocker.args[0].request.source is big
 
 
+def test_a_new_result_renders_the_3d_view_once_in_a_turn_of_its_own(make_window, qtbot, torus):
+    """Swapping a result in, rendering it and drawing its histogram are three turns of the
+    event loop, and the 3D view renders once (issue 11, GUI stall)."""
+    window = make_window(torus, k_auto=False)
+    qtbot.waitUntil(lambda: not window._frame_due and not window.histogram.draw_pending, timeout=10_000)
+    frames, at_result = [], []
+    tag = window.plotter.render_window.AddObserver(
+        "EndEvent", lambda *_a: frames.append(window.histogram.draw_pending))
+    window.result_shown.connect(lambda _out: at_result.append(len(frames)))
+    try:
+        with wait_result(qtbot, window):
+            window.state.set(k=18)
+        qtbot.waitUntil(lambda: bool(frames) and not window.histogram.draw_pending, timeout=10_000)
+        qtbot.wait(300)  # nothing else is on its way
+    finally:
+        window.plotter.render_window.RemoveObserver(tag)
+    assert at_result == [0]  # the result is swapped in; the frame is a later turn
+    assert frames == [True]  # one frame, rendered before the histogram's draw
+
+
 def test_new_cloud_clears_the_old_histogram_and_colour_bar(make_window, qtbot, torus):
     window = make_window(torus)
     assert window.histogram.counts.sum() > 0 and window.scene._bar.GetVisibility()

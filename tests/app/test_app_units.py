@@ -145,3 +145,66 @@ def test_histogram_and_limits_of_many_values_use_a_random_subset_scaled_to_the_w
     look = app.fields.colouring(app.fields.FIELDS["mean"], v, clip=2.0)
     truth = np.percentile(np.abs(v[np.isfinite(v)]), 98.0)
     assert look.clim[1] == pytest.approx(truth, rel=0.1) and look.clim[0] == -look.clim[1]
+
+
+def test_histogram_draws_in_a_turn_of_its_own_after_the_3d_frame(qtbot, monkeypatch):
+    """A changed histogram is drawn later, never while a 3D frame is still due: the two
+    heavy GUI steps of one change are two turns of the event loop (issue 11, GUI stall)."""
+    import app.widgets.histogram as hist
+
+    monkeypatch.setattr(hist, "MAX_WAITS", 10**6)  # this test does not time out the wait
+    h = hist.Histogram()
+    qtbot.addWidget(h)
+    drawn, due = [], [True]
+    monkeypatch.setattr(h, "draw", lambda: drawn.append(h.ax.get_title()))
+    h.frame_due = lambda: due[0]
+    h.set_data(np.linspace(-1.0, 1.0, 500), clim=(-1.0, 1.0), cmap="RdBu_r", label="H")
+    h.set_data(np.linspace(-2.0, 2.0, 700), clim=(-2.0, 2.0), cmap="RdBu_r", label="K")
+    assert h.draw_pending and drawn == [] and h.counts.sum() == 700  # data now, the draw later
+    qtbot.wait(4 * hist.DRAW_DELAY_MS)
+    assert drawn == [] and h.draw_pending  # the 3D frame first
+    due[0] = False
+    h.after_frame()
+    qtbot.waitUntil(lambda: len(drawn) == 1, timeout=5000)
+    assert "K" in drawn[0] and not h.draw_pending  # two changes, one draw, of the last one
+    monkeypatch.setattr(hist, "MAX_WAITS", 2)
+    due[0] = True  # a 3D view that never renders (hidden) does not hold the histogram for good
+    h.clear()
+    qtbot.waitUntil(lambda: len(drawn) == 2, timeout=5000)
+    h.set_data(np.zeros(10), clim=(-1.0, 1.0), cmap="RdBu_r", label="H")
+    h.flush()  # a screenshot draws a pending change at once
+    assert len(drawn) == 3 and not h.draw_pending
+
+
+def test_the_worker_searches_the_neighbours_once_and_matches_a_fresh_estimate(qapp):
+    """Slider moves re-use one neighbour graph, the stage cache's (searched in spatial order,
+    with head room for k), and every result is bit-identical to core.estimate of the same
+    request (issue 11: one neighbour cache)."""
+    import core
+    from app.request import EstimateRequest
+    from app.source import make_shape
+    from app.worker import EstimateWorker
+
+    source = make_shape("torus", 1500, seed=2)
+    worker, got = EstimateWorker(), []
+    worker.finished.connect(got.append)
+    worker.failed.connect(lambda gen, message: pytest.fail(message))
+    steps = [dict(k_auto=True, passes=4), dict(k_auto=True, passes=2), dict(k=20), dict(k=12),
+             dict(k=12, method="ct", compare_method="nr"), dict(k=12, noise=5.0)]
+    for gen, step in enumerate(steps, start=1):
+        worker.latest = gen
+        worker.run(EstimateRequest(gen=gen, source=source, **step))
+    assert [out.gen for out in got] == list(range(1, len(steps) + 1))
+    assert [out.reused_neighbours for out in got] == [False, True, True, True, True, False]  # noise: new points
+    assert worker._cache.computed["neighbours"] == 2  # the clean cloud once, the noisy copy once
+    for out in got:
+        req = out.request
+        runs = [(req.method, out.result)] + ([(req.compare_method, out.compare)] if req.compare_method else [])
+        for method, res in runs:
+            passes = req.passes if core.METHODS[method].uses_passes else None
+            fresh = core.estimate(out.points, source.normals, k=req.k_for(method), method=method, passes=passes)
+            for name in ("normals", "k1", "k2", "e1", "e2", "valid", "k_point", "outlier_score", "crease",
+                         "border", "orientation_confidence"):
+                assert np.asarray(getattr(res, name)).tobytes() == np.asarray(getattr(fresh, name)).tobytes(), name
+            assert res.params == fresh.params
+    assert got[1].spacing == pytest.approx(core.spacing.mean_spacing(source.points))

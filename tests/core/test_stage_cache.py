@@ -76,3 +76,42 @@ def test_editing_a_result_never_changes_the_next_one_and_a_bad_cache_is_refused(
     _same(estimate(torus, k=15, cache=cache, neighbours=nb), estimate(torus, k=15, neighbours=nb))
     with pytest.raises(ValueError, match="cache must be a core.stage_cache.StageCache"):
         estimate(torus, k=15, cache={})
+
+
+def _grid():
+    """A plane on a regular grid, slightly bent: every point has many neighbours at exactly
+    equal distances (the ties a quantised scan has), where a k cut could differ."""
+    u, v = np.meshgrid(np.arange(40.0), np.arange(40.0))
+    pts = np.column_stack([u.ravel(), v.ravel(), 0.002 * (u.ravel() - 20.0) ** 2])
+    return pts[np.random.default_rng(3).permutation(len(pts))]  # no order to lean on
+
+
+@pytest.mark.parametrize("cloud", ["torus", "grid"])
+def test_head_room_serves_every_k_up_to_k_max_in_spatial_order_and_matches(torus, cloud):
+    pts = torus if cloud == "torus" else _grid()
+    cache = StageCache(k_max=32)
+    results = {k: estimate(pts, k=k, cache=cache) for k in (15, 24, 9, 32)}
+    assert cache.computed["neighbours"] == 1 and cache.reused["neighbours"] == 3  # one search for all
+    assert cache._graph[1][1].order is not None  # searched on the points in spatial order
+    for k, res in results.items():
+        _same(res, estimate(pts, k=k))  # bit-identical to a fresh estimate at that k
+    assert results[15].neighbours is results[9].neighbours and results[15].neighbours.k_max == 32
+    assert results[15].neighbours.matches(pts)  # the graph handed back is in the caller's order
+    estimate(pts, k=40, cache=cache)  # beyond the head room: searched again, and kept instead
+    assert cache.computed["neighbours"] == 2 and cache._graph[1][0].k_max == 40
+
+
+def test_auto_k_beyond_the_head_room_and_keep_two_methods(torus):
+    cache = StageCache(k_max=32, keep=2)
+    auto = estimate(torus, k="auto", passes=2, cache=cache)
+    fixed = estimate(torus, k=15, method="ct", cache=cache)  # within the auto search: not searched again
+    assert cache.computed["neighbours"] == 1 and cache.reused["neighbours"] == 1
+    again = estimate(torus, k="auto", passes=2, cache=cache)  # the first method's stages were kept
+    assert cache.reused["scale"] == 1 and cache.reused["orientation"] >= 1
+    _same(again, auto)
+    _same(auto, estimate(torus, k="auto", passes=2))
+    _same(fixed, estimate(torus, k=15, method="ct"))
+    one = StageCache(k_max=32)  # keep=1: the compared method evicts the first one's stages
+    for kw in (dict(k="auto", passes=2), dict(k=15, method="ct"), dict(k="auto", passes=2)):
+        estimate(torus, cache=one, **kw)
+    assert one.reused["scale"] == 0
