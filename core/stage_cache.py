@@ -37,7 +37,7 @@ _BASE = ("k_initial", "k_search", "initial", "auto", "noise", "robust")
 #: stages it takes its inputs from. The fit/refine and flags stages are not cached: they
 #: are what a change of passes, tol or method re-runs.
 STAGE_FIELDS = {
-    "neighbours": ("k_search",),
+    "neighbours": ("k_search",),  # served by any kept search of at least k_search (StageCache._search)
     "scores": ("k_initial",),
     "initial": _BASE,
     "orientation": _BASE + ("orientation",),
