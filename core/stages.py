@@ -188,7 +188,8 @@ def choose_scale(pts, nrm, nb, inliers, plan, report, *, scores=None, k_initial=
     the points whose outlier ``scores`` exceed :data:`core.tuning.JET_SCORE`), else ``plan.k``.
     NR's own fits are at least ``plan.candidates[0]`` wide, and with noise at least the
     candidate >= ``k_initial``: a jet stopped early by a noise tail or an outlier is no
-    reason to fit fewer points."""
+    reason to fit fewer points; a fold is (:func:`core.scale.fold_capped`: the far side
+    of a thin part)."""
     n = len(pts)
     if not plan.auto:
         kc, none = np.full(n, plan.k, dtype=np.int64), np.zeros(n, dtype=bool)
@@ -196,9 +197,12 @@ def choose_scale(pts, nrm, nb, inliers, plan, report, *, scores=None, k_initial=
     ks = plan.candidates
     suspect = scores > JET_SCORE if plan.robust and scores is not None else np.zeros(n, dtype=bool)
     steady = inliers & ~suspect  # the jets are least squares: suspects sit out the choice of k
-    kc, on_jet, quiet, jets, degree = scale.choose_model(pts, np.where(steady[:, None], nrm, np.nan), nb, steady, ks,
-                                                         report)
-    floor = ks[min(int(np.searchsorted(ks, k_initial or 0)), len(ks) - 1)]  # a candidate >= k_initial
+    masked = np.where(steady[:, None], nrm, np.nan)
+    kc, on_jet, quiet, jets, degree = scale.choose_model(pts, masked, nb, steady, ks, report)
+    floor = np.full(n, ks[min(int(np.searchsorted(ks, k_initial or 0)), len(ks) - 1)])  # a candidate >= k_initial
+    lifted = np.flatnonzero(steady & ~quiet & (kc < floor))
+    if len(lifted):  # but not across a fold (the far side of a thin part)
+        floor[lifted] = scale.fold_capped(pts, masked, nb, lifted, ks, floor[0])
     fit_k = np.maximum(kc, np.where(quiet, ks[0], floor))
     return Scale(fit_k, np.where(on_jet, kc, fit_k), on_jet, quiet, jets, np.where(on_jet, degree, -1))
 

@@ -126,6 +126,18 @@ def _fold_limit(points, normals, idx, r, ks, rule, ref):
 
 
 @njit(**OPTS, parallel=True)
+def fold_limits(f, ks, rule, out):
+    """``out[r]``: how many of the sizes ``ks`` stay on the graph at centre r of ``f``
+    (:func:`_fold_limit`), for a size chosen by another rule (the noise floor of NR's fits)."""
+    m = len(f.centres)
+    for blk in prange((m + BLOCK - 1) // BLOCK):
+        ref = np.empty(8)
+        for r in range(blk * BLOCK, min(m, (blk + 1) * BLOCK)):
+            _local_reference(f.points, f.normals, f.idx, r, ks[0], f.z, rule.fold_cos, ref)
+            out[r] = _fold_limit(f.points, f.normals, f.idx, r, ks, rule, ref)
+
+
+@njit(**OPTS, parallel=True)
 def choose_scales(f, ks, rule, chosen):
     """Intersection of confidence intervals over nested neighbourhoods (see core.scale).
 
