@@ -116,40 +116,6 @@ def _find(parent, parity, x):
 
 
 @njit(**_OPTS)
-def kruskal_signs(order, idx, evidence, flip):
-    """Maximum spanning forest (Kruskal) of the evidence graph with a parity union-find.
-
-    Edges (the flat indices e of ``idx`` (N, k) and ``evidence`` (N, k), edge e joins
-    row e // k and ``idx.flat[e]``) are taken in ``order`` (decreasing |evidence|); an
-    edge joining two trees fixes their relative sign (flip when its evidence is
-    negative). Writes ``flip`` (1: flip the normal) and returns the component root of
-    every node.
-    """
-    n, k = idx.shape
-    parent = np.arange(n)
-    parity = np.zeros(n, dtype=np.int8)
-    size = np.ones(n, dtype=np.int64)
-    for e in order:
-        i, m = e // k, e % k
-        ri, pi = _find(parent, parity, i)
-        rj, pj = _find(parent, parity, idx[i, m])
-        if ri == rj:
-            continue
-        s = 1 if evidence[i, m] < 0.0 else 0
-        if size[ri] < size[rj]:
-            ri, rj = rj, ri
-        parent[rj] = ri
-        parity[rj] = pi ^ pj ^ s
-        size[ri] += size[rj]
-    roots = np.empty(n, dtype=np.int64)
-    for x in range(n):
-        r, p = _find(parent, parity, x)
-        roots[x] = r
-        flip[x] = p
-    return roots
-
-
-@njit(**_OPTS)
 def strongest_first(evidence, use, levels, rows):
     """Indices of the non-zero entries of ``evidence`` (N, k) where ``use``, flattened, by
     decreasing |evidence| to within 1 / ``levels`` (a counting sort: linear time, where a
@@ -205,7 +171,7 @@ def knn_components(idx, source, ok, width):
     lowest index of its part (-1 where not ``ok``)."""
     n = idx.shape[0]
     parent = np.arange(n)
-    parity = np.zeros(n, dtype=np.int8)  # unused here: _find keeps signs for kruskal_signs
+    parity = np.zeros(n, dtype=np.int8)  # unused here: _find keeps signs for voted_signs
     for i in range(n):
         if not source[i]:
             continue
@@ -238,8 +204,16 @@ def _join(parent, parity, size, a, b, s):
 
 @njit(**_OPTS)
 def voted_signs(order, idx, evidence, flip, rank, min_size, growth):
-    """:func:`kruskal_signs` where two parts both of at least ``min_size`` points are not
-    joined by their strongest edge alone: such edges are set aside, and once the pass is
+    """Maximum spanning forest (Kruskal) of the evidence graph with a parity union-find,
+    where two parts both of at least ``min_size`` points are not joined by their strongest
+    edge alone.
+
+    Edges (the flat indices e of ``idx`` (N, k) and ``evidence`` (N, k), edge e joins
+    row e // k and ``idx.flat[e]``) are taken in ``order`` (decreasing |evidence|); an
+    edge joining two parts fixes their relative sign (flip when its evidence is
+    negative). Writes ``flip`` (1: flip the normal) and returns the component root of
+    every node. Edges between two parts of ``min_size`` points or more (``min_size`` > N:
+    none, the plain forest) are set aside, and once the pass is
     over, the evidence of all set-aside edges between the same two parts is summed (signed
     by the parts' current parities) and the parts are joined strongest sum first, parts of
     ``min_size x growth`` points again by a sum, and so on. Kruskal's one strongest edge
