@@ -109,19 +109,32 @@ def candidates(n_points: int) -> tuple[int, ...]:
 def choose_k(points, normals, nb, has_normal, ks, degree, report):
     """Per-point k by ICI over ``ks`` (ascending); returns (N,) int (ks[0] where no normal)."""
     n = len(points)
-    idx_all, dist_all = nb.take(ks[-1])
     chosen = np.full(n, ks[0], dtype=np.int64)
-    usable = np.flatnonzero(has_normal & (dist_all[:, -1] > 0))
-    ks_arr = np.asarray(ks, dtype=np.int64)
-    rule = kernels.ScaleRule(degree, GAMMA, RCOND, FOLD_FRACTION, FOLD_COS, FOLD_NOISE, FOLD_MIN_BAD)
-    for start in range(0, len(usable), _CHUNK):
-        centres = usable[start:start + _CHUNK]
-        chunk = Chunk.build(points, normals, idx_all[centres], dist_all[centres, -1], centres)
-        out = np.empty(len(centres), dtype=np.int64)
-        kernels.choose_scales(chunk.frames(), ks_arr, rule, out)
-        chosen[centres] = out
-        report(min(len(usable), start + _CHUNK) / max(len(usable), 1), "choosing k")
+    dist_far = nb.take(ks[-1])[1][:, -1]
+    usable = np.flatnonzero(has_normal & (dist_far > 0))
+    chosen[usable] = _per_centre(kernels.choose_scales, points, normals, nb, usable, ks, _nf_rule(degree), report)
     return chosen
+
+
+def _nf_rule(degree):
+    """The NF rule's :class:`core.kernels.ScaleRule` (ICI width, fold test) for ``degree``."""
+    return kernels.ScaleRule(degree, GAMMA, RCOND, FOLD_FRACTION, FOLD_COS, FOLD_NOISE, FOLD_MIN_BAD)
+
+
+def _per_centre(kernel, points, normals, nb, centres, ks, rule, report=None):
+    """``kernel(frames, ks, rule, out)`` over ``centres`` in chunks of :data:`_CHUNK`, each
+    with its ``ks[-1]`` neighbours; returns ``out`` (len(centres),) int."""
+    idx_all, dist_all = nb.take(ks[-1])
+    ks_arr = np.asarray(ks, dtype=np.int64)
+    result = np.empty(len(centres), dtype=np.int64)
+    for start in range(0, len(centres), _CHUNK):
+        c = centres[start:start + _CHUNK]
+        out = np.empty(len(c), dtype=np.int64)
+        kernel(Chunk.build(points, normals, idx_all[c], dist_all[c, -1], c).frames(), ks_arr, rule, out)
+        result[start:start + _CHUNK] = out
+        if report is not None:
+            report(min(len(centres), start + _CHUNK) / max(len(centres), 1), "choosing k")
+    return result
 
 
 def fold_capped(points, normals, nb, centres, ks, k_floor):
@@ -133,18 +146,9 @@ def fold_capped(points, normals, nb, centres, ks, k_floor):
     at 0.2 spacing of noise the floor (80 neighbours, a third of them on the other face)
     turned 5.6 % of the normals more than 60 degrees.
     """
-    idx_all, dist_all = nb.take(ks[-1])
-    ks_arr = np.asarray(ks, dtype=np.int64)
-    rule = kernels.ScaleRule(AUTO_DEGREE, GAMMA, RCOND, FOLD_FRACTION, FOLD_COS, FOLD_NOISE, FOLD_MIN_BAD)
-    top = int(np.searchsorted(ks_arr, k_floor, side="right"))  # sizes <= k_floor
-    capped = np.empty(len(centres), dtype=np.int64)
-    for start in range(0, len(centres), _CHUNK):
-        c = centres[start:start + _CHUNK]
-        chunk = Chunk.build(points, normals, idx_all[c], dist_all[c, -1], c)
-        out = np.empty(len(c), dtype=np.int64)
-        kernels.fold_limits(chunk.frames(), ks_arr, rule, out)
-        capped[start:start + _CHUNK] = ks_arr[np.clip(np.minimum(out, top), 1, None) - 1]
-    return capped
+    limits = _per_centre(kernels.fold_limits, points, normals, nb, centres, ks, _nf_rule(AUTO_DEGREE))
+    top = int(np.searchsorted(ks, k_floor, side="right"))  # sizes <= k_floor
+    return np.asarray(ks, dtype=np.int64)[np.clip(np.minimum(limits, top), 1, None) - 1]
 
 
 def noise_ratio(height, h) -> float:
