@@ -1,0 +1,49 @@
+"""``python -m core warmup`` compiles what the viewer and a re-estimate run next.
+
+numba compiles a kernel once per type signature, and a read-only array is a type of its
+own: the stages a StageCache keeps are read-only, and so are the points of a
+``build_neighbours`` graph. Judged by the dispatchers' in-memory signatures (not by
+compile events, which a warm disk cache would hide): after ``warm_up()`` these calls
+must add none."""
+
+import numpy as np
+from numba.core.registry import CPUDispatcher
+
+import core.kernels
+from core import build_neighbours, estimate, plan, shapes
+from core.noise import add_noise
+from core.stage_cache import StageCache
+from core.warmup import warm_up
+
+
+def _kernels():
+    """Every numba dispatcher of the kernel modules."""
+    found = []
+    for mod in list(vars(core.kernels).values()) + [core.kernels]:
+        for obj in vars(mod).values() if hasattr(mod, "__dict__") else ():
+            if isinstance(obj, CPUDispatcher) and obj not in found:
+                found.append(obj)
+    return found
+
+
+def _signatures():
+    return {f: set(map(str, f.signatures)) for f in _kernels()}
+
+
+def test_warm_up_covers_cached_stages_and_given_neighbours():
+    warm_up()
+    before = _signatures()
+    assert len(before) > 20  # the kernels were found
+    cloud = shapes.sphere(700, seed=3)
+    noisy = add_noise(cloud.points, 0.3, seed=4)
+    for points, normals in ((cloud.points, None), (cloud.points, cloud.normals), (noisy, None)):
+        cache = StageCache(k_max=40)
+        for k, passes in (("auto", None), ("auto", 3), (15, None), (20, 2)):
+            estimate(points, normals, k=k, passes=passes, cache=cache)
+    for k in (15, "auto"):
+        pts = np.array(cloud.points)
+        estimate(pts, k=k, neighbours=build_neighbours(pts, plan(len(pts), k=k).k_search))
+    after = _signatures()
+    added = {f.py_func.__qualname__: sorted(after[f] - before.get(f, set()))
+             for f in after if after[f] - before.get(f, set())}
+    assert not added, f"compiled after warm_up (first use would compile on the viewer's job thread): {added}"
