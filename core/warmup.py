@@ -35,7 +35,8 @@ def warm_up(n_points: int = 400) -> int:
             _lazy_flags(estimate(cloud.points, method=name))
             estimate(cloud.points, cloud.normals, method=name)
             estimate(noisy, method=name)
-            runs += 3 + _read_only_inputs(cloud, noisy, name)
+            runs += 3
+        runs += _read_only_inputs(cloud, noisy, name)
     return runs
 
 
@@ -45,13 +46,14 @@ def _read_only_inputs(cloud, noisy, method) -> int:
     and the points of a :func:`core.build_neighbours` graph passed as ``neighbours=``.
     Without these the viewer's first result, or a user's first re-estimate on a kept
     graph, compiled for ~10 s. Returns the count of runs."""
-    runs = 0
+    runs, auto = 0, method in ("nf", "nr")
+    calls = (("auto", None), ("auto", 2), (15, None)) if auto else ((15, None), (15, None))
     for points, normals in ((cloud.points, None), (cloud.points, cloud.normals), (noisy, None)):
         cache = StageCache()
-        for k, passes in (("auto", None), ("auto", 2), (15, None)):  # computed, then re-used (read-only)
+        for k, passes in calls:  # computed, then re-used (read-only)
             estimate(points, normals, k=k, method=method, passes=passes, cache=cache)
             runs += 1
-    for k in (15, "auto"):
+    for k in (15, "auto") if auto else (15,):
         pts = cloud.points.copy()
         estimate(pts, k=k, method=method, neighbours=build_neighbours(pts, plan(len(pts), k=k).k_search))
         runs += 1

@@ -10,7 +10,7 @@ import numpy as np
 from numba.core.registry import CPUDispatcher
 
 import core.kernels
-from core import build_neighbours, estimate, plan, shapes
+from core import METHODS, build_neighbours, estimate, plan, shapes
 from core.noise import add_noise
 from core.stage_cache import StageCache
 from core.warmup import warm_up
@@ -36,13 +36,16 @@ def test_warm_up_covers_cached_stages_and_given_neighbours():
     assert len(before) > 20  # the kernels were found
     cloud = shapes.sphere(700, seed=3)
     noisy = add_noise(cloud.points, 0.3, seed=4)
-    for points, normals in ((cloud.points, None), (cloud.points, cloud.normals), (noisy, None)):
-        cache = StageCache(k_max=40)
-        for k, passes in (("auto", None), ("auto", 3), (15, None), (20, 2)):
-            estimate(points, normals, k=k, passes=passes, cache=cache)
-    for k in (15, "auto"):
-        pts = np.array(cloud.points)
-        estimate(pts, k=k, neighbours=build_neighbours(pts, plan(len(pts), k=k).k_search))
+    for method in METHODS:
+        auto = method in ("nf", "nr")
+        calls = (("auto", None), ("auto", 3), (15, None), (20, 2)) if auto else ((15, None), (20, None))
+        for points, normals in ((cloud.points, None), (cloud.points, cloud.normals), (noisy, None)):
+            cache = StageCache(k_max=40)
+            for k, passes in calls:
+                estimate(points, normals, k=k, method=method, passes=passes if auto else None, cache=cache)
+        for k in (15, "auto") if auto else (15,):
+            pts = np.array(cloud.points)
+            estimate(pts, k=k, method=method, neighbours=build_neighbours(pts, plan(len(pts), k=k).k_search))
     after = _signatures()
     added = {f.py_func.__qualname__: sorted(after[f] - before.get(f, set()))
              for f in after if after[f] - before.get(f, set())}
