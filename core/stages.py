@@ -16,7 +16,7 @@ from .border import border_of_valid, served_by
 from .neighbours import Neighbours, search_in_spatial_order, search_neighbours
 from .normal_repair import repair_normals
 from .normals import jet_normals, pca_normals
-from .orientation import orient
+from .orientation import orient, resettle
 from .patch import Chunk
 from .spatial_order import SpatialOrder
 from .tuning import CREASE_NOISE, CREASE_RATIO, CREASE_SPREAD, JET_SCORE, OUTLIER_FLOOR
@@ -61,7 +61,8 @@ class Flags(NamedTuple):
     """Per-point flags of the result (another flag is one more field here and one more
     line in :func:`flags`): ``outlier_score`` (N,), ``crease`` (N,) bool, the typical
     residual the creases were judged against, ``border`` (N,) bool (see
-    :mod:`core.border`) and the ``orientation_confidence`` (N,) of :func:`core.orientation.orient`."""
+    :mod:`core.border`) and the ``orientation_confidence`` (N,) of :func:`core.orientation.orient`
+    (re-judged on the refined normals by :func:`settle_signs` where it re-decided the signs)."""
 
     outlier_score: np.ndarray
     crease: np.ndarray
@@ -356,6 +357,28 @@ class _Rest:
         if self.args is not None:
             args, self.args = self.args, None
             self.fitter.into(*args)
+
+
+def settle_signs(pts, best: Refined, nb, plan, confidence):
+    """The kept fit's signs re-decided on its own (refined) normals
+    (:func:`core.orientation.resettle`) where the plan decides signs ("outward",
+    "propagate"): the fits do not depend on the signs (each centre's neighbours are turned
+    to its side), so a flip here is a flip of the result: normal, k1, k2 -> -k2, -k1 and
+    e1 <-> e2 (e1 x e2 stays the normal). Returns ``(best, confidence)``, both new where
+    anything changed."""
+    if not isinstance(plan.orientation, str) or plan.orientation == "keep":
+        return best, confidence
+    fit = best.fit
+    final = np.where(fit.valid[:, None], fit.normals, best.input_normals)
+    sign, confidence = resettle(pts, final, nb.take(plan.k_initial)[0], plan.orientation)
+    flip = sign < 0
+    if not flip.any():
+        return best, confidence
+    col = flip[:, None]
+    fit = fit._replace(normals=np.where(col, -fit.normals, fit.normals), k1=np.where(flip, -fit.k2, fit.k1),
+                       k2=np.where(flip, -fit.k1, fit.k2), e1=np.where(col, fit.e2, fit.e1),
+                       e2=np.where(col, fit.e1, fit.e2))
+    return best._replace(fit=fit, input_normals=np.where(col, -best.input_normals, best.input_normals)), confidence
 
 
 def flags(fit: Fit, scores, plan, reference: Fit | None, *, nb=None, confidence=None) -> Flags:
