@@ -17,7 +17,7 @@ from .planning import EstimatePlan
 from .result import CurvatureResult
 from .spatial_order import SpatialOrder
 from .stages import (choose_scale, crease_reference, flags, given_normals, initial_normals, orient_signs,
-                     outlier_scores, refine, spatial_neighbours)
+                     outlier_scores, refine, settle_signs, spatial_neighbours)
 from .tuning import AUTO_PASSES, JET_DEGREE, MAX_PASSES, OUTLIER_SCORE, PASS_DECAY, PCA_K
 
 __all__ = ["estimate", "AUTO_PASSES", "MAX_PASSES", "OUTLIER_SCORE", "PASS_DECAY", "PCA_K"]
@@ -126,7 +126,8 @@ def estimate(
     front = prepare(pts, normals, plan, neighbours, report, cache=cache)
     best = refine(front.pts, front.init, front.outlier, front.nb, front.scale, plan,
                   report.sub(0.7 if plan.auto else 0.45, 1.0))
-    marks = flags(best.fit, front.scores, plan, front.reference, nb=front.nb, confidence=front.confidence)
+    best, confidence = settle_signs(front.pts, best, front.nb, plan, front.confidence)
+    marks = flags(best.fit, front.scores, plan, front.reference, nb=front.nb, confidence=confidence)
     stages = front.order.to_caller((front.init, best, front.scale, marks))
     nb = stage_cache.caller_neighbours(cache, front.order, front.nb, pts)  # a cache keeps the sorted graph
     report(1.0, "done")

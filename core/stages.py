@@ -16,10 +16,10 @@ from .border import border_of_valid, served_by
 from .neighbours import Neighbours, search_in_spatial_order, search_neighbours
 from .normal_repair import repair_normals
 from .normals import jet_normals, pca_normals
-from .orientation import orient
+from .orientation import orient, resettle
 from .patch import Chunk
 from .spatial_order import SpatialOrder
-from .tuning import CREASE_NOISE, CREASE_RATIO, CREASE_SPREAD, JET_SCORE, OUTLIER_FLOOR
+from .tuning import CREASE_NOISE, CREASE_RATIO, CREASE_SPREAD, HOLD_TURN, JET_SCORE, OUTLIER_FLOOR, PASS_DECAY
 
 _CHUNK = 32_768
 
@@ -61,7 +61,8 @@ class Flags(NamedTuple):
     """Per-point flags of the result (another flag is one more field here and one more
     line in :func:`flags`): ``outlier_score`` (N,), ``crease`` (N,) bool, the typical
     residual the creases were judged against, ``border`` (N,) bool (see
-    :mod:`core.border`) and the ``orientation_confidence`` (N,) of :func:`core.orientation.orient`."""
+    :mod:`core.border`) and the ``orientation_confidence`` (N,) of :func:`core.orientation.orient`
+    (re-judged on the refined normals by :func:`settle_signs` where it re-decided the signs)."""
 
     outlier_score: np.ndarray
     crease: np.ndarray
@@ -282,8 +283,7 @@ def refine(pts, initial: Initial, outlier, nb, sc: Scale, plan, report) -> Refin
         change = passes.mean_turn_deg(fit.normals, nrm, seen) if rule.measures else None
         keep, more = rule.step(p, change)
         if keep:
-            complete()
-            best = Refined(fit, nrm, p)
+            best = Refined(complete(), nrm, p)
         if not more:
             break
     return finish(best, sc, outlier, plan)
@@ -292,7 +292,9 @@ def refine(pts, initial: Initial, outlier, nb, sc: Scale, plan, report) -> Refin
 def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n_fits, fitted=None, first=None):
     """Yield ``(p, fit, input normals, complete)`` for the first fit and each refinement
     pass, up to ``n_fits`` (the caller stops when it has enough); fits are never changed
-    afterwards. ``fitted[p]`` (N,) bool, optional: fit only those points in fit p (a tile
+    afterwards. ``complete()`` returns the fit to report for pass p: ``fit`` itself, or
+    with k="auto" a copy where :class:`_Held` keeps earlier passes' fits (the next pass
+    and the pass rule see ``fit``). ``fitted[p]`` (N,) bool, optional: fit only those points in fit p (a tile
     fits each pass only as far out as later passes use it; the others keep their input
     normals). With a mask ``first`` a pass is fitted there only, and ``complete()`` fits
     its other points (done before the next pass if the caller did not)."""
@@ -304,12 +306,13 @@ def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n
         nrm = np.where(sc.on_jet[:, None], sc.jets[0], nrm)
     fitter = _Fitter(pts, idx, kc, h, plan.method, dict(plan.options))
     share = 1.0 if first is None else float(first.mean())
+    held = _Held(len(pts)) if plan.adaptive else None
     for p in range(n_fits):
         sub = report.sub(p / n_fits, (p + 1) / n_fits)
         fit = _empty_fit(len(pts))
         centres = has_normal & ~sc.on_jet if fitted is None else has_normal & ~sc.on_jet & fitted[p]
         fitter.into(fit, nrm, centres if first is None else centres & first, sub.sub(0.0, share))
-        complete = _Rest(fitter, fit, nrm, None if first is None else centres & ~first, sub.sub(share, 1.0))
+        complete = _Rest(fitter, fit, nrm, None if first is None else centres & ~first, sub.sub(share, 1.0), held)
         yield p, fit, nrm, complete
         complete()
         new = np.where(fit.valid[:, None], fit.normals, nrm)
@@ -346,16 +349,72 @@ def _drop_outliers(best: Refined, outlier) -> Refined:
     return best._replace(fit=fit._replace(**cleared, valid=fit.valid & ~outlier))
 
 
+class _Held:
+    """What k="auto" reports pass by pass, point by point: where a pass turns a point's
+    normal by more than HOLD_TURN degrees and by more than PASS_DECAY x the turn the pass
+    before gave it, the pass is not averaging noise there (its turns decay) but carrying
+    the normal across a sharp edge (on a 3-spacing plate at noise 0.2 spacing the side
+    strip's turns went 10, 7, 6 degrees pass after pass, the faces' 4, 1.5, 0.9, and 8 %
+    of the strip's normals ended more than 90 degrees off, from 5 % after the first fit):
+    that point reports the fit of the pass before, at this pass and the later ones.
+    :class:`core.passes.PassRule` undoes a pass that does so on the whole cloud; this is
+    the same rule where only some points drift. The passes themselves, and the rule's
+    mean turns, are left as they were (the next pass fits to the unheld normals), and the
+    rule is each point's own, so a tile holds the same points as the whole cloud."""
+
+    def __init__(self, n):
+        self.held, self.turn, self.last = np.zeros(n, dtype=bool), np.zeros(n), None
+
+    def report(self, fit: Fit, nrm) -> Fit:
+        """The fit to report for the pass that fitted ``fit`` to ``nrm`` (call once a pass, in order)."""
+        rows = np.flatnonzero(fit.valid)
+        turn = np.zeros(len(nrm))
+        turn[rows] = passes.turn_angles(fit.normals[rows], nrm[rows], slice(None))
+        if self.last is not None:
+            self.held = self.last.valid & (self.held | ((turn > HOLD_TURN) & (turn > PASS_DECAY * self.turn)))
+            if self.held.any():
+                fit = Fit(*(np.where(self.held.reshape((-1,) + (1,) * (a.ndim - 1)), b, a) for a, b in zip(fit, self.last)))
+        self.turn, self.last = turn, fit
+        return fit
+
+
 class _Rest:
-    """A pass's fit at the points outside the rule's sample, run once (:func:`fit_passes`)."""
+    """A pass's fit at the points outside the rule's sample, run once (:func:`fit_passes`);
+    returns the fit to report (:class:`_Held`)."""
 
-    def __init__(self, fitter, fit, nrm, mask, report):
+    def __init__(self, fitter, fit, nrm, mask, report, held=None):
         self.fitter, self.args = fitter, None if mask is None or not mask.any() else (fit, nrm, mask, report)
+        self.fit, self.nrm, self.held, self.reported = fit, nrm, held, None
 
-    def __call__(self) -> None:
+    def __call__(self) -> Fit:
         if self.args is not None:
             args, self.args = self.args, None
             self.fitter.into(*args)
+        if self.reported is None:
+            self.reported = self.fit if self.held is None else self.held.report(self.fit, self.nrm)
+        return self.reported
+
+
+def settle_signs(pts, best: Refined, nb, plan, confidence):
+    """The kept fit's signs re-decided on its own (refined) normals
+    (:func:`core.orientation.resettle`) where the plan decides signs ("outward",
+    "propagate"): the fits do not depend on the signs (each centre's neighbours are turned
+    to its side), so a flip here is a flip of the result: normal, k1, k2 -> -k2, -k1 and
+    e1 <-> e2 (e1 x e2 stays the normal). Returns ``(best, confidence)``, both new where
+    anything changed."""
+    if not isinstance(plan.orientation, str) or plan.orientation == "keep":
+        return best, confidence
+    fit = best.fit
+    final = np.where(fit.valid[:, None], fit.normals, best.input_normals)
+    sign, confidence = resettle(pts, final, nb.take(plan.k_initial)[0], plan.orientation)
+    flip = sign < 0
+    if not flip.any():
+        return best, confidence
+    col = flip[:, None]
+    fit = fit._replace(normals=np.where(col, -fit.normals, fit.normals), k1=np.where(flip, -fit.k2, fit.k1),
+                       k2=np.where(flip, -fit.k1, fit.k2), e1=np.where(col, fit.e2, fit.e1),
+                       e2=np.where(col, fit.e1, fit.e2))
+    return best._replace(fit=fit, input_normals=np.where(col, -best.input_normals, best.input_normals)), confidence
 
 
 def flags(fit: Fit, scores, plan, reference: Fit | None, *, nb=None, confidence=None) -> Flags:

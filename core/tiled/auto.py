@@ -20,7 +20,7 @@ import numpy as np
 from ..estimate import _result as result_of, prepare  # the in-memory result's fields and flags
 from ..planning import EstimatePlan
 from ..passes import rule_sample, turn_angles
-from ..stages import PassRule, Refined, few_fits, finish, fit_passes, flags
+from ..stages import PassRule, Refined, few_fits, finish, fit_passes, flags, settle_signs
 from .._progress import Progress
 from .halo import auto_chain, rings_from
 from .plan import TilePlan
@@ -50,12 +50,13 @@ def run_auto_tile(root, tile: int, spec) -> dict:
     outputs, stats = [], np.zeros((tplan.passes + 2, 2))  # per pass: sum of turns, count; then the noisy points
     # fit p where later fits use it, and one ring more: an own point's border flag counts its valid neighbours
     reach = [rings_from(own, nb.indices, tplan.passes - p + 1) for p in range(tplan.passes + 1)]
-    for p, fit, nrm, _ in fit_passes(pts, front.init, front.outlier, nb, front.scale, tplan, Progress(None),
-                                  n_fits=tplan.passes + 1, fitted=reach):
+    for p, fit, nrm, complete in fit_passes(pts, front.init, front.outlier, nb, front.scale, tplan, Progress(None),
+                                         n_fits=tplan.passes + 1, fitted=reach):
         seen = fit.valid & judged
         stats[p] = math.fsum(turn_angles(fit.normals, nrm, seen)), int(seen.sum())
-        best = finish(Refined(fit, nrm, p), front.scale, front.outlier, tplan)
-        marks = flags(best.fit, front.scores, tplan, front.reference, nb=nb, confidence=front.confidence)
+        best = finish(Refined(complete(), nrm, p), front.scale, front.outlier, tplan)
+        best, confidence = settle_signs(pts, best, nb, tplan, front.confidence)
+        marks = flags(best.fit, front.scores, tplan, front.reference, nb=nb, confidence=confidence)
         res = result_of(pts, np.ones(len(pts), dtype=bool), tplan, stages=(front.init, best, front.scale, marks),
                         neighbours=nb, repaired=front.repaired)
         outputs.append(_outputs(rec, res, nb, own, owner, exact, spec, front.init.normals))

@@ -157,10 +157,18 @@ def test_thin_parts_meet_the_orientation_target(name, sigma, k):
     and a bowl 3 thick (20k points, the default method): >= 99.5 % of the final normals on
     the outward side of the truth, judged where a sign means something (normal within 60
     degrees of the truth's line, shapes_thin.sign_agreement; README "Real scans").
-    Measured, seeds 0-4: >= 99.68 %. Before the seam vote k="auto" gave 50 % on the noisy
-    plate (seed 2: its whole bottom flipped by one rim edge) and 80 % on the tube (seed 1)."""
+    Measured, seeds 0-4: >= 99.76 %. Before the seam vote k="auto" gave 50 % on the noisy
+    plate (seed 2: its whole bottom flipped by one rim edge) and 80 % on the tube (seed 1).
+
+    Over ALL points (``face``, the blends at a rim included) the noisy plate is the hard
+    case: 99.495-99.62 % at k=15, 99.505-99.665 % at k="auto" (seeds 0-4; 99.39-99.52 and
+    99.41-99.53 before the signs were re-decided on the refined normals and k="auto"'s
+    drifting points held, core.orientation.resettle, core.stages._Held): the 99.5 % is
+    missed by one point in 20000 at k=15, seed 2. What is left is mostly the estimate, not
+    the sign: rim normals more than 90 degrees off whichever way they face."""
     for seed in THIN_SEEDS if (sigma or k == 15) else THIN_SEEDS[:1]:
         s = shapes_thin.THIN_SHAPES[name](20000, seed=seed)
         r = core.estimate(shapes_thin.noisy(s, sigma, seed + 1), k=k)
         clear, face, off = shapes_thin.sign_agreement(r.normals, s)
         assert clear >= 0.995, (name, seed, clear, face, off)
+        assert face >= 0.9945, (name, seed, clear, face, off)
