@@ -3,6 +3,7 @@ is kept apart from *which estimator*)."""
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass
 from typing import Callable, Union
 
@@ -12,7 +13,7 @@ from scipy.spatial import cKDTree
 
 from ._progress import Progress
 from ._validate import as_points, check_int
-from .kernels.kdtree import build_tree, query_sorted
+from .kernels.kdtree import build_tree, query_rows, query_sorted
 from .kernels.knn import keep_nearest
 from .spacing import mean_spacing
 from .tuning import SEARCH_LEAF, SEARCH_RADIUS_NODE
@@ -51,21 +52,51 @@ class Neighbours:
         self._check_k(k)
         return self.indices[:, :k], self.distances[:, :k]
 
+    @property
+    def width(self) -> int:
+        """Columns held in memory: every row's first ``width`` neighbours are at hand
+        (``k_max`` here; fewer for a :class:`WidenableNeighbours`, which searches the rest)."""
+        return self.k_max
+
+    def rows(self, centres: np.ndarray, k: int):
+        """The ``k`` nearest of the points ``centres`` (M,) int: (M, k) indices and distances."""
+        self._check_k(k)
+        return self.indices[centres, :k], self.distances[centres, :k]
+
     def take_without(self, k: int, drop: np.ndarray):
         """The ``k`` nearest not flagged in ``drop`` (N,) bool, each point itself first;
         a row short of unflagged neighbours ends with its nearest flagged ones (copies)."""
         self._check_k(k)
-        n = len(self.indices)
-        idx = np.empty((n, k), dtype=self.indices.dtype)
-        dist = np.empty((n, k), dtype=self.distances.dtype)
+        held_idx, held_dist = self._held()
+        n, width = held_idx.shape
+        idx = np.empty((n, k), dtype=held_idx.dtype)
+        dist = np.empty((n, k), dtype=held_dist.dtype)
         for start in range(0, n, _ROWS):
             rows = slice(start, min(n, start + _ROWS))
-            flagged = drop[self.indices[rows]]
+            flagged = drop[held_idx[rows]]
             flagged[:, 0] = False
             order = np.argsort(flagged, axis=1, kind="stable")[:, :k]
-            idx[rows] = np.take_along_axis(self.indices[rows], order, axis=1)
-            dist[rows] = np.take_along_axis(self.distances[rows], order, axis=1)
+            idx[rows] = np.take_along_axis(held_idx[rows], order, axis=1)
+            dist[rows] = np.take_along_axis(held_dist[rows], order, axis=1)
+            if width < self.k_max:  # rows with fewer than k unflagged among those held: their whole list
+                short = start + np.flatnonzero((~flagged).sum(axis=1) < k)
+                if len(short):
+                    w_idx, w_dist = self.rows(short, self.k_max)
+                    flagged = drop[w_idx]
+                    flagged[:, 0] = False
+                    order = np.argsort(flagged, axis=1, kind="stable")[:, :k]
+                    idx[short] = np.take_along_axis(w_idx, order, axis=1)
+                    dist[short] = np.take_along_axis(w_dist, order, axis=1)
         return idx, dist
+
+    def _held(self):
+        """The (N, width) indices and distances in memory."""
+        return self.indices, self.distances
+
+    def widen(self, k: int | None = None, *, progress=None):
+        """Hold at least ``k`` (default ``k_max``) neighbours of every row; returns the
+        (N, width) indices and distances held (here all ``k_max`` always are)."""
+        return self.indices, self.distances
 
     def _check_k(self, k: int) -> None:
         if k > self.k_max:
@@ -80,6 +111,137 @@ class Neighbours:
     def mean_spacing(self) -> float:
         """Mean distance to the nearest other point (the unit of relative noise)."""
         return mean_spacing(self.points, neighbours=self)
+
+
+class WidenableNeighbours(Neighbours):
+    """:class:`Neighbours` of points in spatial order (:func:`search_in_spatial_order`)
+    that holds only the first :attr:`width` of its ``k_max`` neighbours per point and
+    searches further rows on demand, with the tree and the ranks of the first search.
+
+    The search's answer is canonical (the k smallest by distance, then the caller's
+    index), so the first k of a wider query are a narrower query's: a row searched wider
+    extends the one held, bit for bit. :meth:`rows` serves some rows at any k up to
+    ``k_max``; :meth:`take` beyond the width, :attr:`indices` and :attr:`distances`
+    widen every row to ``k_max`` first (:meth:`widen`), once. With k="auto" most points
+    of a noise-free cloud use at most 40 neighbours of the 226 the plan allows.
+    """
+
+    def __init__(self, points, indices, distances, *, k_max, tree, rank):
+        object.__setattr__(self, "_points", points)
+        object.__setattr__(self, "_idx", indices)
+        object.__setattr__(self, "_dist", distances)
+        object.__setattr__(self, "_k_max", int(k_max))
+        object.__setattr__(self, "_tree", tree)
+        object.__setattr__(self, "_rank", rank)
+
+    def __repr__(self) -> str:
+        return f"WidenableNeighbours(n={len(self._points)}, k_max={self._k_max}, width={self.width})"
+
+    @property
+    def points(self) -> np.ndarray:
+        return self._points
+
+    @property
+    def indices(self) -> np.ndarray:
+        return self.widen()[0]
+
+    @property
+    def distances(self) -> np.ndarray:
+        return self.widen()[1]
+
+    @property
+    def complete(self) -> bool:
+        """Whether all ``k_max`` neighbours of every row are held."""
+        return self.width >= self._k_max
+
+    @property
+    def k_max(self) -> int:
+        return self._k_max
+
+    @property
+    def width(self) -> int:
+        return self._idx.shape[1]
+
+    def _held(self):
+        return self._idx, self._dist
+
+    def take(self, k: int):
+        self._check_k(k)
+        if k > self.width:
+            self.widen(k)
+        return self._idx[:, :k], self._dist[:, :k]
+
+    def rows(self, centres: np.ndarray, k: int):
+        self._check_k(k)
+        if k <= self.width:
+            return self._idx[centres, :k], self._dist[centres, :k]
+        centres = np.asarray(centres, dtype=np.int64)
+        idx = np.empty((len(centres), k), dtype=self._idx.dtype)
+        dist = np.empty((len(centres), k), dtype=np.float64)
+        for start in range(0, len(centres), _CHUNK):
+            stop = min(len(centres), start + _CHUNK)
+            query_rows(self._points, self._tree, self._rank, centres[start:stop], dist[start:stop],
+                       idx[start:stop], max(k, SEARCH_RADIUS_NODE))
+        _self_first(idx, dist, centres)
+        return idx, dist
+
+    def widen(self, k: int | None = None, *, progress=None):
+        """Every row searched to ``k`` (default ``k_max``) neighbours, if fewer are held."""
+        k = self._k_max if k is None else k
+        self._check_k(k)
+        if self.width < k:
+            n = len(self._points)
+            idx = np.empty((n, k), dtype=self._idx.dtype)
+            dist = np.empty((n, k), dtype=np.float64)
+            _query_tree(self._points, self._tree, self._rank, idx, dist, Progress(progress))
+            idx.setflags(write=False)
+            dist.setflags(write=False)
+            object.__setattr__(self, "_idx", idx)
+            object.__setattr__(self, "_dist", dist)
+        return self._idx, self._dist
+
+    def mean_spacing(self) -> float:
+        return float(np.mean(self._dist[:, 1]))
+
+
+class LazyNeighbours(Neighbours):
+    """:class:`Neighbours` of ``points`` made by ``make()`` (a :class:`Neighbours` of
+    ``k_max``) when first read: the graph of an estimate in the caller's order
+    (:attr:`core.CurvatureResult.neighbours`) when the estimate held only the first
+    columns of it (:class:`WidenableNeighbours`); reading it searches the rest."""
+
+    def __init__(self, points, k_max, make):
+        object.__setattr__(self, "_points", points)
+        object.__setattr__(self, "_k_max", int(k_max))
+        object.__setattr__(self, "_make", make)
+        object.__setattr__(self, "_made", None)
+        object.__setattr__(self, "_lock", threading.Lock())
+
+    def __repr__(self) -> str:
+        return f"LazyNeighbours(n={len(self._points)}, k_max={self._k_max}, made={self._made is not None})"
+
+    def _graph(self) -> Neighbours:
+        with self._lock:
+            if self._made is None:
+                object.__setattr__(self, "_made", self._make())
+                object.__setattr__(self, "_make", None)
+        return self._made
+
+    @property
+    def points(self) -> np.ndarray:
+        return self._points
+
+    @property
+    def indices(self) -> np.ndarray:
+        return self._graph().indices
+
+    @property
+    def distances(self) -> np.ndarray:
+        return self._graph().distances
+
+    @property
+    def k_max(self) -> int:
+        return self._k_max
 
 
 def build_neighbours(points: ArrayLike, k_max: int, *, progress: ProgressCallback | None = None) -> Neighbours:
@@ -110,7 +272,8 @@ def search_neighbours(pts: np.ndarray, k_max: int, *, progress=None) -> Neighbou
     return _search(pts, k_max, progress, spatial=False)[0]
 
 
-def search_in_spatial_order(pts: np.ndarray, k_max: int, *, progress=None) -> tuple[Neighbours, np.ndarray | None]:
+def search_in_spatial_order(pts: np.ndarray, k_max: int, *, progress=None,
+                            width: int | None = None) -> tuple[Neighbours, np.ndarray | None]:
     """:func:`search_neighbours` on the points put in the kd-tree's leaf order (neighbours
     in space are neighbours in memory: every later loop over the neighbours reads cache
     lines already loaded, 2-3x faster at 1M points, and the search itself too).
@@ -120,18 +283,25 @@ def search_in_spatial_order(pts: np.ndarray, k_max: int, *, progress=None) -> tu
     :func:`search_neighbours` gives (ties are broken by the caller's index, not by the
     sorted one). ``order`` is None, and ``nb`` in the caller's order, when large groups of
     identical points take the duplicate-aware search.
+
+    ``width`` < ``k_max``: search only that many per point and return a
+    :class:`WidenableNeighbours` that searches further rows when asked (not with the
+    duplicate-aware search, which searches ``k_max``).
     """
-    return _search(pts, k_max, progress, spatial=True)
+    return _search(pts, k_max, progress, spatial=True, width=width)
 
 
-def _search(pts, k_max, progress, *, spatial):
+def _search(pts, k_max, progress, *, spatial, width=None):
     k_max = check_int(k_max, name="k_max", low=1, high=len(pts))
     report = Progress(progress)
     report(0.0, "neighbours")
     n = len(pts)
-    idx = np.empty((n, k_max), dtype=np.int64 if n > 2**31 - 1 else np.int32)
-    dist = np.empty((n, k_max), dtype=np.float64)
+    dtype = np.int64 if n > 2**31 - 1 else np.int32
     groups = _duplicate_groups(pts) if _largest_group_bound(pts) > MAX_DUPLICATES else None
+    narrow = spatial and groups is None and width is not None and width < k_max
+    cols = width if narrow else k_max
+    idx = np.empty((n, cols), dtype=dtype)
+    dist = np.empty((n, cols), dtype=np.float64)
     if groups is not None:
         _query_with_duplicates(pts, groups, idx, dist, report)
         spatial = False
@@ -140,11 +310,14 @@ def _search(pts, k_max, progress, *, spatial):
         order = np.asarray(tree.indices, dtype=idx.dtype)  # the leaf order
         if spatial:
             pts = pts[order]
-            _query_in_order(pts, order, idx, dist, report)
+            sorted_tree = build_tree(pts, SEARCH_LEAF)
+            _query_tree(pts, sorted_tree, order, idx, dist, report)
         else:
             _query_distinct(tree, pts, None, idx, dist, report)
     idx.setflags(write=False)
     dist.setflags(write=False)
+    if narrow:
+        return WidenableNeighbours(pts, idx, dist, k_max=k_max, tree=sorted_tree, rank=order), order
     return Neighbours(points=pts, indices=idx, distances=dist), (order if spatial else None)
 
 
@@ -183,12 +356,12 @@ def _query_distinct(tree, pts, order, idx, dist, report) -> None:
     _self_first(idx, dist, np.arange(n) if order is None else order)
 
 
-def _query_in_order(pts, rank, idx, dist, report) -> None:
+def _query_tree(pts, tree, rank, idx, dist, report) -> None:
     """:func:`_query_distinct`'s answer for points in the kd-tree's leaf order, found by
-    :mod:`core.kernels.kdtree` (indices into ``pts``, ties by ``rank``, the caller's index):
-    the same rows, bit for bit, at a fraction of the cost for k in the hundreds."""
+    :mod:`core.kernels.kdtree` on its ``tree`` of them (indices into ``pts``, ties by
+    ``rank``, the caller's index): the same rows, bit for bit, at a fraction of the cost
+    for k in the hundreds."""
     n, k_max = idx.shape
-    tree = build_tree(pts, SEARCH_LEAF)
     want = max(k_max, SEARCH_RADIUS_NODE)
     for start in range(0, n, _CHUNK):
         stop = min(n, start + _CHUNK)

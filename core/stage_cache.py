@@ -29,6 +29,8 @@ from collections import Counter
 
 import numpy as np
 
+from .neighbours import LazyNeighbours, WidenableNeighbours
+
 __all__ = ["StageCache", "STAGE_FIELDS"]
 
 _BASE = ("k_initial", "k_search", "initial", "auto", "noise", "robust")
@@ -125,7 +127,7 @@ class StageCache:
         """``order.neighbours_to_caller(nb, points)`` kept with ``nb``: the results of one
         graph share one copy in the caller's order."""
         if self._caller is None or self._caller[0] is not nb:
-            self._caller = (nb, order.neighbours_to_caller(nb, points, in_place=False))
+            self._caller = (nb, _to_caller(order, nb, points, in_place=False))
         return self._caller[1]
 
 
@@ -169,8 +171,17 @@ def caller_neighbours(cache: StageCache | None, order, nb, points):
     caller's ``points``: reordered in place without a cache, kept with it
     (:meth:`StageCache.caller_neighbours`)."""
     if cache is None:
-        return order.neighbours_to_caller(nb, points)
+        return _to_caller(order, nb, points, in_place=True)
     return cache.caller_neighbours(order, nb, points)
+
+
+def _to_caller(order, nb, points, *, in_place):
+    """``order.neighbours_to_caller``, put off until read when ``nb`` holds only the
+    first columns of its graph (:class:`core.neighbours.WidenableNeighbours`: the rest
+    would be searched for a result nobody may read)."""
+    if isinstance(nb, WidenableNeighbours) and not nb.complete:
+        return LazyNeighbours(points, nb.k_max, lambda: order.neighbours_to_caller(nb, points, in_place=in_place))
+    return order.neighbours_to_caller(nb, points, in_place=in_place)
 
 
 def _field(plan, name: str):

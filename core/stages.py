@@ -12,14 +12,14 @@ import numpy as np
 from . import kernels, passes, scale
 from .passes import PassRule, few_fits
 from .frame import darboux_frame
-from .border import border_of_valid, served_by
+from .border import BORDER_K, border_of_valid, served_by
 from .neighbours import Neighbours, search_in_spatial_order, search_neighbours
 from .normal_repair import repair_normals
 from .normals import jet_normals, pca_normals
 from .orientation import orient
 from .patch import Chunk
 from .spatial_order import SpatialOrder
-from .tuning import CREASE_NOISE, CREASE_RATIO, CREASE_SPREAD, JET_SCORE, OUTLIER_FLOOR
+from .tuning import CREASE_NOISE, CREASE_RATIO, CREASE_SPREAD, JET_SCORE, OUTLIER_FLOOR, SEARCH_WIDTH
 
 _CHUNK = 32_768
 
@@ -89,8 +89,17 @@ def spatial_neighbours(pts, plan, neighbours, report, *, k=None) -> tuple[Neighb
     ``k``: search that many (>= ``plan.k_search``, a cache's head room) instead."""
     if neighbours is not None:
         return find_neighbours(pts, plan, neighbours, report), SpatialOrder(None)
-    nb, order = search_in_spatial_order(pts, plan.k_search if k is None else k, progress=report)
+    nb, order = search_in_spatial_order(pts, plan.k_search if k is None else k, progress=report,
+                                        width=search_width(plan))
     return nb, SpatialOrder(order)
+
+
+def search_width(plan) -> int:
+    """Neighbours searched per point at first (:class:`core.neighbours.WidenableNeighbours`
+    serves the rows that need more): with k="auto" :data:`core.tuning.SEARCH_WIDTH`, else
+    ``plan.k_search`` (and the border test's), the rest being a cache's head room."""
+    need = SEARCH_WIDTH if plan.auto else max(plan.k_search, BORDER_K)
+    return min(max(need, plan.k_search if not plan.auto else 0), plan.n_points)
 
 
 def outlier_scores(pts, idx) -> np.ndarray:
@@ -132,6 +141,8 @@ def initial_normals(pts, nb, plan, outlier, report) -> Initial:
         jet, ratio, clean = noise_samples(pts, nrm, ok, idx_p, dist_p, outlier)
         noise = scale.noise_ratio(np.where(clean, ratio, np.nan) if clean.any() else ratio, 1.0)
     k_init = scale.initial_k(noise, plan.k_initial, plan.k_search)
+    if k_init > nb.width:  # noise this large grows most jets to k_search too: search them all once
+        nb.widen(plan.k_search)
     shun = plan.robust and outlier.any()
     if k_init == plan.k_initial and not shun:
         if plan.initial == "jet":
@@ -297,8 +308,7 @@ def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n
     normals). With a mask ``first`` a pass is fitted there only, and ``complete()`` fits
     its other points (done before the next pass if the caller did not)."""
     kc = sc.k
-    idx, dist = nb.take(int(kc.max()))
-    h = dist[np.arange(len(pts)), kc - 1]
+    idx, h = _rows_of(nb, kc)
     nrm, has_normal = initial.normals, initial.has_normal
     if sc.on_jet.any():  # the jets' normals are the neighbours' input where the jet is kept
         nrm = np.where(sc.on_jet[:, None], sc.jets[0], nrm)
@@ -317,6 +327,53 @@ def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n
             has_normal = has_normal & ~outlier
             new[outlier] = np.nan
         nrm = new
+
+
+def _rows_of(nb, kc):
+    """``(rows, h)``: the neighbours of every point, at least ``kc[i]`` for point i, as an
+    (N, kc.max()) array or, when ``nb`` holds fewer columns and only a minority of the
+    points needs more, a :class:`_Rows` that adds them per chunk; ``h[i]`` the distance
+    to point i's ``kc[i]``-th neighbour."""
+    n, k = len(kc), int(kc.max())
+    wide = np.flatnonzero(kc > nb.width) if k > nb.width else np.empty(0, dtype=np.int64)
+    if 2 * len(wide) > n:
+        nb.widen(k)
+        wide = wide[:0]
+    if not len(wide):
+        idx, dist = nb.take(k)
+        return idx, dist[np.arange(n), kc - 1]
+    idx, dist = nb.take(nb.width)
+    h = np.empty(n)
+    narrow = np.flatnonzero(kc <= nb.width)
+    h[narrow] = dist[narrow, kc[narrow] - 1]
+    w_idx, w_dist = nb.rows(wide, k)
+    h[wide] = w_dist[np.arange(len(wide)), kc[wide] - 1]
+    return _Rows(idx, wide, w_idx, kc), h
+
+
+class _Rows(NamedTuple):
+    """The neighbours of a chunk of centres ``c`` (``self[c]``), as wide as the most any of
+    them uses (``kc``): the ``held`` columns, and for the centres in ``wide`` (sorted) their
+    rows ``w_idx`` searched wider. Columns a centre does not use hold the centre itself
+    (the fits read a centre's first kc only)."""
+
+    held: np.ndarray
+    wide: np.ndarray
+    w_idx: np.ndarray
+    kc: np.ndarray
+
+    def __getitem__(self, c):
+        k = int(self.kc[c].max()) if len(c) else 1
+        width = self.held.shape[1]
+        if k <= width:
+            return self.held[c, :k]
+        idx = np.empty((len(c), k), dtype=self.held.dtype)
+        idx[:, :width] = self.held[c]
+        idx[:, width:] = c[:, None]
+        pos = np.minimum(np.searchsorted(self.wide, c), len(self.wide) - 1)
+        mine = np.flatnonzero(self.wide[pos] == c)
+        idx[mine] = self.w_idx[pos[mine], :k]
+        return idx
 
 
 def finish(best: Refined, sc: Scale, outlier, plan) -> Refined:
