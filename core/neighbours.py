@@ -200,22 +200,22 @@ class WidenableNeighbours(Neighbours):
             object.__setattr__(self, "_dist", dist)
         return self._idx, self._dist
 
-    def mean_spacing(self) -> float:
-        return float(np.mean(self._dist[:, 1]))
-
 
 class LazyNeighbours(Neighbours):
-    """:class:`Neighbours` of ``points`` made by ``make()`` (a :class:`Neighbours` of
-    ``k_max``) when first read: the graph of an estimate in the caller's order
-    (:attr:`core.CurvatureResult.neighbours`) when the estimate held only the first
-    columns of it (:class:`WidenableNeighbours`); reading it searches the rest."""
+    """The graph ``source`` (a :class:`WidenableNeighbours` on the points in spatial
+    order, sorted point s being the caller's ``order[s]``) as neighbours of the caller's
+    ``points``, what :attr:`core.CurvatureResult.neighbours` holds when the estimate held
+    only the first columns of its graph. The columns held and the rows searched wider are
+    served from ``source`` in the caller's order (:meth:`take`, :meth:`rows`, so an
+    estimate it is passed back to searches no more than the first one did); reading
+    :attr:`indices` or :attr:`distances` makes the whole graph once, by ``make()``."""
 
-    def __init__(self, points, k_max, make):
-        object.__setattr__(self, "_points", points)
-        object.__setattr__(self, "_k_max", int(k_max))
-        object.__setattr__(self, "_make", make)
-        object.__setattr__(self, "_made", None)
-        object.__setattr__(self, "_lock", threading.Lock())
+    def __init__(self, points, source, order, make):
+        inverse = np.empty_like(order)
+        inverse[order] = np.arange(len(order), dtype=order.dtype)
+        for name, value in dict(_points=points, _source=source, _order=order, _inverse=inverse, _make=make,
+                                _made=None, _k_max=source.k_max, _lock=threading.Lock()).items():
+            object.__setattr__(self, name, value)
 
     def __repr__(self) -> str:
         return f"LazyNeighbours(n={len(self._points)}, k_max={self._k_max}, made={self._made is not None})"
@@ -223,8 +223,9 @@ class LazyNeighbours(Neighbours):
     def _graph(self) -> Neighbours:
         with self._lock:
             if self._made is None:
-                object.__setattr__(self, "_made", self._make())
-                object.__setattr__(self, "_make", None)
+                made = self._make()
+                for name, value in dict(_made=made, _make=None, _source=None, _order=None, _inverse=None).items():
+                    object.__setattr__(self, name, value)
         return self._made
 
     @property
@@ -242,6 +243,43 @@ class LazyNeighbours(Neighbours):
     @property
     def k_max(self) -> int:
         return self._k_max
+
+    @property
+    def width(self) -> int:
+        source = self._source
+        return self._k_max if source is None else source.width
+
+    def _held(self):
+        with self._lock:
+            source, order, inverse = self._source, self._order, self._inverse
+        if source is None:
+            return self._made.indices, self._made.distances
+        idx, dist = source.take(source.width)
+        return order[idx[inverse]], dist[inverse]
+
+    def take(self, k: int):
+        self._check_k(k)
+        with self._lock:
+            source, order, inverse = self._source, self._order, self._inverse
+        if source is None or k > source.width:
+            return self._graph().take(k)
+        idx, dist = source.take(k)
+        return order[idx[inverse]], dist[inverse]
+
+    def rows(self, centres: np.ndarray, k: int):
+        self._check_k(k)
+        with self._lock:
+            source, order, inverse = self._source, self._order, self._inverse
+        if source is None:
+            return self._made.rows(centres, k)
+        idx, dist = source.rows(inverse[np.asarray(centres)], k)
+        return order[idx], dist
+
+    def widen(self, k: int | None = None, *, progress=None):
+        if k is not None and k <= self.width:
+            return self._held()
+        graph = self._graph()
+        return graph.indices, graph.distances
 
 
 def build_neighbours(points: ArrayLike, k_max: int, *, progress: ProgressCallback | None = None) -> Neighbours:

@@ -180,7 +180,7 @@ def _to_caller(order, nb, points, *, in_place):
     first columns of its graph (:class:`core.neighbours.WidenableNeighbours`: the rest
     would be searched for a result nobody may read)."""
     if isinstance(nb, WidenableNeighbours) and not nb.complete:
-        return LazyNeighbours(points, nb.k_max, lambda: order.neighbours_to_caller(nb, points, in_place=in_place))
+        return LazyNeighbours(points, nb, order.order, lambda: order.neighbours_to_caller(nb, points, in_place=in_place))
     return order.neighbours_to_caller(nb, points, in_place=in_place)
 
 
