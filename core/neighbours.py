@@ -128,8 +128,8 @@ class WidenableNeighbours(Neighbours):
 
     def __init__(self, points, indices, distances, *, k_max, tree, rank):
         object.__setattr__(self, "_points", points)
-        object.__setattr__(self, "_idx", indices)
-        object.__setattr__(self, "_dist", distances)
+        object.__setattr__(self, "_pair", (indices, distances))  # one attribute: replaced at once
+        object.__setattr__(self, "_lock", threading.Lock())
         object.__setattr__(self, "_k_max", int(k_max))
         object.__setattr__(self, "_tree", tree)
         object.__setattr__(self, "_rank", rank)
@@ -160,23 +160,23 @@ class WidenableNeighbours(Neighbours):
 
     @property
     def width(self) -> int:
-        return self._idx.shape[1]
+        return self._pair[0].shape[1]
 
     def _held(self):
-        return self._idx, self._dist
+        return self._pair
 
     def take(self, k: int):
         self._check_k(k)
-        if k > self.width:
-            self.widen(k)
-        return self._idx[:, :k], self._dist[:, :k]
+        idx, dist = self._pair if k <= self.width else self.widen(k)
+        return idx[:, :k], dist[:, :k]
 
     def rows(self, centres: np.ndarray, k: int):
         self._check_k(k)
-        if k <= self.width:
-            return self._idx[centres, :k], self._dist[centres, :k]
+        held_idx, held_dist = self._pair
+        if k <= held_idx.shape[1]:
+            return held_idx[centres, :k], held_dist[centres, :k]
         centres = np.asarray(centres, dtype=np.int64)
-        idx = np.empty((len(centres), k), dtype=self._idx.dtype)
+        idx = np.empty((len(centres), k), dtype=held_idx.dtype)
         dist = np.empty((len(centres), k), dtype=np.float64)
         for start in range(0, len(centres), _CHUNK):
             stop = min(len(centres), start + _CHUNK)
@@ -189,16 +189,16 @@ class WidenableNeighbours(Neighbours):
         """Every row searched to ``k`` (default ``k_max``) neighbours, if fewer are held."""
         k = self._k_max if k is None else k
         self._check_k(k)
-        if self.width < k:
-            n = len(self._points)
-            idx = np.empty((n, k), dtype=self._idx.dtype)
-            dist = np.empty((n, k), dtype=np.float64)
-            _query_tree(self._points, self._tree, self._rank, idx, dist, Progress(progress))
-            idx.setflags(write=False)
-            dist.setflags(write=False)
-            object.__setattr__(self, "_idx", idx)
-            object.__setattr__(self, "_dist", dist)
-        return self._idx, self._dist
+        with self._lock:  # a viewer's result may be read on one thread while the next job widens it
+            if self.width < k:
+                n = len(self._points)
+                idx = np.empty((n, k), dtype=self._pair[0].dtype)
+                dist = np.empty((n, k), dtype=np.float64)
+                _query_tree(self._points, self._tree, self._rank, idx, dist, Progress(progress))
+                idx.setflags(write=False)
+                dist.setflags(write=False)
+                object.__setattr__(self, "_pair", (idx, dist))
+            return self._pair
 
 
 class LazyNeighbours(Neighbours):

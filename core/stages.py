@@ -98,8 +98,7 @@ def search_width(plan) -> int:
     """Neighbours searched per point at first (:class:`core.neighbours.WidenableNeighbours`
     serves the rows that need more): with k="auto" :data:`core.tuning.SEARCH_WIDTH`, else
     ``plan.k_search`` (and the border test's), the rest being a cache's head room."""
-    need = SEARCH_WIDTH if plan.auto else max(plan.k_search, BORDER_K)
-    return min(max(need, plan.k_search if not plan.auto else 0), plan.n_points)
+    return min(SEARCH_WIDTH if plan.auto else max(plan.k_search, BORDER_K), plan.n_points)
 
 
 def outlier_scores(pts, idx) -> np.ndarray:
@@ -351,16 +350,16 @@ def _rows_of(nb, kc):
     return _Rows(idx, wide, w_idx, kc), h
 
 
-class _Rows(NamedTuple):
+class _Rows:
     """The neighbours of a chunk of centres ``c`` (``self[c]``), as wide as the most any of
     them uses (``kc``): the ``held`` columns, and for the centres in ``wide`` (sorted) their
     rows ``w_idx`` searched wider. Columns a centre does not use hold the centre itself
     (the fits read a centre's first kc only)."""
 
-    held: np.ndarray
-    wide: np.ndarray
-    w_idx: np.ndarray
-    kc: np.ndarray
+    __slots__ = ("held", "wide", "w_idx", "kc")
+
+    def __init__(self, held, wide, w_idx, kc):
+        self.held, self.wide, self.w_idx, self.kc = held, wide, w_idx, kc
 
     def __getitem__(self, c):
         k = int(self.kc[c].max()) if len(c) else 1
