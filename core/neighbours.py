@@ -37,6 +37,10 @@ class Neighbours:
     points : (N, 3) float64 array the search was run on.
     indices : (N, k_max) int array, sorted by distance, ``indices[:, 0]`` is the point.
     distances : (N, k_max) float array of Euclidean distances.
+
+    :meth:`take`, :meth:`rows` and :meth:`take_without` are what the estimate reads; a
+    :class:`WidenableNeighbours` (k="auto") holds only the first :attr:`width` columns
+    and serves the rest through them by searching.
     """
 
     points: np.ndarray

@@ -14,7 +14,10 @@ The neighbour stage searches ``max(k, k_max)`` neighbours (``StageCache(k_max=..
 room) and serves every later call on the same cloud whose plan needs at most that many,
 on the points in spatial order as a call without a cache (:mod:`core.spatial_order`):
 an interactive k slider then never searches again. The first k neighbours of a larger
-search are those of a search for k (ties go to the lowest index either way).
+search are those of a search for k (ties go to the lowest index either way); so the
+search holds only the columns the plan reads at first (:func:`core.stages.search_width`)
+and the graph searches the rest when a later call needs them
+(:class:`core.neighbours.WidenableNeighbours`).
 
 Only the last ``keep`` outputs of each stage are kept (``keep=2``: a method and the one it
 is compared with), and one neighbour graph (memory: one cloud's worth per kept output,
