@@ -138,6 +138,9 @@ class WidenableNeighbours(Neighbours):
         object.__setattr__(self, "_tree", tree)
         object.__setattr__(self, "_rank", rank)
 
+    def __reduce__(self):  # pickled (and copied) as the whole graph: the lock and tree stay here
+        return Neighbours, (self.points, self.indices, self.distances)
+
     def __repr__(self) -> str:
         return f"WidenableNeighbours(n={len(self._points)}, k_max={self._k_max}, width={self.width})"
 
@@ -220,6 +223,9 @@ class LazyNeighbours(Neighbours):
         for name, value in dict(_points=points, _source=source, _order=order, _inverse=inverse, _make=make,
                                 _made=None, _k_max=source.k_max, _lock=threading.Lock()).items():
             object.__setattr__(self, name, value)
+
+    def __reduce__(self):  # pickled (and copied) as the whole graph
+        return Neighbours, (self.points, self.indices, self.distances)
 
     def __repr__(self) -> str:
         return f"LazyNeighbours(n={len(self._points)}, k_max={self._k_max}, made={self._made is not None})"

@@ -162,6 +162,18 @@ def test_noise_free_cloud_searches_few_rows_wide(monkeypatch):
     assert res.neighbours.k_max == 226 and res.neighbours.indices.shape == (len(pts), 226)
 
 
+def test_pickled_as_the_whole_graph(quantised):
+    import pickle
+
+    narrow, _ = search_in_spatial_order(quantised, 60, width=20)
+    back = pickle.loads(pickle.dumps(narrow))
+    assert type(back).__name__ == "Neighbours" and np.array_equal(back.indices, narrow.indices)
+    res = estimate(shapes.torus(3000, seed=0).points)
+    assert isinstance(res.neighbours, LazyNeighbours)
+    back = pickle.loads(pickle.dumps(res))
+    assert np.array_equal(back.neighbours.distances, res.neighbours.distances)
+
+
 @pytest.mark.parametrize("cloud", ["cube", "tube"])
 def test_folds_at_the_last_sizes_held(cloud, monkeypatch):
     """Rings that fold over (a cube's edges, a thin tube's far side) stop the jet rule at
