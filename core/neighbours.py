@@ -3,7 +3,6 @@ is kept apart from *which estimator*)."""
 
 from __future__ import annotations
 
-import threading
 from dataclasses import dataclass
 from typing import Callable, Union
 
@@ -13,7 +12,7 @@ from scipy.spatial import cKDTree
 
 from ._progress import Progress
 from ._validate import as_points, check_int
-from .kernels.kdtree import build_tree, query_rows, query_sorted
+from .kernels.kdtree import build_tree, query_sorted
 from .kernels.knn import keep_nearest
 from .spacing import mean_spacing
 from .tuning import SEARCH_LEAF, SEARCH_RADIUS_NODE
@@ -39,8 +38,8 @@ class Neighbours:
     distances : (N, k_max) float array of Euclidean distances.
 
     :meth:`take`, :meth:`rows` and :meth:`take_without` are what the estimate reads; a
-    :class:`WidenableNeighbours` (k="auto") holds only the first :attr:`width` columns
-    and serves the rest through them by searching.
+    :class:`core.wide_neighbours.WidenableNeighbours` (k="auto") holds only the first
+    :attr:`width` columns and serves the rest through them by searching.
     """
 
     points: np.ndarray
@@ -117,181 +116,6 @@ class Neighbours:
         return mean_spacing(self.points, neighbours=self)
 
 
-class WidenableNeighbours(Neighbours):
-    """:class:`Neighbours` of points in spatial order (:func:`search_in_spatial_order`)
-    that holds only the first :attr:`width` of its ``k_max`` neighbours per point and
-    searches further rows on demand, with the tree and the ranks of the first search.
-
-    The search's answer is canonical (the k smallest by distance, then the caller's
-    index), so the first k of a wider query are a narrower query's: a row searched wider
-    extends the one held, bit for bit. :meth:`rows` serves some rows at any k up to
-    ``k_max``; :meth:`take` beyond the width, :attr:`indices` and :attr:`distances`
-    widen every row to ``k_max`` first (:meth:`widen`), once. With k="auto" most points
-    of a noise-free cloud use at most 40 neighbours of the 226 the plan allows.
-    """
-
-    def __init__(self, points, indices, distances, *, k_max, tree, rank):
-        object.__setattr__(self, "_points", points)
-        object.__setattr__(self, "_pair", (indices, distances))  # one attribute: replaced at once
-        object.__setattr__(self, "_lock", threading.Lock())
-        object.__setattr__(self, "_k_max", int(k_max))
-        object.__setattr__(self, "_tree", tree)
-        object.__setattr__(self, "_rank", rank)
-
-    def __reduce__(self):  # pickled (and copied) as the whole graph: the lock and tree stay here
-        return Neighbours, (self.points, self.indices, self.distances)
-
-    def __repr__(self) -> str:
-        return f"WidenableNeighbours(n={len(self._points)}, k_max={self._k_max}, width={self.width})"
-
-    @property
-    def points(self) -> np.ndarray:
-        return self._points
-
-    @property
-    def indices(self) -> np.ndarray:
-        return self.widen()[0]
-
-    @property
-    def distances(self) -> np.ndarray:
-        return self.widen()[1]
-
-    @property
-    def complete(self) -> bool:
-        """Whether all ``k_max`` neighbours of every row are held."""
-        return self.width >= self._k_max
-
-    @property
-    def k_max(self) -> int:
-        return self._k_max
-
-    @property
-    def width(self) -> int:
-        return self._pair[0].shape[1]
-
-    def _held(self):
-        return self._pair
-
-    def take(self, k: int):
-        self._check_k(k)
-        idx, dist = self._pair if k <= self.width else self.widen(k)
-        return idx[:, :k], dist[:, :k]
-
-    def rows(self, centres: np.ndarray, k: int):
-        self._check_k(k)
-        held_idx, held_dist = self._pair
-        if k <= held_idx.shape[1]:
-            return held_idx[centres, :k], held_dist[centres, :k]
-        centres = np.asarray(centres, dtype=np.int64)
-        idx = np.empty((len(centres), k), dtype=held_idx.dtype)
-        dist = np.empty((len(centres), k), dtype=np.float64)
-        for start in range(0, len(centres), _CHUNK):
-            stop = min(len(centres), start + _CHUNK)
-            query_rows(self._points, self._tree, self._rank, centres[start:stop], dist[start:stop],
-                       idx[start:stop], max(k, SEARCH_RADIUS_NODE))
-        _self_first(idx, dist, centres)
-        return idx, dist
-
-    def widen(self, k: int | None = None, *, progress=None):
-        """Every row searched to ``k`` (default ``k_max``) neighbours, if fewer are held."""
-        k = self._k_max if k is None else k
-        self._check_k(k)
-        with self._lock:  # a viewer's result may be read on one thread while the next job widens it
-            if self.width < k:
-                n = len(self._points)
-                idx = np.empty((n, k), dtype=self._pair[0].dtype)
-                dist = np.empty((n, k), dtype=np.float64)
-                _query_tree(self._points, self._tree, self._rank, idx, dist, Progress(progress))
-                idx.setflags(write=False)
-                dist.setflags(write=False)
-                object.__setattr__(self, "_pair", (idx, dist))
-            return self._pair
-
-
-class LazyNeighbours(Neighbours):
-    """The graph ``source`` (a :class:`WidenableNeighbours` on the points in spatial
-    order, sorted point s being the caller's ``order[s]``) as neighbours of the caller's
-    ``points``, what :attr:`core.CurvatureResult.neighbours` holds when the estimate held
-    only the first columns of its graph. The columns held and the rows searched wider are
-    served from ``source`` in the caller's order (:meth:`take`, :meth:`rows`, so an
-    estimate it is passed back to searches no more than the first one did); reading
-    :attr:`indices` or :attr:`distances` makes the whole graph once, by ``make()``."""
-
-    def __init__(self, points, source, order, make):
-        inverse = np.empty_like(order)
-        inverse[order] = np.arange(len(order), dtype=order.dtype)
-        for name, value in dict(_points=points, _source=source, _order=order, _inverse=inverse, _make=make,
-                                _made=None, _k_max=source.k_max, _lock=threading.Lock()).items():
-            object.__setattr__(self, name, value)
-
-    def __reduce__(self):  # pickled (and copied) as the whole graph
-        return Neighbours, (self.points, self.indices, self.distances)
-
-    def __repr__(self) -> str:
-        return f"LazyNeighbours(n={len(self._points)}, k_max={self._k_max}, made={self._made is not None})"
-
-    def _graph(self) -> Neighbours:
-        with self._lock:
-            if self._made is None:
-                made = self._make()
-                for name, value in dict(_made=made, _make=None, _source=None, _order=None, _inverse=None).items():
-                    object.__setattr__(self, name, value)
-        return self._made
-
-    @property
-    def points(self) -> np.ndarray:
-        return self._points
-
-    @property
-    def indices(self) -> np.ndarray:
-        return self._graph().indices
-
-    @property
-    def distances(self) -> np.ndarray:
-        return self._graph().distances
-
-    @property
-    def k_max(self) -> int:
-        return self._k_max
-
-    @property
-    def width(self) -> int:
-        source = self._source
-        return self._k_max if source is None else source.width
-
-    def _held(self):
-        with self._lock:
-            source, order, inverse = self._source, self._order, self._inverse
-        if source is None:
-            return self._made.indices, self._made.distances
-        idx, dist = source.take(source.width)
-        return order[idx[inverse]], dist[inverse]
-
-    def take(self, k: int):
-        self._check_k(k)
-        with self._lock:
-            source, order, inverse = self._source, self._order, self._inverse
-        if source is None or k > source.width:
-            return self._graph().take(k)
-        idx, dist = source.take(k)
-        return order[idx[inverse]], dist[inverse]
-
-    def rows(self, centres: np.ndarray, k: int):
-        self._check_k(k)
-        with self._lock:
-            source, order, inverse = self._source, self._order, self._inverse
-        if source is None:
-            return self._made.rows(centres, k)
-        idx, dist = source.rows(inverse[np.asarray(centres)], k)
-        return order[idx], dist
-
-    def widen(self, k: int | None = None, *, progress=None):
-        if k is not None and k <= self.width:
-            return self._held()
-        graph = self._graph()
-        return graph.indices, graph.distances
-
-
 def build_neighbours(points: ArrayLike, k_max: int, *, progress: ProgressCallback | None = None) -> Neighbours:
     """Find the ``k_max`` nearest neighbours of each point with scipy's cKDTree (all cores).
 
@@ -320,8 +144,7 @@ def search_neighbours(pts: np.ndarray, k_max: int, *, progress=None) -> Neighbou
     return _search(pts, k_max, progress, spatial=False)[0]
 
 
-def search_in_spatial_order(pts: np.ndarray, k_max: int, *, progress=None,
-                            width: int | None = None) -> tuple[Neighbours, np.ndarray | None]:
+def search_in_spatial_order(pts: np.ndarray, k_max: int, *, progress=None) -> tuple[Neighbours, np.ndarray | None]:
     """:func:`search_neighbours` on the points put in the kd-tree's leaf order (neighbours
     in space are neighbours in memory: every later loop over the neighbours reads cache
     lines already loaded, 2-3x faster at 1M points, and the search itself too).
@@ -331,15 +154,15 @@ def search_in_spatial_order(pts: np.ndarray, k_max: int, *, progress=None,
     :func:`search_neighbours` gives (ties are broken by the caller's index, not by the
     sorted one). ``order`` is None, and ``nb`` in the caller's order, when large groups of
     identical points take the duplicate-aware search.
-
-    ``width`` < ``k_max``: search only that many per point and return a
-    :class:`WidenableNeighbours` that searches further rows when asked (not with the
-    duplicate-aware search, which searches ``k_max``).
     """
-    return _search(pts, k_max, progress, spatial=True, width=width)
+    return _search(pts, k_max, progress, spatial=True)[:2]
 
 
 def _search(pts, k_max, progress, *, spatial, width=None):
+    """``(nb, order, tree)``: the search; with ``width`` < ``k_max`` in spatial order (and
+    without the duplicate-aware search) only the first ``width`` neighbours, and the tree
+    of the sorted points that finds the rest (else None; see
+    :func:`core.wide_neighbours.search_in_spatial_order`)."""
     k_max = check_int(k_max, name="k_max", low=1, high=len(pts))
     report = Progress(progress)
     report(0.0, "neighbours")
@@ -364,9 +187,8 @@ def _search(pts, k_max, progress, *, spatial, width=None):
             _query_distinct(tree, pts, None, idx, dist, report)
     idx.setflags(write=False)
     dist.setflags(write=False)
-    if narrow:
-        return WidenableNeighbours(pts, idx, dist, k_max=k_max, tree=sorted_tree, rank=order), order
-    return Neighbours(points=pts, indices=idx, distances=dist), (order if spatial else None)
+    nb = Neighbours(points=pts, indices=idx, distances=dist)
+    return nb, (order if spatial else None), (sorted_tree if narrow else None)
 
 
 #: odd 64-bit multipliers mixing the three coordinates' bits into one hash

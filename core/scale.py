@@ -246,7 +246,13 @@ def choose_jets(points, normals, nb, has_normal, ks, report):
     if nb.width < ks[-1] and np.count_nonzero(noise[usable] > JET_QUIET) > WIDEN_SHARE * len(usable):
         idx_all, dist_all = nb.take(ks[-1])  # noisy: most jets grow past the columns held, search all at once
     report(0.2, "choosing k")
-    chosen, coef = _jet_ici(points, normals, nb, idx_all, usable, ks, s, t1, t2, sigma2, report)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        sigma2_h = sigma2 / s ** 2  # the noise in units of h^2, as the kernels take it
+
+    def frames(rows, c):
+        return _jet_frames(points, normals, rows, c, s, t1, t2)
+
+    chosen, coef = _jet_ici(nb, idx_all, usable, ks, frames, sigma2_h, report)
     ks_arr = np.asarray(ks, dtype=np.int64)
     fitted = chosen >= 0
     k = np.where(fitted, ks_arr[np.maximum(chosen, 0)], 0)
@@ -268,10 +274,11 @@ def choose_jets(points, normals, nb, has_normal, ks, report):
     return k, (*frame[:-1], frame[-1] & fitted), noise, degree
 
 
-def _jet_ici(points, normals, nb, idx, usable, ks, s, t1, t2, sigma2, report):
+def _jet_ici(nb, idx, usable, ks, frames, sigma2_h, report):
     """(chosen index into ``ks`` (N,), -1 where no fit; coefficients (N, 10)) of
     :func:`core.kernels.jets.jet_ici` at the ``usable`` centres, on their neighbours
-    ``idx`` (N, w) (the columns ``nb`` holds).
+    ``idx`` (N, w) (the columns ``nb`` holds); ``frames(rows, centres)`` the kernels'
+    record, ``sigma2_h`` (N,) the noise in units of h^2.
 
     With w < ks[-1] the rule runs on the sizes up to w first. It looks one ring ahead
     (at size c it tests the ring ks[c]..ks[c + 1] for a fold) and ends at the last size,
@@ -279,7 +286,7 @@ def _jet_ici(points, normals, nb, idx, usable, ks, s, t1, t2, sigma2, report):
     that stopped before (chosen <= m - 3 of m sizes) has the full rule's answer, the others
     (and those without a fit) are run again on their ``ks[-1]`` neighbours (``nb.rows``).
     """
-    n = len(points)
+    n = len(idx)
     chosen = np.full(n, -1, dtype=np.int64)
     coef = np.full((n, jet_kernels.P3), np.nan)
     rule = _jet_rule()
@@ -291,8 +298,7 @@ def _jet_ici(points, normals, nb, idx, usable, ks, s, t1, t2, sigma2, report):
 
     def run(c, rows, sizes):
         out_k, out_c = np.empty(len(c), dtype=np.int64), np.empty((len(c), jet_kernels.P3))
-        jet_kernels.jet_ici(_jet_frames(points, normals, rows, c, s, t1, t2), sizes, sigma2[c] / s[c] ** 2,
-                            rule, out_k, out_c)
+        jet_kernels.jet_ici(frames(rows, c), sizes, sigma2_h[c], rule, out_k, out_c)
         chosen[c], coef[c] = out_k, out_c
 
     for start in range(0, len(usable), _CHUNK):

@@ -17,7 +17,7 @@ an interactive k slider then never searches again. The first k neighbours of a l
 search are those of a search for k (ties go to the lowest index either way); so the
 search holds only the columns the plan reads at first (:func:`core.stages.search_width`)
 and the graph searches the rest when a later call needs them
-(:class:`core.neighbours.WidenableNeighbours`).
+(:class:`core.wide_neighbours.WidenableNeighbours`).
 
 Only the last ``keep`` outputs of each stage are kept (``keep=2``: a method and the one it
 is compared with), and one neighbour graph (memory: one cloud's worth per kept output,
@@ -32,7 +32,7 @@ from collections import Counter
 
 import numpy as np
 
-from .neighbours import LazyNeighbours, WidenableNeighbours
+from .wide_neighbours import LazyNeighbours, WidenableNeighbours
 
 __all__ = ["StageCache", "STAGE_FIELDS"]
 
@@ -180,7 +180,7 @@ def caller_neighbours(cache: StageCache | None, order, nb, points):
 
 def _to_caller(order, nb, points, *, in_place):
     """``order.neighbours_to_caller``, put off until read when ``nb`` holds only the
-    first columns of its graph (:class:`core.neighbours.WidenableNeighbours`: the rest
+    first columns of its graph (:class:`core.wide_neighbours.WidenableNeighbours`: the rest
     would be searched for a result nobody may read)."""
     if isinstance(nb, WidenableNeighbours) and not nb.complete:
         return LazyNeighbours(points, nb, order.order, lambda: order.neighbours_to_caller(nb, points, in_place=in_place))

@@ -13,12 +13,13 @@ from . import kernels, passes, scale
 from .passes import PassRule, few_fits
 from .frame import darboux_frame
 from .border import BORDER_K, border_of_valid, served_by
-from .neighbours import Neighbours, search_in_spatial_order, search_neighbours
+from .neighbours import Neighbours, search_neighbours
 from .normal_repair import repair_normals
 from .normals import jet_normals, pca_normals
 from .orientation import orient
 from .patch import Chunk
 from .spatial_order import SpatialOrder
+from .wide_neighbours import rows_at_least, search_in_spatial_order
 from .tuning import CREASE_NOISE, CREASE_RATIO, CREASE_SPREAD, JET_SCORE, OUTLIER_FLOOR, SEARCH_WIDTH
 
 _CHUNK = 32_768
@@ -95,7 +96,7 @@ def spatial_neighbours(pts, plan, neighbours, report, *, k=None) -> tuple[Neighb
 
 
 def search_width(plan) -> int:
-    """Neighbours searched per point at first (:class:`core.neighbours.WidenableNeighbours`
+    """Neighbours searched per point at first (:class:`core.wide_neighbours.WidenableNeighbours`
     serves the rows that need more): with k="auto" :data:`core.tuning.SEARCH_WIDTH`, else
     ``plan.k_search`` (and the border test's), the rest being a cache's head room."""
     return min(SEARCH_WIDTH if plan.auto else max(plan.k_search, BORDER_K), plan.n_points)
@@ -307,7 +308,7 @@ def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n
     normals). With a mask ``first`` a pass is fitted there only, and ``complete()`` fits
     its other points (done before the next pass if the caller did not)."""
     kc = sc.k
-    idx, h = _rows_of(nb, kc)
+    idx, h = rows_at_least(nb, kc)
     nrm, has_normal = initial.normals, initial.has_normal
     if sc.on_jet.any():  # the jets' normals are the neighbours' input where the jet is kept
         nrm = np.where(sc.on_jet[:, None], sc.jets[0], nrm)
@@ -326,53 +327,6 @@ def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n
             has_normal = has_normal & ~outlier
             new[outlier] = np.nan
         nrm = new
-
-
-def _rows_of(nb, kc):
-    """``(rows, h)``: the neighbours of every point, at least ``kc[i]`` for point i, as an
-    (N, kc.max()) array or, when ``nb`` holds fewer columns and only a minority of the
-    points needs more, a :class:`_Rows` that adds them per chunk; ``h[i]`` the distance
-    to point i's ``kc[i]``-th neighbour."""
-    n, k = len(kc), int(kc.max())
-    wide = np.flatnonzero(kc > nb.width) if k > nb.width else np.empty(0, dtype=np.int64)
-    if 2 * len(wide) > n:
-        nb.widen(k)
-        wide = wide[:0]
-    if not len(wide):
-        idx, dist = nb.take(k)
-        return idx, dist[np.arange(n), kc - 1]
-    idx, dist = nb.take(nb.width)
-    h = np.empty(n)
-    narrow = np.flatnonzero(kc <= nb.width)
-    h[narrow] = dist[narrow, kc[narrow] - 1]
-    w_idx, w_dist = nb.rows(wide, k)
-    h[wide] = w_dist[np.arange(len(wide)), kc[wide] - 1]
-    return _Rows(idx, wide, w_idx, kc), h
-
-
-class _Rows:
-    """The neighbours of a chunk of centres ``c`` (``self[c]``), as wide as the most any of
-    them uses (``kc``): the ``held`` columns, and for the centres in ``wide`` (sorted) their
-    rows ``w_idx`` searched wider. Columns a centre does not use hold the centre itself
-    (the fits read a centre's first kc only)."""
-
-    __slots__ = ("held", "wide", "w_idx", "kc")
-
-    def __init__(self, held, wide, w_idx, kc):
-        self.held, self.wide, self.w_idx, self.kc = held, wide, w_idx, kc
-
-    def __getitem__(self, c):
-        k = int(self.kc[c].max()) if len(c) else 1
-        width = self.held.shape[1]
-        if k <= width:
-            return self.held[c, :k]
-        idx = np.empty((len(c), k), dtype=self.held.dtype)
-        idx[:, :width] = self.held[c]
-        idx[:, width:] = c[:, None]
-        pos = np.minimum(np.searchsorted(self.wide, c), len(self.wide) - 1)
-        mine = np.flatnonzero(self.wide[pos] == c)
-        idx[mine] = self.w_idx[pos[mine], :k]
-        return idx
 
 
 def finish(best: Refined, sc: Scale, outlier, plan) -> Refined:

@@ -32,7 +32,7 @@ SEARCH_LEAF = 32
 #: and fewer candidates but costs more distances itself.
 SEARCH_RADIUS_NODE = 64
 #: with k="auto" the search finds this many neighbours per point at first and the rows
-#: that need more later (core.neighbours.WidenableNeighbours): every stage before the
+#: that need more later (core.wide_neighbours.WidenableNeighbours): every stage before the
 #: choice of scale reads at most 30 (core.border.BORDER_K), and the jet rule stops at
 #: 15-28 neighbours at nearly every point of a noise-free cloud (at the next-to-last of
 #: the sizes it is run on, it reruns with the whole list: it looks one ring ahead). A

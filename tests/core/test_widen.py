@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from core import build_neighbours, estimate, noise, scale, shapes, stages
-from core.neighbours import LazyNeighbours, WidenableNeighbours, search_in_spatial_order
+from core.wide_neighbours import LazyNeighbours, WidenableNeighbours, search_in_spatial_order
 from core.stage_cache import StageCache
 
 FIELDS = ("normals", "k1", "k2", "e1", "e2", "valid", "k_point", "degree_point", "outlier_score", "crease",
