@@ -186,3 +186,14 @@ def test_folds_at_the_last_sizes_held(cloud, monkeypatch):
     res = estimate(pts)
     monkeypatch.setattr(stages, "SEARCH_WIDTH", 10**9)
     _same(res, estimate(pts))
+
+
+def test_one_point_s_neighbourhood_reads_one_row():
+    """The viewer's pick and local_fit read one row; the lazy graph must not be made."""
+    import core
+
+    pts = shapes.torus(3000, seed=0).points
+    res = estimate(pts)
+    fit = core.local_fit(res, 7)
+    assert res.neighbours._made is None
+    assert np.array_equal(fit.neighbours, res.neighbours.indices[7, :res.k_point[7]])
