@@ -12,7 +12,7 @@ import numpy as np
 from . import kernels, passes, scale
 from .passes import PassRule, few_fits
 from .frame import darboux_frame
-from .border import BORDER_K, border_of_valid, served_by
+from .border import border_of_valid, served_by
 from .neighbours import Neighbours, search_neighbours
 from .normal_repair import repair_normals
 from .normals import jet_normals, pca_normals
@@ -95,11 +95,11 @@ def spatial_neighbours(pts, plan, neighbours, report, *, k=None) -> tuple[Neighb
     return nb, SpatialOrder(order)
 
 
-def search_width(plan) -> int:
+def search_width(plan) -> int | None:
     """Neighbours searched per point at first (:class:`core.wide_neighbours.WidenableNeighbours`
-    serves the rows that need more): with k="auto" :data:`core.tuning.SEARCH_WIDTH`, else
-    ``plan.k_search`` (and the border test's), the rest being a cache's head room."""
-    return min(SEARCH_WIDTH if plan.auto else max(plan.k_search, BORDER_K), plan.n_points)
+    serves the rest): with k="auto" :data:`core.tuning.SEARCH_WIDTH`; with an integer k all
+    (None), a cache's head room included (a viewer's k slider moves within it unsearched)."""
+    return min(SEARCH_WIDTH, plan.n_points) if plan.auto else None
 
 
 def outlier_scores(pts, idx) -> np.ndarray:

@@ -139,7 +139,7 @@ def test_stage_cache_auto_then_a_larger_k(half_noisy, full_width):
 
 def test_stage_cache_head_room_for_an_integer_k(half_noisy):
     cache = StageCache(k_max=226)
-    a = estimate(half_noisy, k=15, cache=cache)  # searches 30 of 226: the border test's
+    a = estimate(half_noisy, k=15, cache=cache)  # an integer k searches the whole head room
     _same(a, estimate(half_noisy, k=15))
     _same(estimate(half_noisy, k=113, cache=cache), estimate(half_noisy, k=113))
     assert cache.computed["neighbours"] == 1
