@@ -145,7 +145,8 @@ class ResultPresenter:
                     scene.set_highlight(None)
             return
         for scene, res, _fields in self._pairs():
-            neighbours = np.asarray(res.neighbours.indices)[index, : int(res.k_point[index])]
+            k = min(int(res.k_point[index]), res.neighbours.k_max)  # a tiled result carries 16 of them
+            neighbours = np.asarray(res.neighbours.rows(np.array([index]), k)[0][0])  # a lazy graph: one row searched
             scene.set_highlight(index, neighbours, {"e1": res.e1[index], "e2": res.e2[index], "n": res.normals[index]})
         self.inspector.show_point(point_info(out, index))
 

@@ -198,7 +198,7 @@ def _neighbourhood(res, index):
     nb = res.neighbours
     k = int(res.k_point[index]) if res.k_point is not None and res.k_point[index] > 0 else DEFAULT_K
     if nb is not None and nb.matches(res.points) and k <= nb.k_max:
-        return np.asarray(nb.indices[index, :k])
+        return np.asarray(nb.rows(np.array([index]), k)[0][0])  # one row: a lazy graph searches only it
     k = min(k, len(res.points))
     _, idx = cKDTree(res.points).query(res.points[index], k=k)
     return np.atleast_1d(idx)

@@ -36,6 +36,10 @@ class Neighbours:
     points : (N, 3) float64 array the search was run on.
     indices : (N, k_max) int array, sorted by distance, ``indices[:, 0]`` is the point.
     distances : (N, k_max) float array of Euclidean distances.
+
+    :meth:`take`, :meth:`rows` and :meth:`take_without` are what the estimate reads; a
+    :class:`core.wide_neighbours.WidenableNeighbours` (k="auto") holds only the first
+    :attr:`width` columns and serves the rest through them by searching.
     """
 
     points: np.ndarray
@@ -51,21 +55,51 @@ class Neighbours:
         self._check_k(k)
         return self.indices[:, :k], self.distances[:, :k]
 
+    @property
+    def width(self) -> int:
+        """Columns held in memory: every row's first ``width`` neighbours are at hand
+        (``k_max`` here; fewer for a :class:`WidenableNeighbours`, which searches the rest)."""
+        return self.k_max
+
+    def rows(self, centres: np.ndarray, k: int):
+        """The ``k`` nearest of the points ``centres`` (M,) int: (M, k) indices and distances."""
+        self._check_k(k)
+        return self.indices[centres, :k], self.distances[centres, :k]
+
     def take_without(self, k: int, drop: np.ndarray):
         """The ``k`` nearest not flagged in ``drop`` (N,) bool, each point itself first;
         a row short of unflagged neighbours ends with its nearest flagged ones (copies)."""
         self._check_k(k)
-        n = len(self.indices)
-        idx = np.empty((n, k), dtype=self.indices.dtype)
-        dist = np.empty((n, k), dtype=self.distances.dtype)
+        held_idx, held_dist = self._held()
+        n, width = held_idx.shape
+        idx = np.empty((n, k), dtype=held_idx.dtype)
+        dist = np.empty((n, k), dtype=held_dist.dtype)
         for start in range(0, n, _ROWS):
             rows = slice(start, min(n, start + _ROWS))
-            flagged = drop[self.indices[rows]]
+            flagged = drop[held_idx[rows]]
             flagged[:, 0] = False
             order = np.argsort(flagged, axis=1, kind="stable")[:, :k]
-            idx[rows] = np.take_along_axis(self.indices[rows], order, axis=1)
-            dist[rows] = np.take_along_axis(self.distances[rows], order, axis=1)
+            idx[rows] = np.take_along_axis(held_idx[rows], order, axis=1)
+            dist[rows] = np.take_along_axis(held_dist[rows], order, axis=1)
+            if width < self.k_max:  # rows with fewer than k unflagged among those held: their whole list
+                short = start + np.flatnonzero((~flagged).sum(axis=1) < k)
+                if len(short):
+                    w_idx, w_dist = self.rows(short, self.k_max)
+                    flagged = drop[w_idx]
+                    flagged[:, 0] = False
+                    order = np.argsort(flagged, axis=1, kind="stable")[:, :k]
+                    idx[short] = np.take_along_axis(w_idx, order, axis=1)
+                    dist[short] = np.take_along_axis(w_dist, order, axis=1)
         return idx, dist
+
+    def _held(self):
+        """The (N, width) indices and distances in memory."""
+        return self.indices, self.distances
+
+    def widen(self, k: int | None = None, *, progress=None):
+        """Hold at least ``k`` (default ``k_max``) neighbours of every row; returns the
+        (N, width) indices and distances held (here all ``k_max`` always are)."""
+        return self.indices, self.distances
 
     def _check_k(self, k: int) -> None:
         if k > self.k_max:
@@ -121,17 +155,24 @@ def search_in_spatial_order(pts: np.ndarray, k_max: int, *, progress=None) -> tu
     sorted one). ``order`` is None, and ``nb`` in the caller's order, when large groups of
     identical points take the duplicate-aware search.
     """
-    return _search(pts, k_max, progress, spatial=True)
+    return _search(pts, k_max, progress, spatial=True)[:2]
 
 
-def _search(pts, k_max, progress, *, spatial):
+def _search(pts, k_max, progress, *, spatial, width=None):
+    """``(nb, order, tree)``: the search; with ``width`` < ``k_max`` in spatial order (and
+    without the duplicate-aware search) only the first ``width`` neighbours, and the tree
+    of the sorted points that finds the rest (else None; see
+    :func:`core.wide_neighbours.search_in_spatial_order`)."""
     k_max = check_int(k_max, name="k_max", low=1, high=len(pts))
     report = Progress(progress)
     report(0.0, "neighbours")
     n = len(pts)
-    idx = np.empty((n, k_max), dtype=np.int64 if n > 2**31 - 1 else np.int32)
-    dist = np.empty((n, k_max), dtype=np.float64)
+    dtype = np.int64 if n > 2**31 - 1 else np.int32
     groups = _duplicate_groups(pts) if _largest_group_bound(pts) > MAX_DUPLICATES else None
+    narrow = spatial and groups is None and width is not None and width < k_max
+    cols = width if narrow else k_max
+    idx = np.empty((n, cols), dtype=dtype)
+    dist = np.empty((n, cols), dtype=np.float64)
     if groups is not None:
         _query_with_duplicates(pts, groups, idx, dist, report)
         spatial = False
@@ -140,12 +181,14 @@ def _search(pts, k_max, progress, *, spatial):
         order = np.asarray(tree.indices, dtype=idx.dtype)  # the leaf order
         if spatial:
             pts = pts[order]
-            _query_in_order(pts, order, idx, dist, report)
+            sorted_tree = build_tree(pts, SEARCH_LEAF)
+            _query_tree(pts, sorted_tree, order, idx, dist, report)
         else:
             _query_distinct(tree, pts, None, idx, dist, report)
     idx.setflags(write=False)
     dist.setflags(write=False)
-    return Neighbours(points=pts, indices=idx, distances=dist), (order if spatial else None)
+    nb = Neighbours(points=pts, indices=idx, distances=dist)
+    return nb, (order if spatial else None), (sorted_tree if narrow else None)
 
 
 #: odd 64-bit multipliers mixing the three coordinates' bits into one hash
@@ -183,12 +226,12 @@ def _query_distinct(tree, pts, order, idx, dist, report) -> None:
     _self_first(idx, dist, np.arange(n) if order is None else order)
 
 
-def _query_in_order(pts, rank, idx, dist, report) -> None:
+def _query_tree(pts, tree, rank, idx, dist, report) -> None:
     """:func:`_query_distinct`'s answer for points in the kd-tree's leaf order, found by
-    :mod:`core.kernels.kdtree` (indices into ``pts``, ties by ``rank``, the caller's index):
-    the same rows, bit for bit, at a fraction of the cost for k in the hundreds."""
+    :mod:`core.kernels.kdtree` on its ``tree`` of them (indices into ``pts``, ties by
+    ``rank``, the caller's index): the same rows, bit for bit, at a fraction of the cost
+    for k in the hundreds."""
     n, k_max = idx.shape
-    tree = build_tree(pts, SEARCH_LEAF)
     want = max(k_max, SEARCH_RADIUS_NODE)
     for start in range(0, n, _CHUNK):
         stop = min(n, start + _CHUNK)

@@ -90,7 +90,7 @@ from .linalg import tangent_basis
 from .patch import Chunk
 from .tuning import (AUTO_DEGREE, AUTO_KS, FOLD_COS, FOLD_FRACTION, FOLD_MIN_BAD, FOLD_NOISE, GAMMA,
                      INITIAL_K0, JET_DEGREE, JET_GAMMA, JET_DEGREES, JET_KS, JET_QUIET, JET_REACH, JET_SCORE,
-                     NEIGHBOUR_BUDGET, NOISE_KS, NOISE_POOL, RCOND)
+                     NEIGHBOUR_BUDGET, NOISE_KS, NOISE_POOL, RCOND, WIDEN_SHARE)
 
 __all__ = ["AUTO_DEGREE", "AUTO_KS", "GAMMA", "INITIAL_K0", "NEIGHBOUR_BUDGET", "JET_KS", "JET_DEGREE",
            "JET_SCORE", "candidates", "choose_k", "noise_ratio", "initial_k", "jet_candidates",
@@ -110,9 +110,9 @@ def choose_k(points, normals, nb, has_normal, ks, degree, report):
     """Per-point k by ICI over ``ks`` (ascending); returns (N,) int (ks[0] where no normal)."""
     n = len(points)
     chosen = np.full(n, ks[0], dtype=np.int64)
-    dist_far = nb.take(ks[-1])[1][:, -1]
-    usable = np.flatnonzero(has_normal & (dist_far > 0))
-    chosen[usable] = _per_centre(kernels.choose_scales, points, normals, nb, usable, ks, _nf_rule(degree), report)
+    usable = np.flatnonzero(has_normal)  # and whose ks[-1]-th neighbour is not at distance 0 (else ks[0])
+    chosen[usable] = _per_centre(kernels.choose_scales, points, normals, nb, usable, ks, _nf_rule(degree), report,
+                                 flat=ks[0])
     return chosen
 
 
@@ -121,16 +121,26 @@ def _nf_rule(degree):
     return kernels.ScaleRule(degree, GAMMA, RCOND, FOLD_FRACTION, FOLD_COS, FOLD_NOISE, FOLD_MIN_BAD)
 
 
-def _per_centre(kernel, points, normals, nb, centres, ks, rule, report=None):
+def _per_centre(kernel, points, normals, nb, centres, ks, rule, report=None, *, flat=None):
     """``kernel(frames, ks, rule, out)`` over ``centres`` in chunks of :data:`_CHUNK`, each
-    with its ``ks[-1]`` neighbours; returns ``out`` (len(centres),) int."""
-    idx_all, dist_all = nb.take(ks[-1])
+    with its ``ks[-1]`` neighbours (``nb.rows``: searched for these centres only when the
+    graph holds fewer); returns ``out`` (len(centres),) int. ``flat``: the answer, without
+    the kernel, at centres whose ``ks[-1]``-th neighbour is at distance 0."""
     ks_arr = np.asarray(ks, dtype=np.int64)
     result = np.empty(len(centres), dtype=np.int64)
     for start in range(0, len(centres), _CHUNK):
         c = centres[start:start + _CHUNK]
+        idx, dist = nb.rows(c, ks[-1])
+        h = dist[:, -1]
         out = np.empty(len(c), dtype=np.int64)
-        kernel(Chunk.build(points, normals, idx_all[c], dist_all[c, -1], c).frames(), ks_arr, rule, out)
+        if flat is None:
+            kernel(Chunk.build(points, normals, idx, h, c).frames(), ks_arr, rule, out)
+        else:
+            far = np.flatnonzero(h > 0)
+            out[:] = flat
+            part = np.empty(len(far), dtype=np.int64)
+            kernel(Chunk.build(points, normals, idx[far], h[far], c[far]).frames(), ks_arr, rule, part)
+            out[far] = part
         result[start:start + _CHUNK] = out
         if report is not None:
             report(min(len(centres), start + _CHUNK) / max(len(centres), 1), "choosing k")
@@ -219,7 +229,9 @@ def choose_jets(points, normals, nb, has_normal, ks, report):
     degree rule's (see the module; -1 where no fit).
     """
     n = len(points)
-    idx_all, dist_all = nb.take(ks[-1])
+    if nb.width < max(NOISE_KS[1], NOISE_POOL, ks[0]):
+        nb.widen(ks[-1])
+    idx_all, dist_all = nb.take(min(nb.width, ks[-1]))  # the columns held: the rows that need more are searched
     s = dist_all[:, ks[0] - 1].copy()
     usable = np.flatnonzero(has_normal & (s > 0))
     t1, t2 = tangent_basis(np.where(has_normal[:, None], normals, [0.0, 0.0, 1.0]))
@@ -229,25 +241,25 @@ def choose_jets(points, normals, nb, has_normal, ks, report):
     jet_kernels.jet_residuals(f, np.asarray(NOISE_KS, dtype=np.int64), RCOND, out)
     rss[usable] = out
     sigma2, plain = noise_variance(rss[:, 0], rss[:, 1], s, idx_all)
-    report(0.2, "choosing k")
-    chosen = np.full(n, -1, dtype=np.int64)
-    coef = np.full((n, jet_kernels.P3), np.nan)
-    ks_arr, rule = np.asarray(ks, dtype=np.int64), _jet_rule()
-    for start in range(0, len(usable), _CHUNK):
-        c = usable[start:start + _CHUNK]
-        out_k, out_c = np.empty(len(c), dtype=np.int64), np.empty((len(c), jet_kernels.P3))
-        jet_kernels.jet_ici(_jet_frames(points, normals, idx_all[c], c, s, t1, t2), ks_arr, sigma2[c] / s[c] ** 2,
-                            rule, out_k, out_c)
-        chosen[c], coef[c] = out_k, out_c
-        report(0.2 + 0.8 * min(len(usable), start + _CHUNK) / max(len(usable), 1), "choosing k")
-    fitted = chosen >= 0
-    k = np.where(fitted, ks_arr[np.maximum(chosen, 0)], 0)
     with np.errstate(invalid="ignore", divide="ignore"):
         noise = np.where(s > 0, np.maximum(np.sqrt(sigma2), 0.5 * np.sqrt(plain)) / s, np.inf)
+    if nb.width < ks[-1] and np.count_nonzero(noise[usable] > JET_QUIET) > WIDEN_SHARE * len(usable):
+        idx_all, dist_all = nb.take(ks[-1])  # noisy: most jets grow past the columns held, search all at once
+    report(0.2, "choosing k")
+    with np.errstate(invalid="ignore", divide="ignore"):
+        sigma2_h = sigma2 / s ** 2  # the noise in units of h^2, as the kernels take it
+
+    def frames(rows, c):
+        return _jet_frames(points, normals, rows, c, s, t1, t2)
+
+    chosen, coef = _jet_ici(nb, idx_all, usable, ks, frames, sigma2_h, report)
+    ks_arr = np.asarray(ks, dtype=np.int64)
+    fitted = chosen >= 0
+    k = np.where(fitted, ks_arr[np.maximum(chosen, 0)], 0)
     degree = np.where(fitted, JET_DEGREE, -1)
     # nearly noise-free and the cubic stopped by its bias within the richer models' reach: a
     # higher degree may remove that bias (where the cubic grew wider, noise, not bias, limits it)
-    reach = min(max(kd for _, kd in JET_DEGREES), idx_all.shape[1])
+    reach = min(max(kd for _, kd in JET_DEGREES), ks[-1])
     quiet = np.flatnonzero(fitted & (noise <= JET_QUIET) & (k <= reach))
     if len(quiet):
         f = _jet_frames(points, normals, idx_all[quiet, :max(reach, ks[0])], quiet, s, t1, t2)
@@ -260,6 +272,46 @@ def choose_jets(points, normals, nb, has_normal, ks, report):
         frame = darboux_frame(t1, t2, np.where(has_normal[:, None], normals, [0.0, 0.0, 1.0]),
                               np.nan_to_num(mu), np.nan_to_num(W) / s[:, None, None])
     return k, (*frame[:-1], frame[-1] & fitted), noise, degree
+
+
+def _jet_ici(nb, idx, usable, ks, frames, sigma2_h, report):
+    """(chosen index into ``ks`` (N,), -1 where no fit; coefficients (N, 10)) of
+    :func:`core.kernels.jets.jet_ici` at the ``usable`` centres, on their neighbours
+    ``idx`` (N, w) (the columns ``nb`` holds); ``frames(rows, centres)`` the kernels'
+    record, ``sigma2_h`` (N,) the noise in units of h^2.
+
+    With w < ks[-1] the rule runs on the sizes up to w first. It looks one ring ahead
+    (at size c it tests the ring ks[c]..ks[c + 1] for a fold) and ends at the last size,
+    so it takes the same steps as on all sizes up to the next-to-last size held: a centre
+    that stopped before (chosen <= m - 3 of m sizes) has the full rule's answer, the others
+    (and those without a fit) are run again on their ``ks[-1]`` neighbours (``nb.rows``).
+    """
+    n = len(idx)
+    chosen = np.full(n, -1, dtype=np.int64)
+    coef = np.full((n, jet_kernels.P3), np.nan)
+    rule = _jet_rule()
+    m = int(np.searchsorted(ks, idx.shape[1], side="right"))  # sizes held
+    if m < 3 < len(ks):  # too few to tell anything: all of them
+        idx, m = nb.take(ks[-1])[0], len(ks)
+    held = ks[:m]
+    ks_held = np.asarray(held, dtype=np.int64)
+
+    def run(c, rows, sizes):
+        out_k, out_c = np.empty(len(c), dtype=np.int64), np.empty((len(c), jet_kernels.P3))
+        jet_kernels.jet_ici(frames(rows, c), sizes, sigma2_h[c], rule, out_k, out_c)
+        chosen[c], coef[c] = out_k, out_c
+
+    for start in range(0, len(usable), _CHUNK):
+        c = usable[start:start + _CHUNK]
+        run(c, idx[c, :held[-1]], ks_held)
+        report(0.2 + 0.8 * min(len(usable), start + _CHUNK) / max(len(usable), 1), "choosing k")
+    if len(held) < len(ks):
+        ks_arr = np.asarray(ks, dtype=np.int64)
+        again = usable[(chosen[usable] < 0) | (chosen[usable] >= len(held) - 2)]
+        for start in range(0, len(again), _CHUNK):
+            c = again[start:start + _CHUNK]
+            run(c, nb.rows(c, ks[-1])[0], ks_arr)
+    return chosen, coef
 
 
 def _higher_degrees(f, k3, sigma2):

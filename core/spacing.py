@@ -27,7 +27,7 @@ def mean_spacing(points, *, neighbours=None, sample=None, seed=0) -> float:
     if neighbours is not None:
         if neighbours.k_max < 2:
             raise ValueError(f"mean spacing needs neighbours with k_max >= 2, got k_max={neighbours.k_max}")
-        return float(np.mean(neighbours.distances[:, 1]))
+        return float(np.mean(neighbours.take(2)[1][:, 1]))  # take: a graph that searches on demand holds these
     pts, _ = as_points(points)
     n = len(pts)
     if n < 2:

@@ -14,7 +14,10 @@ The neighbour stage searches ``max(k, k_max)`` neighbours (``StageCache(k_max=..
 room) and serves every later call on the same cloud whose plan needs at most that many,
 on the points in spatial order as a call without a cache (:mod:`core.spatial_order`):
 an interactive k slider then never searches again. The first k neighbours of a larger
-search are those of a search for k (ties go to the lowest index either way).
+search are those of a search for k (ties go to the lowest index either way); so the
+search holds only the columns the plan reads at first (:func:`core.stages.search_width`)
+and the graph searches the rest when a later call needs them
+(:class:`core.wide_neighbours.WidenableNeighbours`).
 
 Only the last ``keep`` outputs of each stage are kept (``keep=2``: a method and the one it
 is compared with), and one neighbour graph (memory: one cloud's worth per kept output,
@@ -28,6 +31,8 @@ import hashlib
 from collections import Counter
 
 import numpy as np
+
+from .wide_neighbours import LazyNeighbours, WidenableNeighbours
 
 __all__ = ["StageCache", "STAGE_FIELDS"]
 
@@ -125,7 +130,7 @@ class StageCache:
         """``order.neighbours_to_caller(nb, points)`` kept with ``nb``: the results of one
         graph share one copy in the caller's order."""
         if self._caller is None or self._caller[0] is not nb:
-            self._caller = (nb, order.neighbours_to_caller(nb, points, in_place=False))
+            self._caller = (nb, _to_caller(order, nb, points, in_place=False))
         return self._caller[1]
 
 
@@ -169,8 +174,17 @@ def caller_neighbours(cache: StageCache | None, order, nb, points):
     caller's ``points``: reordered in place without a cache, kept with it
     (:meth:`StageCache.caller_neighbours`)."""
     if cache is None:
-        return order.neighbours_to_caller(nb, points)
+        return _to_caller(order, nb, points, in_place=True)
     return cache.caller_neighbours(order, nb, points)
+
+
+def _to_caller(order, nb, points, *, in_place):
+    """``order.neighbours_to_caller``, put off until read when ``nb`` holds only the
+    first columns of its graph (:class:`core.wide_neighbours.WidenableNeighbours`: the rest
+    would be searched for a result nobody may read)."""
+    if isinstance(nb, WidenableNeighbours) and not nb.complete:
+        return LazyNeighbours(points, nb, order.order, lambda: order.neighbours_to_caller(nb, points, in_place=in_place))
+    return order.neighbours_to_caller(nb, points, in_place=in_place)
 
 
 def _field(plan, name: str):

@@ -13,13 +13,15 @@ from . import kernels, passes, scale
 from .passes import PassRule, few_fits
 from .frame import darboux_frame
 from .border import border_of_valid, served_by
-from .neighbours import Neighbours, search_in_spatial_order, search_neighbours
+from .neighbours import Neighbours, search_neighbours
 from .normal_repair import repair_normals
 from .normals import jet_normals, pca_normals
 from .orientation import orient, resettle
 from .patch import Chunk
 from .spatial_order import SpatialOrder
-from .tuning import CREASE_NOISE, CREASE_RATIO, CREASE_SPREAD, HOLD_TURN, JET_SCORE, OUTLIER_FLOOR, PASS_DECAY
+from .wide_neighbours import rows_at_least, search_in_spatial_order
+from .tuning import (CREASE_NOISE, CREASE_RATIO, CREASE_SPREAD, HOLD_TURN, JET_SCORE, OUTLIER_FLOOR, PASS_DECAY,
+                     SEARCH_WIDTH)
 
 _CHUNK = 32_768
 
@@ -90,8 +92,16 @@ def spatial_neighbours(pts, plan, neighbours, report, *, k=None) -> tuple[Neighb
     ``k``: search that many (>= ``plan.k_search``, a cache's head room) instead."""
     if neighbours is not None:
         return find_neighbours(pts, plan, neighbours, report), SpatialOrder(None)
-    nb, order = search_in_spatial_order(pts, plan.k_search if k is None else k, progress=report)
+    nb, order = search_in_spatial_order(pts, plan.k_search if k is None else k, progress=report,
+                                        width=search_width(plan))
     return nb, SpatialOrder(order)
+
+
+def search_width(plan) -> int | None:
+    """Neighbours searched per point at first (:class:`core.wide_neighbours.WidenableNeighbours`
+    serves the rest): with k="auto" :data:`core.tuning.SEARCH_WIDTH`; with an integer k all
+    (None), a cache's head room included (a viewer's k slider moves within it unsearched)."""
+    return min(SEARCH_WIDTH, plan.n_points) if plan.auto else None
 
 
 def outlier_scores(pts, idx) -> np.ndarray:
@@ -133,6 +143,8 @@ def initial_normals(pts, nb, plan, outlier, report) -> Initial:
         jet, ratio, clean = noise_samples(pts, nrm, ok, idx_p, dist_p, outlier)
         noise = scale.noise_ratio(np.where(clean, ratio, np.nan) if clean.any() else ratio, 1.0)
     k_init = scale.initial_k(noise, plan.k_initial, plan.k_search)
+    if k_init > nb.width:  # noise this large grows most jets to k_search too: search them all once
+        nb.widen(plan.k_search)
     shun = plan.robust and outlier.any()
     if k_init == plan.k_initial and not shun:
         if plan.initial == "jet":
@@ -299,8 +311,7 @@ def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n
     normals). With a mask ``first`` a pass is fitted there only, and ``complete()`` fits
     its other points (done before the next pass if the caller did not)."""
     kc = sc.k
-    idx, dist = nb.take(int(kc.max()))
-    h = dist[np.arange(len(pts)), kc - 1]
+    idx, h = rows_at_least(nb, kc)
     nrm, has_normal = initial.normals, initial.has_normal
     if sc.on_jet.any():  # the jets' normals are the neighbours' input where the jet is kept
         nrm = np.where(sc.on_jet[:, None], sc.jets[0], nrm)

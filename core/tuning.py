@@ -31,6 +31,14 @@ SEARCH_LEAF = 32
 #: this many points (or k) holding it; speed only. A larger node gives a tighter radius
 #: and fewer candidates but costs more distances itself.
 SEARCH_RADIUS_NODE = 64
+#: with k="auto" the search finds this many neighbours per point at first and the rows
+#: that need more later (core.wide_neighbours.WidenableNeighbours): every stage before the
+#: choice of scale reads at most 30 (core.border.BORDER_K), and the jet rule stops at
+#: 15-28 neighbours at nearly every point of a noise-free cloud (at the next-to-last of
+#: the sizes it is run on, it reruns with the whole list: it looks one ring ahead). A
+#: noisy cloud is searched to k_search at once (core.scale.WIDEN_SHARE). Speed only.
+#: CPU s of the search on a 100k torus: 16 0.14, 56 0.22, 226 0.69.
+SEARCH_WIDTH = 56
 
 # ----------------------------------------------------------------------------- initial normals
 
@@ -111,6 +119,11 @@ JET_GAMMA = 5.0
 #: margin over noise-free data. An outlier that raises a point's neighbours' residuals
 #: keeps them off the jet (the jet is not robust).
 JET_QUIET = 0.001
+#: when more than this share of the points measures noise above JET_QUIET, the jet rule
+#: searches every point's whole list at once instead of the rows that grow past the
+#: columns held (core.tuning.SEARCH_WIDTH): with noise most jets grow to the largest size
+#: (noise 0.2 spacing on a torus: 96 % at 226), noise-free nearly none do. Speed only.
+WIDEN_SHARE = 0.5
 #: ... but only where the 15 neighbours reach less than this fraction of a radius of
 #: curvature (s |k|max): on 1000 points of a torus (15 neighbours span 0.65 of the tube's
 #: radius) NR's cubic normal field at the NF rule's k has a quarter of the jet's H error,

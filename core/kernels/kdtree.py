@@ -226,30 +226,55 @@ def query_sorted(p, tree, rank, start, dist, idx, want):
 
     Numpy reference, row i: ``d = sqrt(((p - p[i]) ** 2).sum(1)); o = np.lexsort((rank, d))[:k];
     dist[i], idx[i] = d[o], o``."""
-    rows, k = dist.shape
+    rows = dist.shape[0]
     depth = 2 * int(np.log2(max(p.shape[0], 2))) + 8
     for b in prange((rows + BLOCK - 1) // BLOCK):
-        stack = np.empty(2 * depth + 4, np.int64)
-        cap = 8 * want + 2
-        cd, cj = np.empty(cap, np.float64), np.empty(cap, np.int64)
-        work = (np.empty(cap, np.float64), np.empty(cap, np.int64), np.empty(cap + 1, np.int64), stack)
-        last = -1.0
-        for r in range(b * BLOCK, min(rows, (b + 1) * BLOCK)):
+        _query_block(p, tree, rank, start, None, b * BLOCK, min(rows, (b + 1) * BLOCK), dist, idx, want, depth)
+
+
+@njit(**OPTS, parallel=True)
+def query_rows(p, tree, rank, rows, dist, idx, want):
+    """:func:`query_sorted` for the points ``rows`` (any indices into ``p``, best in
+    ascending order: each query starts from the previous one's radius): row r of
+    ``dist`` / ``idx`` holds the k = ``dist.shape[1]`` nearest neighbours of point
+    ``rows[r]``, the same bits as :func:`query_sorted` gives for that point."""
+    m = dist.shape[0]
+    depth = 2 * int(np.log2(max(p.shape[0], 2))) + 8
+    for b in prange((m + BLOCK - 1) // BLOCK):
+        _query_block(p, tree, rank, 0, rows, b * BLOCK, min(m, (b + 1) * BLOCK), dist, idx, want, depth)
+
+
+@njit(**OPTS)
+def _query_block(p, tree, rank, start, rows, r0, r1, dist, idx, want, depth):
+    """Rows r0 .. r1 - 1 of :func:`query_sorted` (point ``start + r``) or of
+    :func:`query_rows` (point ``rows[r]``), scratch allocated once."""
+    k = dist.shape[1]
+    stack = np.empty(2 * depth + 4, np.int64)
+    cap = 8 * want + 2
+    cd, cj = np.empty(cap, np.float64), np.empty(cap, np.int64)
+    work = (np.empty(cap, np.float64), np.empty(cap, np.int64), np.empty(cap + 1, np.int64), stack)
+    last = -1.0
+    prev = -1
+    for r in range(r0, r1):
+        if rows is None:
             i = start + r
-            # the previous point's k nearest lie within d(i, i - 1) + its k-th distance of i
-            step = _distance(p, i, i - 1) if last >= 0.0 else np.inf
-            radius = (step + last) * (1.0 + _SLACK) if step <= last else _radius(p, tree, i, k, want, rank, cd, cj)
-            while True:
-                m = _gather(p, tree, i, radius, cd, cj, stack)
-                if m < 0:
-                    cap *= 2
-                    cd, cj = np.empty(cap, np.float64), np.empty(cap, np.int64)
-                    work = (np.empty(cap, np.float64), np.empty(cap, np.int64), np.empty(cap + 1, np.int64), stack)
-                elif m < k:  # short of k by rounding: the node's own radius
-                    radius = _radius(p, tree, i, k, want, rank, cd, cj)
-                else:
-                    break
-            _bucket_sort(cd, cj, m, radius, rank, k, work)
-            for c in range(k):
-                dist[r, c], idx[r, c] = work[0][c], work[1][c]
-            last = dist[r, k - 1]
+        else:
+            i = rows[r]
+        # the previous point's k nearest lie within d(i, prev) + its k-th distance of i
+        step = _distance(p, i, prev) if last >= 0.0 else np.inf
+        radius = (step + last) * (1.0 + _SLACK) if step <= last else _radius(p, tree, i, k, want, rank, cd, cj)
+        while True:
+            m = _gather(p, tree, i, radius, cd, cj, stack)
+            if m < 0:
+                cap *= 2
+                cd, cj = np.empty(cap, np.float64), np.empty(cap, np.int64)
+                work = (np.empty(cap, np.float64), np.empty(cap, np.int64), np.empty(cap + 1, np.int64), stack)
+            elif m < k:  # short of k by rounding: the node's own radius
+                radius = _radius(p, tree, i, k, want, rank, cd, cj)
+            else:
+                break
+        _bucket_sort(cd, cj, m, radius, rank, k, work)
+        for c in range(k):
+            dist[r, c], idx[r, c] = work[0][c], work[1][c]
+        last = dist[r, k - 1]
+        prev = i

@@ -18,7 +18,7 @@ FIELDS = ("normals", "k1", "k2", "e1", "e2", "valid", "k_point", "outlier_score"
           "orientation_confidence")
 
 
-def _unsorted(pts, k_max, *, progress=None):
+def _unsorted(pts, k_max, *, progress=None, width=None):  # width: the whole lists, the reference
     return neighbours.search_neighbours(pts, k_max, progress=progress), None
 
 

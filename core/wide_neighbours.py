@@ -1,0 +1,259 @@
+"""Neighbour graphs that hold the first columns of every row and search the rest on
+demand (issue 15, speed).
+
+With k="auto" a plan allows up to 226 neighbours per point, but the jet rule stops at
+15-28 of them at nearly every point of a noise-free cloud: searching all 226 for every
+point was the largest single cost of an estimate of 100k points (0.69 CPU s, against 0.22
+for 56), and moving that graph to the caller's order the next. The search's answer is
+canonical (the k smallest by distance, then the caller's index), so the first k of a
+wider query are a narrower query's and a row searched wider extends the row held, bit
+for bit: :class:`WidenableNeighbours` holds :data:`core.tuning.SEARCH_WIDTH` columns and
+the tree, :class:`LazyNeighbours` is that graph in the caller's order (what
+``CurvatureResult.neighbours`` holds) and :func:`rows_at_least` gives a fit every row at
+the width it uses.
+"""
+
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+
+from ._progress import Progress
+from .kernels.kdtree import query_rows
+from .neighbours import _CHUNK, Neighbours, _query_tree, _search, _self_first
+from .tuning import SEARCH_RADIUS_NODE
+
+__all__ = ["WidenableNeighbours", "LazyNeighbours", "rows_at_least", "search_in_spatial_order"]
+
+
+def search_in_spatial_order(pts: np.ndarray, k_max: int, *, progress=None, width: int | None = None):
+    """:func:`core.neighbours.search_in_spatial_order`; with ``width`` < ``k_max`` only
+    that many neighbours per point, in a :class:`WidenableNeighbours` that searches further
+    rows when asked (not with the duplicate-aware search, which searches ``k_max``)."""
+    nb, order, tree = _search(pts, k_max, progress, spatial=True, width=width)
+    if tree is None:
+        return nb, order
+    return WidenableNeighbours(nb.points, nb.indices, nb.distances, k_max=k_max, tree=tree, rank=order), order
+
+
+class WidenableNeighbours(Neighbours):
+    """:class:`Neighbours` of points in spatial order (:func:`search_in_spatial_order`)
+    that holds only the first :attr:`width` of its ``k_max`` neighbours per point and
+    searches further rows on demand, with the tree and the ranks of the first search.
+
+    The search's answer is canonical (the k smallest by distance, then the caller's
+    index), so the first k of a wider query are a narrower query's: a row searched wider
+    extends the one held, bit for bit. :meth:`rows` serves some rows at any k up to
+    ``k_max``; :meth:`take` beyond the width, :attr:`indices` and :attr:`distances`
+    widen every row to ``k_max`` first (:meth:`widen`), once. With k="auto" most points
+    of a noise-free cloud use at most 40 neighbours of the 226 the plan allows.
+    """
+
+    def __init__(self, points, indices, distances, *, k_max, tree, rank):
+        object.__setattr__(self, "_points", points)
+        object.__setattr__(self, "_pair", (indices, distances))  # one attribute: replaced at once
+        object.__setattr__(self, "_lock", threading.Lock())
+        object.__setattr__(self, "_k_max", int(k_max))
+        object.__setattr__(self, "_tree", tree)
+        object.__setattr__(self, "_rank", rank)
+
+    def __reduce__(self):  # pickled (and copied) as the whole graph: the lock and tree stay here
+        return Neighbours, (self.points, self.indices, self.distances)
+
+    def __repr__(self) -> str:
+        return f"WidenableNeighbours(n={len(self._points)}, k_max={self._k_max}, width={self.width})"
+
+    @property
+    def points(self) -> np.ndarray:
+        return self._points
+
+    @property
+    def indices(self) -> np.ndarray:
+        return self.widen()[0]
+
+    @property
+    def distances(self) -> np.ndarray:
+        return self.widen()[1]
+
+    @property
+    def complete(self) -> bool:
+        """Whether all ``k_max`` neighbours of every row are held."""
+        return self.width >= self._k_max
+
+    @property
+    def k_max(self) -> int:
+        return self._k_max
+
+    @property
+    def width(self) -> int:
+        return self._pair[0].shape[1]
+
+    def _held(self):
+        return self._pair
+
+    def take(self, k: int):
+        self._check_k(k)
+        idx, dist = self._pair if k <= self.width else self.widen(k)
+        return idx[:, :k], dist[:, :k]
+
+    def rows(self, centres: np.ndarray, k: int):
+        self._check_k(k)
+        held_idx, held_dist = self._pair
+        if k <= held_idx.shape[1]:
+            return held_idx[centres, :k], held_dist[centres, :k]
+        centres = np.asarray(centres, dtype=np.int64)
+        idx = np.empty((len(centres), k), dtype=held_idx.dtype)
+        dist = np.empty((len(centres), k), dtype=np.float64)
+        for start in range(0, len(centres), _CHUNK):
+            stop = min(len(centres), start + _CHUNK)
+            query_rows(self._points, self._tree, self._rank, centres[start:stop], dist[start:stop],
+                       idx[start:stop], max(k, SEARCH_RADIUS_NODE))
+        _self_first(idx, dist, centres)
+        return idx, dist
+
+    def widen(self, k: int | None = None, *, progress=None):
+        """Every row searched to ``k`` (default ``k_max``) neighbours, if fewer are held."""
+        k = self._k_max if k is None else k
+        self._check_k(k)
+        with self._lock:  # a viewer's result may be read on one thread while the next job widens it
+            if self.width < k:
+                n = len(self._points)
+                idx = np.empty((n, k), dtype=self._pair[0].dtype)
+                dist = np.empty((n, k), dtype=np.float64)
+                _query_tree(self._points, self._tree, self._rank, idx, dist, Progress(progress))
+                idx.setflags(write=False)
+                dist.setflags(write=False)
+                object.__setattr__(self, "_pair", (idx, dist))
+            return self._pair
+
+
+class LazyNeighbours(Neighbours):
+    """The graph ``source`` (a :class:`WidenableNeighbours` on the points in spatial
+    order, sorted point s being the caller's ``order[s]``) as neighbours of the caller's
+    ``points``, what :attr:`core.CurvatureResult.neighbours` holds when the estimate held
+    only the first columns of its graph. The columns held and the rows searched wider are
+    served from ``source`` in the caller's order (:meth:`take`, :meth:`rows`, so an
+    estimate it is passed back to searches no more than the first one did); reading
+    :attr:`indices` or :attr:`distances` makes the whole graph once, by ``make()``."""
+
+    def __init__(self, points, source, order, make):
+        inverse = np.empty_like(order)
+        inverse[order] = np.arange(len(order), dtype=order.dtype)
+        for name, value in dict(_points=points, _source=source, _order=order, _inverse=inverse, _make=make,
+                                _made=None, _k_max=source.k_max, _lock=threading.Lock()).items():
+            object.__setattr__(self, name, value)
+
+    def __reduce__(self):  # pickled (and copied) as the whole graph
+        return Neighbours, (self.points, self.indices, self.distances)
+
+    def __repr__(self) -> str:
+        return f"LazyNeighbours(n={len(self._points)}, k_max={self._k_max}, made={self._made is not None})"
+
+    def _graph(self) -> Neighbours:
+        with self._lock:
+            if self._made is None:
+                made = self._make()
+                for name, value in dict(_made=made, _make=None, _source=None, _order=None, _inverse=None).items():
+                    object.__setattr__(self, name, value)
+        return self._made
+
+    @property
+    def points(self) -> np.ndarray:
+        return self._points
+
+    @property
+    def indices(self) -> np.ndarray:
+        return self._graph().indices
+
+    @property
+    def distances(self) -> np.ndarray:
+        return self._graph().distances
+
+    @property
+    def k_max(self) -> int:
+        return self._k_max
+
+    @property
+    def width(self) -> int:
+        source = self._source
+        return self._k_max if source is None else source.width
+
+    def _held(self):
+        with self._lock:
+            source, order, inverse = self._source, self._order, self._inverse
+        if source is None:
+            return self._made.indices, self._made.distances
+        idx, dist = source.take(source.width)
+        return order[idx[inverse]], dist[inverse]
+
+    def take(self, k: int):
+        self._check_k(k)
+        with self._lock:
+            source, order, inverse = self._source, self._order, self._inverse
+        if source is None or k > source.width:
+            return self._graph().take(k)
+        idx, dist = source.take(k)
+        return order[idx[inverse]], dist[inverse]
+
+    def rows(self, centres: np.ndarray, k: int):
+        self._check_k(k)
+        with self._lock:
+            source, order, inverse = self._source, self._order, self._inverse
+        if source is None:
+            return self._made.rows(centres, k)
+        idx, dist = source.rows(inverse[np.asarray(centres)], k)
+        return order[idx], dist
+
+    def widen(self, k: int | None = None, *, progress=None):
+        if k is not None and k <= self.width:
+            return self._held()
+        graph = self._graph()
+        return graph.indices, graph.distances
+
+
+def rows_at_least(nb, kc):
+    """``(rows, h)``: the neighbours of every point, at least ``kc[i]`` for point i, as an
+    (N, kc.max()) array or, when ``nb`` holds fewer columns and only a minority of the
+    points needs more, a :class:`_Rows` that adds them per chunk; ``h[i]`` the distance
+    to point i's ``kc[i]``-th neighbour."""
+    n, k = len(kc), int(kc.max())
+    wide = np.flatnonzero(kc > nb.width) if k > nb.width else np.empty(0, dtype=np.int64)
+    if 2 * len(wide) > n:
+        nb.widen(k)
+        wide = wide[:0]
+    if not len(wide):
+        idx, dist = nb.take(k)
+        return idx, dist[np.arange(n), kc - 1]
+    idx, dist = nb.take(nb.width)
+    h = np.empty(n)
+    narrow = np.flatnonzero(kc <= nb.width)
+    h[narrow] = dist[narrow, kc[narrow] - 1]
+    w_idx, w_dist = nb.rows(wide, k)
+    h[wide] = w_dist[np.arange(len(wide)), kc[wide] - 1]
+    return _Rows(idx, wide, w_idx, kc), h
+
+
+class _Rows:
+    """The neighbours of a chunk of centres ``c`` (``self[c]``), as wide as the most any of
+    them uses (``kc``): the ``held`` columns, and for the centres in ``wide`` (sorted) their
+    rows ``w_idx`` searched wider. Columns a centre does not use hold the centre itself
+    (the fits read a centre's first kc only)."""
+
+    __slots__ = ("held", "wide", "w_idx", "kc")
+
+    def __init__(self, held, wide, w_idx, kc):
+        self.held, self.wide, self.w_idx, self.kc = held, wide, w_idx, kc
+
+    def __getitem__(self, c):
+        k = int(self.kc[c].max()) if len(c) else 1
+        width = self.held.shape[1]
+        if k <= width:
+            return self.held[c, :k]
+        idx = np.empty((len(c), k), dtype=self.held.dtype)
+        idx[:, :width] = self.held[c]
+        idx[:, width:] = c[:, None]
+        pos = np.minimum(np.searchsorted(self.wide, c), len(self.wide) - 1)
+        mine = np.flatnonzero(self.wide[pos] == c)
+        idx[mine] = self.w_idx[pos[mine], :k]
+        return idx

@@ -1,0 +1,199 @@
+"""A narrow neighbour graph widened row by row (core.neighbours.WidenableNeighbours) gives
+k="auto" exactly what a search of every point's k_search neighbours gives (issue 15, speed)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from core import build_neighbours, estimate, noise, scale, shapes, stages
+from core.wide_neighbours import LazyNeighbours, WidenableNeighbours, search_in_spatial_order
+from core.stage_cache import StageCache
+
+FIELDS = ("normals", "k1", "k2", "e1", "e2", "valid", "k_point", "degree_point", "outlier_score", "crease",
+          "orientation_confidence", "border")
+
+
+def _same(a, b):
+    for f in FIELDS:
+        x, y = np.asarray(getattr(a, f)), np.asarray(getattr(b, f))
+        assert np.array_equal(x, y, equal_nan=True), f
+    assert a.params["passes_run"] == b.params["passes_run"]
+    assert a.params["initial_k"] == b.params["initial_k"]
+
+
+@pytest.fixture(scope="module")
+def half_noisy():
+    """A torus noise-free on one half and with noise of 0.3 spacing on the other."""
+    pts = shapes.torus(6000, seed=3).points
+    noisy = noise.add_noise(pts, 0.3, seed=4)
+    return np.where((pts[:, 0] > 0)[:, None], noisy, pts)
+
+
+@pytest.fixture(scope="module")
+def quantised():
+    """Ties at every distance (coordinates on a grid), and some exact duplicates."""
+    pts = np.round(shapes.torus(3000, seed=5).points * 12) / 12
+    return np.vstack([pts, pts[:40]])
+
+
+@pytest.fixture(scope="module")
+def full_width(half_noisy):
+    """The estimate with every point's whole list searched up front (the old pipeline)."""
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(stages, "SEARCH_WIDTH", 10**9)
+        return estimate(half_noisy)
+
+
+def test_rows_widened_equal_a_full_search(quantised):
+    narrow, order = search_in_spatial_order(quantised, 120, width=24)
+    full, order_full = search_in_spatial_order(quantised, 120)
+    assert isinstance(narrow, WidenableNeighbours) and narrow.width == 24 and narrow.k_max == 120
+    assert np.array_equal(order, order_full)
+    rng = np.random.default_rng(0)
+    centres = np.sort(rng.choice(len(quantised), 500, replace=False))
+    for k in (24, 25, 57, 120):
+        idx, dist = narrow.rows(centres, k)
+        assert np.array_equal(idx, full.indices[centres, :k]) and np.array_equal(dist, full.distances[centres, :k])
+    idx, dist = narrow.rows(centres[::-1].copy(), 120)  # any order of rows
+    assert np.array_equal(idx, full.indices[centres[::-1], :])
+    drop = rng.random(len(quantised)) < 0.6  # many rows short of unflagged among the 24 held
+    for got, want in zip(narrow.take_without(20, drop), full.take_without(20, drop)):
+        assert np.array_equal(got, want)
+    assert narrow.width == 24  # none of that widened the graph
+    assert narrow.mean_spacing() == full.mean_spacing()
+    idx, dist = narrow.take(80)
+    assert narrow.width == 80 and np.array_equal(idx, full.indices[:, :80])
+    assert np.array_equal(narrow.indices, full.indices) and np.array_equal(narrow.distances, full.distances)
+
+
+def test_half_noisy_cloud_is_bit_identical_to_a_full_search(half_noisy, full_width):
+    res = estimate(half_noisy)
+    _same(res, full_width)
+    assert set(np.unique(res.k_point)) & {226}  # the noisy half grew past the columns held
+    assert (res.k_point <= 40).mean() > 0.3  # and the clean half did not
+
+
+@pytest.mark.parametrize("share", [0.0, 1.0])
+def test_either_way_of_widening_gives_the_same(half_noisy, full_width, share, monkeypatch):
+    """share 0: every point searched wide before the jet rule; 1: only the rows that reached
+    the last sizes held, rerun (the jet rule looks one ring ahead)."""
+    monkeypatch.setattr(scale, "WIDEN_SHARE", share)
+    _same(estimate(half_noisy), full_width)
+
+
+def test_truncated_jet_rule_reruns_the_points_at_its_last_sizes(half_noisy, full_width, monkeypatch):
+    """Without the rerun the jets at the last sizes held would differ (fold_next is True
+    at the last size): the width where the noise-free half stops must be checked."""
+    monkeypatch.setattr(scale, "WIDEN_SHARE", 1.0)
+    monkeypatch.setattr(stages, "SEARCH_WIDTH", 40)
+    _same(estimate(half_noisy), full_width)
+
+
+def test_result_neighbours_are_the_full_graph_and_pass_back(half_noisy, full_width):
+    res = estimate(half_noisy)
+    assert res.neighbours.k_max == 226
+    full = build_neighbours(half_noisy, 226)
+    _same(estimate(half_noisy, neighbours=res.neighbours), full_width)
+    assert np.array_equal(res.neighbours.indices, full.indices)
+    assert np.array_equal(res.neighbours.distances, full.distances)
+    _same(estimate(half_noisy, neighbours=full), full_width)
+
+
+def test_lazy_result_neighbours_pass_back(monkeypatch):
+    """A third of the torus noisy: the rows, not the graph, are widened, and the result's
+    graph in the caller's order is made when read (also by an estimate it is passed to)."""
+    pts = shapes.torus(6000, seed=3).points
+    pts = np.where((pts[:, 0] > 1.2)[:, None], noise.add_noise(pts, 0.3, seed=4), pts)
+    monkeypatch.setattr(scale, "WIDEN_SHARE", 1.0)
+    res = estimate(pts)
+    assert isinstance(res.neighbours, LazyNeighbours) and res.neighbours._made is None
+    with monkeypatch.context() as mp:
+        mp.setattr(stages, "SEARCH_WIDTH", 10**9)
+        want = estimate(pts)
+    _same(res, want)
+    again = estimate(pts, neighbours=res.neighbours)
+    _same(again, want)
+    assert again.neighbours is res.neighbours and res.neighbours._made is None  # served without the whole graph
+    idx, dist = res.neighbours.take(30)
+    assert np.array_equal(idx, want.neighbours.indices[:, :30]) and np.array_equal(dist, want.neighbours.distances[:, :30])
+    centres = np.arange(0, len(pts), 7)
+    idx, dist = res.neighbours.rows(centres, 200)
+    assert np.array_equal(idx, want.neighbours.indices[centres, :200])
+    assert res.neighbours.mean_spacing() == want.neighbours.mean_spacing()
+    assert res.neighbours._made is None
+    assert np.array_equal(res.neighbours.indices, want.neighbours.indices)
+    assert np.array_equal(res.neighbours.distances, want.neighbours.distances)
+
+
+def test_stage_cache_auto_then_a_larger_k(half_noisy, full_width):
+    cache = StageCache()
+    _same(estimate(half_noisy, cache=cache), full_width)
+    fresh = estimate(half_noisy, k=200)
+    again = estimate(half_noisy, k=200, cache=cache)  # served by the auto graph, widened
+    assert cache.reused["neighbours"] == 1
+    _same(again, fresh)
+    assert np.array_equal(again.neighbours.indices[:, :200], fresh.neighbours.indices)
+    _same(estimate(half_noisy, cache=cache), full_width)  # and back
+
+
+def test_stage_cache_head_room_for_an_integer_k(half_noisy):
+    cache = StageCache(k_max=226)
+    a = estimate(half_noisy, k=15, cache=cache)  # an integer k searches the whole head room
+    _same(a, estimate(half_noisy, k=15))
+    _same(estimate(half_noisy, k=113, cache=cache), estimate(half_noisy, k=113))
+    assert cache.computed["neighbours"] == 1
+
+
+def test_noise_free_cloud_searches_few_rows_wide(monkeypatch):
+    pts = shapes.torus(6000, seed=0).points
+    searched = []
+    rows = WidenableNeighbours.rows
+
+    def counting(self, centres, k):
+        if k > self.width:
+            searched.append(len(centres))
+        return rows(self, centres, k)
+
+    monkeypatch.setattr(WidenableNeighbours, "rows", counting)
+    res = estimate(pts)
+    assert isinstance(res.neighbours, LazyNeighbours) and res.neighbours._made is None
+    assert sum(searched) < 0.05 * len(pts)
+    assert res.neighbours.k_max == 226 and res.neighbours.indices.shape == (len(pts), 226)
+
+
+def test_pickled_as_the_whole_graph(quantised):
+    import pickle
+
+    narrow, _ = search_in_spatial_order(quantised, 60, width=20)
+    back = pickle.loads(pickle.dumps(narrow))
+    assert type(back).__name__ == "Neighbours" and np.array_equal(back.indices, narrow.indices)
+    res = estimate(shapes.torus(3000, seed=0).points)
+    assert isinstance(res.neighbours, LazyNeighbours)
+    back = pickle.loads(pickle.dumps(res))
+    assert np.array_equal(back.neighbours.distances, res.neighbours.distances)
+
+
+@pytest.mark.parametrize("cloud", ["cube", "tube"])
+def test_folds_at_the_last_sizes_held(cloud, monkeypatch):
+    """Rings that fold over (a cube's edges, a thin tube's far side) stop the jet rule at
+    a size whose next ring is not held: the points that stopped at the next-to-last size
+    held must be rerun too (the cube had 8 points wrong without it)."""
+    from core import shapes_thin
+
+    pts = shapes.cube(6000).points if cloud == "cube" else shapes_thin.thin_tube(6000).points
+    monkeypatch.setattr(scale, "WIDEN_SHARE", 1.0)
+    res = estimate(pts)
+    monkeypatch.setattr(stages, "SEARCH_WIDTH", 10**9)
+    _same(res, estimate(pts))
+
+
+def test_one_point_s_neighbourhood_reads_one_row():
+    """The viewer's pick and local_fit read one row; the lazy graph must not be made."""
+    import core
+
+    pts = shapes.torus(3000, seed=0).points
+    res = estimate(pts)
+    fit = core.local_fit(res, 7)
+    assert res.neighbours._made is None
+    assert np.array_equal(fit.neighbours, res.neighbours.indices[7, :res.k_point[7]])
