@@ -16,8 +16,9 @@ from ._validate import as_normals, as_points
 from .planning import EstimatePlan
 from .result import CurvatureResult
 from .spatial_order import SpatialOrder
+from .refinement import refine, settle_signs
 from .stages import (choose_scale, crease_reference, flags, given_normals, initial_normals, orient_signs,
-                     outlier_scores, refine, settle_signs, spatial_neighbours)
+                     outlier_scores, spatial_neighbours)
 from .tuning import AUTO_PASSES, JET_DEGREE, MAX_PASSES, OUTLIER_SCORE, PASS_DECAY, PCA_K
 
 __all__ = ["estimate", "AUTO_PASSES", "MAX_PASSES", "OUTLIER_SCORE", "PASS_DECAY", "PCA_K"]

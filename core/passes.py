@@ -1,4 +1,4 @@
-"""The pass-stop rule of k="auto" (:func:`core.stages.refine`), judged on a sample.
+"""The pass-stop rule of k="auto" (:func:`core.refinement.refine`), judged on a sample.
 
 NR's refinement passes average the noise of the normals further, and the turn a pass
 gives them decays geometrically; a pass that turns them more than ``PASS_DECAY`` x the
@@ -56,7 +56,7 @@ def mean_turn_deg(a, b, mask) -> float:
 
 
 class PassRule:
-    """When :func:`core.stages.refine` keeps a pass and stops, from each fit's mean turn of the
+    """When :func:`core.refinement.refine` keeps a pass and stops, from each fit's mean turn of the
     normals (a whole-cloud mean: a tiled run reduces it over the tiles and replays this
     rule). ``n_fits``: fits at most (1 when NR fits too few points with noise)."""
 

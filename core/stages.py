@@ -1,6 +1,6 @@
 """The stages of :func:`core.estimate`, each a function of a few named inputs returning
 a small named result: neighbours -> outlier scores -> initial normals -> orientation ->
-scale choice -> fit/refine -> flags. A tiled engine runs them with quantities fixed on
+scale choice -> fit/refine (:mod:`core.refinement`) -> flags. A tiled engine runs them with quantities fixed on
 the whole cloud through the :class:`core.planning.EstimatePlan`."""
 
 from __future__ import annotations
@@ -9,19 +9,17 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import kernels, passes, scale
-from .passes import PassRule, few_fits
+from . import kernels, scale
 from .frame import darboux_frame
 from .border import border_of_valid, served_by
 from .neighbours import Neighbours, search_neighbours
 from .normal_repair import repair_normals
 from .normals import jet_normals, pca_normals
-from .orientation import orient, resettle
+from .orientation import orient
 from .patch import Chunk
 from .spatial_order import SpatialOrder
-from .wide_neighbours import rows_at_least, search_in_spatial_order
-from .tuning import (CREASE_NOISE, CREASE_RATIO, CREASE_SPREAD, HOLD_TURN, JET_SCORE, OUTLIER_FLOOR, PASS_DECAY,
-                     SEARCH_WIDTH)
+from .wide_neighbours import search_in_spatial_order
+from .tuning import CREASE_NOISE, CREASE_RATIO, CREASE_SPREAD, JET_SCORE, OUTLIER_FLOOR, SEARCH_WIDTH
 
 _CHUNK = 32_768
 
@@ -49,14 +47,6 @@ class Fit(NamedTuple):
     valid: np.ndarray
     rms: np.ndarray
     spread: np.ndarray
-
-
-class Refined(NamedTuple):
-    """The fit kept by the refinement loop, the normals it was fitted to, and its pass."""
-
-    fit: Fit
-    input_normals: np.ndarray
-    passes_run: int
 
 
 class Flags(NamedTuple):
@@ -274,158 +264,6 @@ def _fit_chunk(chunk, method, opts, out: Fit) -> None:
         out.rms[sel] = diag["rms"][good]
         out.spread[sel] = diag["spread"][good]
     out.valid[sel] = True
-
-
-def refine(pts, initial: Initial, outlier, nb, sc: Scale, plan, report) -> Refined:
-    """Fit, then refine the normals (NR, §4.4) up to ``plan.passes`` times: stop below
-    ``plan.tol``; with ``plan.adaptive`` undo a pass that turned the normals more than
-    PASS_DECAY x the pass before (it smoothed the shape, not the noise). The adaptive rule
-    judges each pass on :func:`core.passes.rule_sample` before the rest of the pass is
-    fitted, so an undone pass costs only the sample. In robust mode the outliers leave
-    their neighbours' fits after the first one. Where ``sc.on_jet`` the jet is the result
-    (and its normal the neighbours' input); passes run only if NR fits at least
-    PASS_MIN_SHARE of the points with noise (the pass rule judges by mean turns,
-    meaningless on a handful of points)."""
-    rule = PassRule(plan, few_fits(float((initial.has_normal & ~sc.quiet).mean()), plan))
-    judged = passes.rule_sample(pts, plan.n_points) if plan.adaptive else None
-    best = None
-    for p, fit, nrm, complete in fit_passes(pts, initial, outlier, nb, sc, plan, report, n_fits=rule.n_fits,
-                                            first=judged):
-        seen = fit.valid if judged is None else fit.valid & judged
-        change = passes.mean_turn_deg(fit.normals, nrm, seen) if rule.measures else None
-        keep, more = rule.step(p, change)
-        if keep:
-            best = Refined(complete(), nrm, p)
-        if not more:
-            break
-    return finish(best, sc, outlier, plan)
-
-
-def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n_fits, fitted=None, first=None):
-    """Yield ``(p, fit, input normals, complete)`` for the first fit and each refinement
-    pass, up to ``n_fits`` (the caller stops when it has enough); fits are never changed
-    afterwards. ``complete()`` returns the fit to report for pass p: ``fit`` itself, or
-    with k="auto" a copy where :class:`_Held` keeps earlier passes' fits (the next pass
-    and the pass rule see ``fit``). ``fitted[p]`` (N,) bool, optional: fit only those points in fit p (a tile
-    fits each pass only as far out as later passes use it; the others keep their input
-    normals). With a mask ``first`` a pass is fitted there only, and ``complete()`` fits
-    its other points (done before the next pass if the caller did not)."""
-    kc = sc.k
-    idx, h = rows_at_least(nb, kc)
-    nrm, has_normal = initial.normals, initial.has_normal
-    if sc.on_jet.any():  # the jets' normals are the neighbours' input where the jet is kept
-        nrm = np.where(sc.on_jet[:, None], sc.jets[0], nrm)
-    fitter = _Fitter(pts, idx, kc, h, plan.method, dict(plan.options))
-    share = 1.0 if first is None else float(first.mean())
-    held = _Held(len(pts)) if plan.adaptive else None
-    for p in range(n_fits):
-        sub = report.sub(p / n_fits, (p + 1) / n_fits)
-        fit = _empty_fit(len(pts))
-        centres = has_normal & ~sc.on_jet if fitted is None else has_normal & ~sc.on_jet & fitted[p]
-        fitter.into(fit, nrm, centres if first is None else centres & first, sub.sub(0.0, share))
-        complete = _Rest(fitter, fit, nrm, None if first is None else centres & ~first, sub.sub(share, 1.0), held)
-        yield p, fit, nrm, complete
-        complete()
-        new = np.where(fit.valid[:, None], fit.normals, nrm)
-        if plan.robust and p == 0:  # outliers leave their neighbours' fits (and are not estimated)
-            has_normal = has_normal & ~outlier
-            new[outlier] = np.nan
-        nrm = new
-
-
-def finish(best: Refined, sc: Scale, outlier, plan) -> Refined:
-    """The kept fit with the jets merged in where they are the result, and in robust mode
-    without the outliers (new arrays: the fits yielded by :func:`fit_passes` are kept)."""
-    best = _with_jets(best, sc)
-    return _drop_outliers(best, outlier) if plan.robust else best
-
-
-def _with_jets(best: Refined, sc: Scale) -> Refined:
-    """The jets' frames merged into the kept fit where the jet is the result."""
-    if not sc.on_jet.any():
-        return best
-    on = sc.on_jet
-    merged = [np.where(on.reshape((-1,) + (1,) * (a.ndim - 1)), j, a)
-              for j, a in zip(sc.jets, best.fit[:6])]
-    return best._replace(fit=best.fit._replace(**dict(zip(Fit._fields[:6], merged))))
-
-
-def _drop_outliers(best: Refined, outlier) -> Refined:
-    """Outliers are not estimated in robust mode (a kept first fit still estimated them)."""
-    fit = best.fit
-    if not fit.valid[outlier].any():
-        return best
-    cleared = {name: np.where(outlier.reshape((-1,) + (1,) * (a.ndim - 1)), np.nan, a)
-               for name, a in zip(Fit._fields[:5], fit[:5])}
-    return best._replace(fit=fit._replace(**cleared, valid=fit.valid & ~outlier))
-
-
-class _Held:
-    """What k="auto" reports pass by pass, point by point: where a pass turns a point's
-    normal by more than HOLD_TURN degrees and by more than PASS_DECAY x the turn the pass
-    before gave it, the pass is not averaging noise there (its turns decay) but carrying
-    the normal across a sharp edge (on a 3-spacing plate at noise 0.2 spacing the side
-    strip's turns went 10, 7, 6 degrees pass after pass, the faces' 4, 1.5, 0.9, and 8 %
-    of the strip's normals ended more than 90 degrees off, from 5 % after the first fit):
-    that point reports the fit of the pass before, at this pass and the later ones.
-    :class:`core.passes.PassRule` undoes a pass that does so on the whole cloud; this is
-    the same rule where only some points drift. The passes themselves, and the rule's
-    mean turns, are left as they were (the next pass fits to the unheld normals), and the
-    rule is each point's own, so a tile holds the same points as the whole cloud."""
-
-    def __init__(self, n):
-        self.held, self.turn, self.last = np.zeros(n, dtype=bool), np.zeros(n), None
-
-    def report(self, fit: Fit, nrm) -> Fit:
-        """The fit to report for the pass that fitted ``fit`` to ``nrm`` (call once a pass, in order)."""
-        rows = np.flatnonzero(fit.valid)
-        turn = np.zeros(len(nrm))
-        turn[rows] = passes.turn_angles(fit.normals[rows], nrm[rows], slice(None))
-        if self.last is not None:
-            self.held = self.last.valid & (self.held | ((turn > HOLD_TURN) & (turn > PASS_DECAY * self.turn)))
-            if self.held.any():
-                fit = Fit(*(np.where(self.held.reshape((-1,) + (1,) * (a.ndim - 1)), b, a) for a, b in zip(fit, self.last)))
-        self.turn, self.last = turn, fit
-        return fit
-
-
-class _Rest:
-    """A pass's fit at the points outside the rule's sample, run once (:func:`fit_passes`);
-    returns the fit to report (:class:`_Held`)."""
-
-    def __init__(self, fitter, fit, nrm, mask, report, held=None):
-        self.fitter, self.args = fitter, None if mask is None or not mask.any() else (fit, nrm, mask, report)
-        self.fit, self.nrm, self.held, self.reported = fit, nrm, held, None
-
-    def __call__(self) -> Fit:
-        if self.args is not None:
-            args, self.args = self.args, None
-            self.fitter.into(*args)
-        if self.reported is None:
-            self.reported = self.fit if self.held is None else self.held.report(self.fit, self.nrm)
-        return self.reported
-
-
-def settle_signs(pts, best: Refined, nb, plan, confidence):
-    """The kept fit's signs re-decided on its own (refined) normals
-    (:func:`core.orientation.resettle`) where the plan decides signs ("outward",
-    "propagate"): the fits do not depend on the signs (each centre's neighbours are turned
-    to its side), so a flip here is a flip of the result: normal, k1, k2 -> -k2, -k1 and
-    e1 <-> e2 (e1 x e2 stays the normal). Returns ``(best, confidence)``, both new where
-    anything changed."""
-    if not isinstance(plan.orientation, str) or plan.orientation == "keep":
-        return best, confidence
-    fit = best.fit
-    final = np.where(fit.valid[:, None], fit.normals, best.input_normals)
-    sign, confidence = resettle(pts, final, nb.take(plan.k_initial)[0], plan.orientation)
-    flip = sign < 0
-    if not flip.any():
-        return best, confidence
-    col = flip[:, None]
-    fit = fit._replace(normals=np.where(col, -fit.normals, fit.normals), k1=np.where(flip, -fit.k2, fit.k1),
-                       k2=np.where(flip, -fit.k1, fit.k2), e1=np.where(col, fit.e2, fit.e1),
-                       e2=np.where(col, fit.e1, fit.e2))
-    return best._replace(fit=fit, input_normals=np.where(col, -best.input_normals, best.input_normals)), confidence
 
 
 def flags(fit: Fit, scores, plan, reference: Fit | None, *, nb=None, confidence=None) -> Flags:

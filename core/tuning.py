@@ -160,7 +160,7 @@ PASS_MIN_SHARE = 0.02
 #: drift that remains noise-free) and is undone.
 AUTO_PASSES = 4
 PASS_DECAY = 0.7
-#: ... and point by point (core.stages._Held): where a pass turns a point's normal by more than
+#: ... and point by point (core.refinement._Held): where a pass turns a point's normal by more than
 #: HOLD_TURN degrees and more than PASS_DECAY x its turn in the pass before, the point reports
 #: the pass before (the passes and the rule's mean turns are unchanged). Noise averages away in
 #: the first fit and pass (later turns ~1 degree); at a sharp edge the turns stay at 5-10 degrees

@@ -19,8 +19,9 @@ import numpy as np
 
 from ..estimate import _result as result_of, prepare  # the in-memory result's fields and flags
 from ..planning import EstimatePlan
-from ..passes import rule_sample, turn_angles
-from ..stages import PassRule, Refined, few_fits, finish, fit_passes, flags, settle_signs
+from ..passes import PassRule, few_fits, rule_sample, turn_angles
+from ..refinement import Refined, finish, fit_passes, settle_signs
+from ..stages import flags
 from .._progress import Progress
 from .halo import auto_chain, rings_from
 from .plan import TilePlan

@@ -163,7 +163,7 @@ def test_thin_parts_meet_the_orientation_target(name, sigma, k):
     Over ALL points (``face``, the blends at a rim included) the noisy plate is the hard
     case: 99.495-99.62 % at k=15, 99.505-99.665 % at k="auto" (seeds 0-4; 99.39-99.52 and
     99.41-99.53 before the signs were re-decided on the refined normals and k="auto"'s
-    drifting points held, core.orientation.resettle, core.stages._Held): the 99.5 % is
+    drifting points held, core.orientation.resettle, core.refinement._Held): the 99.5 % is
     missed by one point in 20000 at k=15, seed 2. What is left is mostly the estimate, not
     the sign: rim normals more than 90 degrees off whichever way they face."""
     for seed in THIN_SEEDS if (sigma or k == 15) else THIN_SEEDS[:1]:

@@ -18,7 +18,7 @@ from ..._progress import Progress
 from ...estimate import prepare
 from ...linalg import tangent_basis
 from ...planning import plan as make_plan
-from ...stages import fit_passes, refine
+from ...refinement import fit_passes, refine
 from .harness import make_case
 
 
