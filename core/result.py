@@ -9,7 +9,29 @@ import numpy as np
 from .anisotropy import anisotropy_of, striped
 from .border import border_of_valid
 from .point_types import point_types
+from .spatial_order import PendingNeighbours
 from .tuning import OUTLIER_SCORE
+
+
+class _LazyNeighbours:
+    """The ``neighbours`` field: a :class:`core.spatial_order.PendingNeighbours` stored by
+    the estimate (its graph still on the points in spatial order) is converted to the
+    caller's order on the first read; any other value is kept as given."""
+
+    def __set_name__(self, owner, name):
+        self._slot = f"_{name}_stored"
+
+    def __get__(self, obj, owner=None):
+        if obj is None:
+            return self  # the class attribute (the dataclass default is handled by __set__)
+        value = obj.__dict__.get(self._slot)
+        if isinstance(value, PendingNeighbours):
+            value = value.resolve()
+            obj.__dict__[self._slot] = value
+        return value
+
+    def __set__(self, obj, value):  # the dataclass __init__ only: the instance is frozen
+        obj.__dict__[self._slot] = None if value is self else value
 
 
 @dataclass(frozen=True, eq=False)
@@ -46,7 +68,8 @@ class CurvatureResult:
         :attr:`striped` is ``anisotropy > 0.8``: H there may show the scan pattern. Computed
         on first access.
     method, k, passes, params : what was run (``k`` is an int or "auto").
-    neighbours : the :class:`core.Neighbours` used, to pass back for a fast re-estimate.
+    neighbours : the :class:`core.Neighbours` used, to pass back for a fast re-estimate
+        (converted from the estimate's spatial order on first access).
     """
 
     points: np.ndarray
@@ -60,7 +83,7 @@ class CurvatureResult:
     k: object
     passes: int
     params: dict = field(default_factory=dict)
-    neighbours: object = field(default=None, repr=False)
+    neighbours: object = field(default=_LazyNeighbours(), repr=False)
     k_point: np.ndarray = None
     degree_point: np.ndarray = None
     outlier_score: np.ndarray = None

@@ -12,6 +12,8 @@ strong edges in :mod:`core.orientation`) follows the caller's index,
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 
 from .kernels.permute import move_rows, relabel_rows
@@ -78,3 +80,37 @@ class SpatialOrder:
         idx.setflags(write=False)
         dist.setflags(write=False)
         return Neighbours(points=points, indices=idx, distances=dist)
+
+    def neighbours_later(self, nb: Neighbours, points: np.ndarray, *, in_place=True):
+        """:meth:`neighbours_to_caller` when first needed: ``nb`` itself in the identity
+        order, else a :class:`PendingNeighbours` (a result's ``neighbours``, which most
+        callers never read: 1.1 s of a 1M-point estimate went into converting them)."""
+        if self.order is None:
+            return nb
+        return PendingNeighbours(self, nb, points, in_place=in_place)
+
+
+class PendingNeighbours:
+    """The graph ``nb`` on the sorted points, converted to the caller's order by
+    :meth:`SpatialOrder.neighbours_to_caller` on the first :meth:`resolve` (once, under a
+    lock: results of one graph may share it across threads). With ``in_place`` the
+    conversion reuses ``nb``'s arrays: only for a graph nothing else keeps (no cache)."""
+
+    def __init__(self, order: SpatialOrder, nb: Neighbours, points: np.ndarray, *, in_place: bool):
+        self._args = (order, nb, points, in_place)
+        self._done = None
+        self._lock = threading.Lock()
+
+    def resolve(self) -> Neighbours:
+        """The :class:`core.Neighbours` of the caller's points (converted on the first call)."""
+        if self._done is None:
+            with self._lock:
+                if self._done is None:
+                    order, nb, points, in_place = self._args
+                    self._done = order.neighbours_to_caller(nb, points, in_place=in_place)
+                    self._args = None  # the sorted graph and the order are no longer needed
+        return self._done
+
+    def __reduce__(self):  # pickled (with a result) as the Neighbours it stands for
+        nb = self.resolve()
+        return Neighbours, (nb.points, nb.indices, nb.distances)

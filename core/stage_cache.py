@@ -122,10 +122,11 @@ class StageCache:
         return found
 
     def caller_neighbours(self, order, nb, points):
-        """``order.neighbours_to_caller(nb, points)`` kept with ``nb``: the results of one
-        graph share one copy in the caller's order."""
+        """``order.neighbours_later(nb, points)`` kept with ``nb``: the results of one graph
+        share one (lazy) copy in the caller's order, never converted in place (the cache
+        keeps ``nb``)."""
         if self._caller is None or self._caller[0] is not nb:
-            self._caller = (nb, order.neighbours_to_caller(nb, points, in_place=False))
+            self._caller = (nb, order.neighbours_later(nb, points, in_place=False))
         return self._caller[1]
 
 
@@ -166,10 +167,11 @@ def memo(cache: StageCache | None, points, normals, plan) -> _Memo:
 
 def caller_neighbours(cache: StageCache | None, order, nb, points):
     """The neighbour graph ``nb`` (on the points in spatial ``order``) as neighbours of the
-    caller's ``points``: reordered in place without a cache, kept with it
-    (:meth:`StageCache.caller_neighbours`)."""
+    caller's ``points``, converted on first access (:meth:`core.spatial_order.SpatialOrder.
+    neighbours_later`): in place without a cache (the result is the graph's only
+    holder), shared with it (:meth:`StageCache.caller_neighbours`)."""
     if cache is None:
-        return order.neighbours_to_caller(nb, points)
+        return order.neighbours_later(nb, points)
     return cache.caller_neighbours(order, nb, points)
 
 
