@@ -86,6 +86,7 @@ import numpy as np
 from . import kernels
 from .frame import darboux_frame, height_field_derivatives
 from .kernels import jets as jet_kernels
+from .kernels import pool as pool_kernels
 from .linalg import tangent_basis
 from .patch import Chunk
 from .tuning import (AUTO_DEGREE, AUTO_KS, FOLD_COS, FOLD_FRACTION, FOLD_MIN_BAD, FOLD_NOISE, GAMMA,
@@ -189,10 +190,15 @@ def noise_variance(rss_a, rss_b, s, idx, ka=NOISE_KS[0], kb=NOISE_KS[1]):
         va = rss_a * s2 / (ka - 10)
         vb = rss_b * s2 / (kb - 10)
     pool = idx[:, :min(NOISE_POOL, idx.shape[1])]
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN pools (rank-deficient fits)
-        a = np.nanmean(va[pool], axis=1)
-        b = np.nanmean(vb[pool], axis=1)
+    if pool.shape[1] <= pool_kernels.MAX_POOL:  # np.nanmean(va[pool], axis=1) without its (N, 20) copies
+        a, b = np.empty(len(pool)), np.empty(len(pool))
+        pool_kernels.pooled_nanmeans(np.ascontiguousarray(va, dtype=np.float64),
+                                     np.ascontiguousarray(vb, dtype=np.float64), pool, a, b)
+    else:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN pools (rank-deficient fits)
+            a = np.nanmean(va[pool], axis=1)
+            b = np.nanmean(vb[pool], axis=1)
     rho = (kb / ka) ** 4
     sigma2 = np.maximum((rho * a - b) / (rho - 1.0), 0.0)
     return np.nan_to_num(sigma2, nan=0.0), np.nan_to_num(a, nan=np.inf)
