@@ -101,10 +101,27 @@ def _residuals_block(f, ks, rcond, rss, start, stop):
 def _hessian_sd(L, d, e, x, sigma2, out):
     """Standard deviations of (2 c3, c4, 2 c5) = (f_uu, f_uv, f_vv) at noise sigma2."""
     for t in range(3):
-        e[:] = 0.0
-        e[3 + t] = 1.0
-        chol_solve(L, d, P3, e, x)  # x = G^-1 e: its entry 3 + t is the variance factor
-        out[t] = (2.0 if t != 1 else 1.0) * math.sqrt(max(x[3 + t], 0.0) * sigma2)
+        out[t] = (2.0 if t != 1 else 1.0) * math.sqrt(max(_inverse_diagonal(L, d, P3, 3 + t, x), 0.0) * sigma2)
+
+
+@njit(**OPTS)
+def _inverse_diagonal(L, d, p, i, x):
+    """(G^-1)_ii with the factor of :func:`~core.kernels.algebra.cholesky`: entry i of
+    ``chol_solve(L, d, p, e_i, x)``, bit for bit, without its dead work. Its forward pass
+    leaves x[a] = +0.0 for a < i (0.0 / d[a], less exact zeros: L is finite once the
+    factor succeeded), and subtracting L[a, e] * 0.0 from +0.0 or from 1 / d[i] changes
+    nothing, so that pass starts at i; its backward pass reaches x[i] from x[i..p-1] alone."""
+    for a in range(i, p):
+        s = 1.0 / d[a] if a == i else 0.0
+        for c in range(i, a):
+            s -= L[a, c] * x[c]
+        x[a] = s / L[a, a]
+    for a in range(p - 1, i - 1, -1):
+        s = x[a]
+        for c in range(a + 1, p):
+            s -= L[c, a] * x[c]
+        x[a] = s / L[a, a]
+    return x[i] / d[i]
 
 
 @njit(**OPTS, parallel=True)
