@@ -204,10 +204,19 @@ def noise_variance(rss_a, rss_b, s, idx, ka=NOISE_KS[0], kb=NOISE_KS[1]):
     return np.nan_to_num(sigma2, nan=0.0), np.nan_to_num(a, nan=np.inf)
 
 
-def _jet_frames(points, normals, idx, centres, s, t1, t2):
-    """The kernels' record of ``centres`` (frame z = their normal, lengths in units of s)."""
-    return kernels.Frames(points, normals, np.ascontiguousarray(idx), np.zeros(len(centres), dtype=np.int64),
-                          s[centres], centres, t1[centres], t2[centres], normals[centres])
+def _jet_frames(points, normals, idx_all, centres, s, t1, t2, width=None):
+    """The kernels' record of ``centres`` (frame z = their normal, lengths in units of s)
+    with their first ``width`` neighbours of ``idx_all`` (all by default). A run of
+    consecutive centres (every point of a clean cloud) takes views of the per-point
+    arrays, not copies."""
+    width = idx_all.shape[1] if width is None else width
+    if len(centres) and centres[-1] - centres[0] == len(centres) - 1:  # sorted, distinct: a run
+        rows = slice(centres[0], centres[-1] + 1)
+        return kernels.Frames(points, normals, idx_all[rows, :width], np.zeros(len(centres), dtype=np.int64),
+                              s[rows], centres, t1[rows], t2[rows], normals[rows])
+    return kernels.Frames(points, normals, np.ascontiguousarray(idx_all[centres, :width]),
+                          np.zeros(len(centres), dtype=np.int64), s[centres], centres, t1[centres], t2[centres],
+                          normals[centres])
 
 
 def _jet_rule():
@@ -231,7 +240,7 @@ def choose_jets(points, normals, nb, has_normal, ks, report):
     t1, t2 = tangent_basis(np.where(has_normal[:, None], normals, [0.0, 0.0, 1.0]))
     rss = np.full((n, 2), np.nan)
     out = np.empty((len(usable), 2))
-    f = _jet_frames(points, normals, idx_all[usable, :NOISE_KS[1]], usable, s, t1, t2)
+    f = _jet_frames(points, normals, idx_all, usable, s, t1, t2, NOISE_KS[1])
     jet_kernels.jet_residuals(f, np.asarray(NOISE_KS, dtype=np.int64), RCOND, out)
     rss[usable] = out
     sigma2, plain = noise_variance(rss[:, 0], rss[:, 1], s, idx_all)
@@ -242,7 +251,7 @@ def choose_jets(points, normals, nb, has_normal, ks, report):
     for start in range(0, len(usable), _CHUNK):
         c = usable[start:start + _CHUNK]
         out_k, out_c = np.empty(len(c), dtype=np.int64), np.empty((len(c), jet_kernels.P3))
-        jet_kernels.jet_ici(_jet_frames(points, normals, idx_all[c], c, s, t1, t2), ks_arr, sigma2[c] / s[c] ** 2,
+        jet_kernels.jet_ici(_jet_frames(points, normals, idx_all, c, s, t1, t2), ks_arr, sigma2[c] / s[c] ** 2,
                             rule, out_k, out_c)
         chosen[c], coef[c] = out_k, out_c
         report(0.2 + 0.8 * min(len(usable), start + _CHUNK) / max(len(usable), 1), "choosing k")
@@ -256,7 +265,7 @@ def choose_jets(points, normals, nb, has_normal, ks, report):
     reach = min(max(kd for _, kd in JET_DEGREES), idx_all.shape[1])
     quiet = np.flatnonzero(fitted & (noise <= JET_QUIET) & (k <= reach))
     if len(quiet):
-        f = _jet_frames(points, normals, idx_all[quiet, :max(reach, ks[0])], quiet, s, t1, t2)
+        f = _jet_frames(points, normals, idx_all, quiet, s, t1, t2, max(reach, ks[0]))
         kq, dq, cq = _higher_degrees(f, k[quiet], sigma2[quiet] / s[quiet] ** 2)
         higher = dq != JET_DEGREE
         k[quiet], degree[quiet] = kq, dq
