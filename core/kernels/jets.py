@@ -287,20 +287,20 @@ def _degrees_block(f, degrees, kd, k3, sigma2, rule, chosen, coef, start, stop):
     nm = len(degrees) + 1
     fits, ok = np.empty((nm, 7)), np.empty(nm, dtype=np.bool_)
     keep, bounds = np.empty((nm, 6)), np.empty((2, 3))
-    G3, b3, acc3, acc = np.empty((P3, P3)), np.empty(P3), np.empty(2), np.empty(2)
+    G3, b3, accs = np.empty((P3, P3)), np.empty(P3), np.empty((2, 2))  # accs: model 0's sums, the cubic's
     for r in range(start, stop):
         _offsets(f, r, 0, max(kd.max(), k3[r]), uvw)
         shared = nm > 1 and degrees[0] >= 3  # the cubic's sums come with those of model 0
         for mi in range(nm - 1):
             ok[mi] = _higher_fit(uvw, degrees[mi], kd[mi], k3[r] if mi == 0 and shared else 0, sigma2[r],
-                                 rule.rcond, mats, vecs, acc, G3, b3, acc3, fits[mi])
+                                 rule.rcond, mats, vecs, accs, G3, b3, fits[mi])
             keep[mi, :] = vecs[2, :6]
         if not shared:  # the cubic's sums from nothing
             G3[:, :] = 0.0
             b3[:] = 0.0
-            acc3[:] = 0.0
-            _sums(uvw, 0, k3[r], 3, vecs[0], G3, b3, acc3)
-        ok[nm - 1] = _fit_degree(G3, b3, acc3, 3, rule.rcond, sigma2[r], mats, vecs, fits[nm - 1])
+            accs[1, :] = 0.0
+            _sums(uvw, 0, k3[r], 3, vecs[0], G3, b3, accs[1])
+        ok[nm - 1] = _fit_degree(G3, b3, accs[1], 3, rule.rcond, sigma2[r], mats, vecs, fits[nm - 1])
         keep[nm - 1, :] = vecs[2, :6]
         chosen[r] = _walk_down(fits, ok, rule.gamma, bounds)
         if chosen[r] >= 0:
@@ -310,12 +310,12 @@ def _degrees_block(f, degrees, kd, k3, sigma2, rule, chosen, coef, start, stop):
 
 
 @njit(**OPTS)
-def _higher_fit(uvw, degree, k, k3, sigma2, rcond, mats, vecs, acc, G3, b3, acc3, out):
-    """:func:`_fit_degree` of ``degree`` on k neighbours; with k3 > 0 also the cubic's sums
-    on k3 into G3, b3, acc3, taken from the same pass: the leading block of these sums
-    after min(k, k3) neighbours, then grown alone (each sum adds the same terms in the same
-    order as a pass of its own)."""
-    G, b, row = mats[0], vecs[1], vecs[0]
+def _higher_fit(uvw, degree, k, k3, sigma2, rcond, mats, vecs, accs, G3, b3, out):
+    """:func:`_fit_degree` of ``degree`` on k neighbours (its sum of w^2 and count in
+    accs[0]); with k3 > 0 also the cubic's sums on k3 into G3, b3, accs[1], taken from the
+    same pass: the leading block of these sums after min(k, k3) neighbours, then grown
+    alone (each sum adds the same terms in the same order as a pass of its own)."""
+    G, b, row, acc, acc3 = mats[0], vecs[1], vecs[0], accs[0], accs[1]
     p = (degree + 1) * (degree + 2) // 2
     G[:p, :p] = 0.0
     b[:p] = 0.0
