@@ -54,7 +54,9 @@ def border_flags(points, normals, idx):
     """
     pts = np.ascontiguousarray(points, dtype=np.float64)
     nrm = np.ascontiguousarray(normals, dtype=np.float64)
-    graph = np.ascontiguousarray(idx[:, :BORDER_K], dtype=np.int64)
+    graph = np.asarray(idx)[:, :BORDER_K]  # a view: the kernel reads the columns in place
+    if graph.dtype != np.int64:
+        graph = graph.astype(np.int64)
     gap = np.empty(len(pts))
     reach = np.empty(len(pts))
     kern.tangent_extent(pts, nrm, graph, N_DIRS, gap, reach)

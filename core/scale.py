@@ -86,6 +86,7 @@ import numpy as np
 from . import kernels
 from .frame import darboux_frame, height_field_derivatives
 from .kernels import jets as jet_kernels
+from .kernels import pool as pool_kernels
 from .linalg import tangent_basis
 from .patch import Chunk
 from .tuning import (AUTO_DEGREE, AUTO_KS, FOLD_COS, FOLD_FRACTION, FOLD_MIN_BAD, FOLD_NOISE, GAMMA,
@@ -199,19 +200,39 @@ def noise_variance(rss_a, rss_b, s, idx, ka=NOISE_KS[0], kb=NOISE_KS[1]):
         va = rss_a * s2 / (ka - 10)
         vb = rss_b * s2 / (kb - 10)
     pool = idx[:, :min(NOISE_POOL, idx.shape[1])]
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN pools (rank-deficient fits)
-        a = np.nanmean(va[pool], axis=1)
-        b = np.nanmean(vb[pool], axis=1)
+    if pool.shape[1] <= pool_kernels.MAX_POOL:  # np.nanmean(va[pool], axis=1) without its (N, 20) copies
+        a, b = np.empty(len(pool)), np.empty(len(pool))
+        pool_kernels.pooled_nanmeans(np.ascontiguousarray(va, dtype=np.float64),
+                                     np.ascontiguousarray(vb, dtype=np.float64), pool, a, b)
+    else:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN pools (rank-deficient fits)
+            a = np.nanmean(va[pool], axis=1)
+            b = np.nanmean(vb[pool], axis=1)
     rho = (kb / ka) ** 4
     sigma2 = np.maximum((rho * a - b) / (rho - 1.0), 0.0)
     return np.nan_to_num(sigma2, nan=0.0), np.nan_to_num(a, nan=np.inf)
 
 
-def _jet_frames(points, normals, idx, centres, s, t1, t2):
-    """The kernels' record of ``centres`` (frame z = their normal, lengths in units of s)."""
-    return kernels.Frames(points, normals, np.ascontiguousarray(idx), np.zeros(len(centres), dtype=np.int64),
-                          s[centres], centres, t1[centres], t2[centres], normals[centres])
+def _at(a, centres):
+    """``a[centres]``: a view for a run of consecutive centres (every point of a clean
+    cloud, chunk by chunk), else a copy."""
+    if len(centres) and centres[-1] - centres[0] == len(centres) - 1:  # sorted, distinct: a run
+        return a[centres[0]:centres[-1] + 1]
+    return a[centres]
+
+
+def _rows(idx, centres, width):
+    """The first ``width`` neighbours of ``centres`` in the graph ``idx`` (N, w): a view
+    for a run, else a contiguous copy of those columns only (:func:`_at`)."""
+    return _at(idx[:, :width], centres)
+
+
+def _jet_frames(points, normals, rows, centres, s, t1, t2):
+    """The kernels' record of ``centres`` with their neighbours ``rows`` (M, w) (frame z =
+    their normal, lengths in units of s)."""
+    return kernels.Frames(points, normals, rows, np.zeros(len(centres), dtype=np.int64), _at(s, centres), centres,
+                          _at(t1, centres), _at(t2, centres), _at(normals, centres))
 
 
 def _jet_rule():
@@ -237,7 +258,7 @@ def choose_jets(points, normals, nb, has_normal, ks, report):
     t1, t2 = tangent_basis(np.where(has_normal[:, None], normals, [0.0, 0.0, 1.0]))
     rss = np.full((n, 2), np.nan)
     out = np.empty((len(usable), 2))
-    f = _jet_frames(points, normals, idx_all[usable, :NOISE_KS[1]], usable, s, t1, t2)
+    f = _jet_frames(points, normals, _rows(idx_all, usable, NOISE_KS[1]), usable, s, t1, t2)
     jet_kernels.jet_residuals(f, np.asarray(NOISE_KS, dtype=np.int64), RCOND, out)
     rss[usable] = out
     sigma2, plain = noise_variance(rss[:, 0], rss[:, 1], s, idx_all)
@@ -262,7 +283,7 @@ def choose_jets(points, normals, nb, has_normal, ks, report):
     reach = min(max(kd for _, kd in JET_DEGREES), ks[-1])
     quiet = np.flatnonzero(fitted & (noise <= JET_QUIET) & (k <= reach))
     if len(quiet):
-        f = _jet_frames(points, normals, idx_all[quiet, :max(reach, ks[0])], quiet, s, t1, t2)
+        f = _jet_frames(points, normals, _rows(idx_all, quiet, max(reach, ks[0])), quiet, s, t1, t2)
         kq, dq, cq = _higher_degrees(f, k[quiet], sigma2[quiet] / s[quiet] ** 2)
         higher = dq != JET_DEGREE
         k[quiet], degree[quiet] = kq, dq
@@ -303,7 +324,7 @@ def _jet_ici(nb, idx, usable, ks, frames, sigma2_h, report):
 
     for start in range(0, len(usable), _CHUNK):
         c = usable[start:start + _CHUNK]
-        run(c, idx[c, :held[-1]], ks_held)
+        run(c, _rows(idx, c, held[-1]), ks_held)
         report(0.2 + 0.8 * min(len(usable), start + _CHUNK) / max(len(usable), 1), "choosing k")
     if len(held) < len(ks):
         ks_arr = np.asarray(ks, dtype=np.int64)

@@ -7,6 +7,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from ._base import BLOCK
 from ._base import OPTS as _OPTS
 
 
@@ -21,51 +22,61 @@ def tangent_extent(points, normals, idx, n_dirs, gap, reach):
     NaN where the point has no normal or no distinct neighbour.
     """
     n, k = idx.shape
-    for i in prange(n):
-        gap[i] = math.nan
-        reach[i] = math.nan
-        nx, ny, nz = normals[i, 0], normals[i, 1], normals[i, 2]
-        if not (math.isfinite(nx) and math.isfinite(ny) and math.isfinite(nz)):
+    dirs = np.empty((n_dirs, 2))  # the same directions for every point: computed once
+    for d in range(n_dirs):
+        dirs[d, 0], dirs[d, 1] = math.cos(2 * math.pi * d / n_dirs), math.sin(2 * math.pi * d / n_dirs)
+    for blk in prange((n + BLOCK - 1) // BLOCK):
+        scratch = np.empty((3, k))  # xs, ys, angles: once per block, not per point
+        for i in range(blk * BLOCK, min(n, (blk + 1) * BLOCK)):
+            _extent(points, normals, idx, i, dirs, scratch, gap, reach)
+
+
+@njit(**_OPTS)
+def _extent(points, normals, idx, i, dirs, scratch, gap, reach):
+    """:func:`tangent_extent` at point i."""
+    gap[i] = math.nan
+    reach[i] = math.nan
+    nx, ny, nz = normals[i, 0], normals[i, 1], normals[i, 2]
+    if not (math.isfinite(nx) and math.isfinite(ny) and math.isfinite(nz)):
+        return
+    # tangent basis: t1 = n x (axis least aligned with n), t2 = n x t1
+    if abs(nx) < 0.9:
+        ax, ay, az = 1.0, 0.0, 0.0
+    else:
+        ax, ay, az = 0.0, 1.0, 0.0
+    t1x, t1y, t1z = ny * az - nz * ay, nz * ax - nx * az, nx * ay - ny * ax
+    s = math.sqrt(t1x * t1x + t1y * t1y + t1z * t1z)
+    t1x, t1y, t1z = t1x / s, t1y / s, t1z / s
+    t2x, t2y, t2z = ny * t1z - nz * t1y, nz * t1x - nx * t1z, nx * t1y - ny * t1x
+    xs, ys, ang = scratch[0], scratch[1], scratch[2]
+    m = 0
+    r = 0.0
+    for c in range(idx.shape[1]):
+        j = idx[i, c]
+        dx = points[j, 0] - points[i, 0]
+        dy = points[j, 1] - points[i, 1]
+        dz = points[j, 2] - points[i, 2]
+        x = dx * t1x + dy * t1y + dz * t1z
+        y = dx * t2x + dy * t2y + dz * t2z
+        rr = math.sqrt(x * x + y * y)
+        if rr == 0.0:
             continue
-        # tangent basis: t1 = n x (axis least aligned with n), t2 = n x t1
-        if abs(nx) < 0.9:
-            ax, ay, az = 1.0, 0.0, 0.0
-        else:
-            ax, ay, az = 0.0, 1.0, 0.0
-        t1x, t1y, t1z = ny * az - nz * ay, nz * ax - nx * az, nx * ay - ny * ax
-        s = math.sqrt(t1x * t1x + t1y * t1y + t1z * t1z)
-        t1x, t1y, t1z = t1x / s, t1y / s, t1z / s
-        t2x, t2y, t2z = ny * t1z - nz * t1y, nz * t1x - nx * t1z, nx * t1y - ny * t1x
-        xs = np.empty(k)
-        ys = np.empty(k)
-        ang = np.empty(k)
-        m = 0
-        r = 0.0
-        for c in range(k):
-            j = idx[i, c]
-            dx = points[j, 0] - points[i, 0]
-            dy = points[j, 1] - points[i, 1]
-            dz = points[j, 2] - points[i, 2]
-            x = dx * t1x + dy * t1y + dz * t1z
-            y = dx * t2x + dy * t2y + dz * t2z
-            rr = math.sqrt(x * x + y * y)
-            if rr == 0.0:
-                continue
-            xs[m], ys[m], ang[m] = x, y, math.atan2(y, x)
-            r = max(r, rr)
-            m += 1
-        if m == 0:
-            continue
-        a = np.sort(ang[:m])
-        g = a[0] + 2 * math.pi - a[m - 1]
-        for c in range(1, m):
-            g = max(g, a[c] - a[c - 1])
-        gap[i] = g
-        low = math.inf
-        for d in range(n_dirs):
-            ux, uy = math.cos(2 * math.pi * d / n_dirs), math.sin(2 * math.pi * d / n_dirs)
-            far = 0.0  # the point itself is at the origin
-            for c in range(m):
-                far = max(far, xs[c] * ux + ys[c] * uy)
-            low = min(low, far)
-        reach[i] = low / r
+        xs[m], ys[m], ang[m] = x, y, math.atan2(y, x)
+        r = max(r, rr)
+        m += 1
+    if m == 0:
+        return
+    a = ang[:m]
+    a.sort()
+    g = a[0] + 2 * math.pi - a[m - 1]
+    for c in range(1, m):
+        g = max(g, a[c] - a[c - 1])
+    gap[i] = g
+    low = math.inf
+    for d in range(len(dirs)):
+        ux, uy = dirs[d, 0], dirs[d, 1]
+        far = 0.0  # the point itself is at the origin
+        for c in range(m):
+            far = max(far, xs[c] * ux + ys[c] * uy)
+        low = min(low, far)
+    reach[i] = low / r

@@ -101,10 +101,27 @@ def _residuals_block(f, ks, rcond, rss, start, stop):
 def _hessian_sd(L, d, e, x, sigma2, out):
     """Standard deviations of (2 c3, c4, 2 c5) = (f_uu, f_uv, f_vv) at noise sigma2."""
     for t in range(3):
-        e[:] = 0.0
-        e[3 + t] = 1.0
-        chol_solve(L, d, P3, e, x)  # x = G^-1 e: its entry 3 + t is the variance factor
-        out[t] = (2.0 if t != 1 else 1.0) * math.sqrt(max(x[3 + t], 0.0) * sigma2)
+        out[t] = (2.0 if t != 1 else 1.0) * math.sqrt(max(_inverse_diagonal(L, d, P3, 3 + t, x), 0.0) * sigma2)
+
+
+@njit(**OPTS)
+def _inverse_diagonal(L, d, p, i, x):
+    """(G^-1)_ii with the factor of :func:`~core.kernels.algebra.cholesky`: entry i of
+    ``chol_solve(L, d, p, e_i, x)``, bit for bit, without its dead work. Its forward pass
+    leaves x[a] = +0.0 for a < i (0.0 / d[a], less exact zeros: L is finite once the
+    factor succeeded), and subtracting L[a, e] * 0.0 from +0.0 or from 1 / d[i] changes
+    nothing, so that pass starts at i; its backward pass reaches x[i] from x[i..p-1] alone."""
+    for a in range(i, p):
+        s = 1.0 / d[a] if a == i else 0.0
+        for c in range(i, a):
+            s -= L[a, c] * x[c]
+        x[a] = s / L[a, a]
+    for a in range(p - 1, i - 1, -1):
+        s = x[a]
+        for c in range(a + 1, p):
+            s -= L[c, a] * x[c]
+        x[a] = s / L[a, a]
+    return x[i] / d[i]
 
 
 @njit(**OPTS, parallel=True)
@@ -194,27 +211,34 @@ P5 = 21
 
 
 @njit(**OPTS)
-def _fit_degree(uvw, k, degree, rcond, sigma2, mats, vecs, out):
-    """Jet of ``degree`` on the first k neighbours (offsets in ``uvw``): out = (f_uu, f_uv,
-    f_vv, their sd at noise sigma2, residual variance per degree of freedom); False if
-    rank deficient. The coefficients stay in vecs[2] (x), the first p of them used."""
+def _sums(uvw, j0, j1, degree, row, G, b, acc):
+    """Least-squares sums of the jet of ``degree`` over neighbours j0 <= j < j1 (offsets in
+    ``uvw``, NaN heights left out) added onto G (lower triangle), b, acc[0] = sum w^2 and
+    acc[1] = their count. Sums of a lower degree are the leading block of these (the
+    monomials come by total degree, each computed the same way at every degree)."""
     p = (degree + 1) * (degree + 2) // 2
-    G, L = mats[0], mats[1]
-    row, b, x, d, tmp = vecs[0], vecs[1], vecs[2], vecs[3], vecs[5]
-    G[:p, :p] = 0.0
-    b[:p] = 0.0
-    ww, n = 0.0, 0
-    for j in range(k):
+    for j in range(j0, j1):
         w = uvw[2, j]
         if not math.isfinite(w):
             continue
-        n += 1
+        acc[1] += 1.0
         poly_row(uvw[0, j], uvw[1, j], degree, row)
-        ww += w * w
+        acc[0] += w * w
         for a in range(p):
             b[a] += row[a] * w
             for c in range(a + 1):
                 G[a, c] += row[a] * row[c]
+
+
+@njit(**OPTS)
+def _fit_degree(G, b, acc, degree, rcond, sigma2, mats, vecs, out):
+    """Jet of ``degree`` from its sums (:func:`_sums`): out = (f_uu, f_uv, f_vv, their sd
+    at noise sigma2, residual variance per degree of freedom); False if rank deficient.
+    The coefficients stay in vecs[2] (x), the first p of them used."""
+    p = (degree + 1) * (degree + 2) // 2
+    L = mats[1]
+    x, d, tmp = vecs[2], vecs[3], vecs[5]
+    ww, n = acc[0], int(acc[1])
     if n <= p or not cholesky(G, p, rcond, d, L):
         return False
     chol_solve(L, d, p, b, x)
@@ -225,10 +249,10 @@ def _fit_degree(uvw, k, degree, rcond, sigma2, mats, vecs, out):
         i = 3 + t
         var = 0.0
         for a in range(i, p):
-            acc = 1.0 if a == i else 0.0
+            acc_ = 1.0 if a == i else 0.0
             for c in range(i, a):
-                acc -= L[a, c] * tmp[c]
-            tmp[a] = acc / L[a, a]
+                acc_ -= L[a, c] * tmp[c]
+            tmp[a] = acc_ / L[a, a]
             var += tmp[a] * tmp[a]
         out[3 + t] = (2.0 if t != 1 else 1.0) * math.sqrt(var * sigma2) / d[i]
     out[0], out[1], out[2] = 2.0 * x[3], x[4], 2.0 * x[5]
@@ -262,14 +286,23 @@ def _degrees_block(f, degrees, kd, k3, sigma2, rule, chosen, coef, start, stop):
     mats, vecs = np.empty((2, P5, P5)), np.empty((6, P5))
     nm = len(degrees) + 1
     fits, ok = np.empty((nm, 7)), np.empty(nm, dtype=np.bool_)
-    keep = np.empty((nm, 6))
+    keep, bounds = np.empty((nm, 6)), np.empty((2, 3))
+    G3, b3, accs = np.empty((P3, P3)), np.empty(P3), np.empty((2, 2))  # accs: model 0's sums, the cubic's
     for r in range(start, stop):
         _offsets(f, r, 0, max(kd.max(), k3[r]), uvw)
-        for mi in range(nm):
-            deg, k = (degrees[mi], kd[mi]) if mi < nm - 1 else (3, k3[r])
-            ok[mi] = _fit_degree(uvw, k, deg, rule.rcond, sigma2[r], mats, vecs, fits[mi])
+        shared = nm > 1 and degrees[0] >= 3  # the cubic's sums come with those of model 0
+        for mi in range(nm - 1):
+            ok[mi] = _higher_fit(uvw, degrees[mi], kd[mi], k3[r] if mi == 0 and shared else 0, sigma2[r],
+                                 rule.rcond, mats, vecs, accs, G3, b3, fits[mi])
             keep[mi, :] = vecs[2, :6]
-        chosen[r] = _walk_down(fits, ok, rule.gamma)
+        if not shared:  # the cubic's sums from nothing
+            G3[:, :] = 0.0
+            b3[:] = 0.0
+            accs[1, :] = 0.0
+            _sums(uvw, 0, k3[r], 3, vecs[0], G3, b3, accs[1])
+        ok[nm - 1] = _fit_degree(G3, b3, accs[1], 3, rule.rcond, sigma2[r], mats, vecs, fits[nm - 1])
+        keep[nm - 1, :] = vecs[2, :6]
+        chosen[r] = _walk_down(fits, ok, rule.gamma, bounds)
         if chosen[r] >= 0:
             coef[r, :] = keep[chosen[r]]
         else:
@@ -277,11 +310,36 @@ def _degrees_block(f, degrees, kd, k3, sigma2, rule, chosen, coef, start, stop):
 
 
 @njit(**OPTS)
-def _walk_down(fits, ok, gamma):
-    """The last model of the walk (see :func:`jet_degrees`), -1 if none fits."""
+def _higher_fit(uvw, degree, k, k3, sigma2, rcond, mats, vecs, accs, G3, b3, out):
+    """:func:`_fit_degree` of ``degree`` on k neighbours (its sum of w^2 and count in
+    accs[0]); with k3 > 0 also the cubic's sums on k3 into G3, b3, accs[1], taken from the
+    same pass: the leading block of these sums after min(k, k3) neighbours, then grown
+    alone (each sum adds the same terms in the same order as a pass of its own)."""
+    G, b, row, acc, acc3 = mats[0], vecs[1], vecs[0], accs[0], accs[1]
+    p = (degree + 1) * (degree + 2) // 2
+    G[:p, :p] = 0.0
+    b[:p] = 0.0
+    acc[:] = 0.0
+    shared = min(k, k3)
+    _sums(uvw, 0, shared, degree, row, G, b, acc)
+    if k3 > 0:
+        G3[:, :] = G[:P3, :P3]
+        b3[:] = b[:P3]
+        acc3[:] = acc
+        _sums(uvw, shared, k3, 3, row, G3, b3, acc3)
+    _sums(uvw, shared, k, degree, row, G, b, acc)
+    return _fit_degree(G, b, acc, degree, rcond, sigma2, mats, vecs, out)
+
+
+@njit(**OPTS)
+def _walk_down(fits, ok, gamma, bounds):
+    """The last model of the walk (see :func:`jet_degrees`), -1 if none fits; ``bounds``
+    (2, 3) scratch for the intersection's lower and upper ends."""
     nm = len(ok)
     cubic_var = fits[nm - 1, 6] if ok[nm - 1] else math.inf
-    lo, hi = np.full(3, -math.inf), np.full(3, math.inf)
+    lo, hi = bounds[0], bounds[1]
+    lo[:] = -math.inf
+    hi[:] = math.inf
     chosen = -1
     for mi in range(nm):
         if not ok[mi] or (mi < nm - 1 and fits[mi, 6] > cubic_var):
