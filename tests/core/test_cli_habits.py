@@ -95,7 +95,10 @@ def test_info_json(clouds, capsys):
 
 @pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
 def test_ctrl_c_exits_130_without_traceback(tmp_path):
-    np.savetxt(tmp_path / "big.xyz", core.shapes.torus(30_000, seed=0).points)
+    # noisy, so the estimate runs for seconds after its bar is up (a clean 30k cloud had
+    # finished before the signal arrived on a loaded machine)
+    big = core.noise.add_noise(core.shapes.torus(100_000, seed=0).points, 0.3, seed=1)
+    np.savetxt(tmp_path / "big.xyz", big, fmt="%.6f")
     env = {**os.environ, "PYTHONPATH": os.getcwd()}
     proc = subprocess.Popen([sys.executable, "-m", "core", "estimate", str(tmp_path / "big.xyz"), "-o",
                              str(tmp_path / "o.ply"), "--progress"], stderr=subprocess.PIPE, env=env)
