@@ -121,7 +121,7 @@ def plan(n_points, **kwargs) -> EstimatePlan:
     """:meth:`EstimatePlan.build`: the frozen plan of an estimate of ``n_points`` points.
 
     >>> plan(10_000, k="auto").k_search, plan(10_000, k=15).k_search
-    (226, 15)
+    (320, 15)
     """
     return EstimatePlan.build(n_points, **kwargs)
 

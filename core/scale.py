@@ -1,7 +1,7 @@
 """Automatic scale: ``k="auto"`` picks, per point, the neighbourhood size and the model.
 
 **The rule (issue 15).** Fit osculating cubic jets of the *positions* (Cazals & Pouget) on
-nested neighbourhoods, 15, 20, 28, ... 226 neighbours, in one pass per point (the normal
+nested neighbourhoods, 15, 20, 28, ... 226, 320 neighbours, in one pass per point (the normal
 equations grow ring by ring, :mod:`core.kernels.jets`), and keep the largest size whose
 Hessian (f_uu, f_uv, f_vv) still lies within +-5 sigma of every smaller one (intersection of
 confidence intervals: Goldenshluger & Nemirovski 1997, Katkovnik 1999). What makes it see
@@ -11,7 +11,7 @@ went to 226 neighbours everywhere, noise-free included), but from the **noise le
 measured apart** (:func:`noise_variance`): the residual variance of a cubic jet is the
 noise (the same at every size) plus its bias, which grows as k^4; the variances at 15 and
 28 neighbours, pooled over 20 neighbours, separate the two. Noise-free that is ~0, the
-intervals are narrow and a curved patch stops at 15; with noise a flat patch goes to 226,
+intervals are narrow and a curved patch stops at 15; with noise a flat patch goes to 320,
 a bent one stops where the bias shows. Heights of points have independent noise, unlike
 estimated normals, so the intervals need no correction for correlation.
 
@@ -43,8 +43,9 @@ constants: :mod:`core.tuning`.)
 spacing, e1 is the quantity the default still loses (to a cubic jet on 240 neighbours on
 some hold-out surfaces). Four explanations were tested on the tuning surfaces and a private
 set (``python -m core bench holdout --probe``), then on the hold-out, and none holds across
-surfaces: (1) *k too small*: no, NR fits the largest candidate (226) at 76-100 % of the
-points of every noisy graph, and forcing 226 everywhere moves e1 by <= 2 % there; (2) *the
+surfaces: (1) *k too small*: not at 226 alone, NR fits the largest candidate (226) at 76-100 % of the
+points of every noisy graph, and forcing 226 everywhere moves e1 by <= 2 % there (but one candidate more, 320, gains
+10-30 % on e1 on smooth noisy graphs: :data:`core.tuning.AUTO_KS`); (2) *the
 refinement passes bias the direction*: no, they are what makes it good (the first fit
 alone: 1.0-3.0x worse), and more passes help e1 on some surfaces only, while smoothing the
 curvatures; (3) *e1 from the

@@ -12,10 +12,10 @@ from core.linalg import tangent_basis
 from core.neighbours import build_neighbours
 
 
-def _choose(sample, level, seed=1, k_max=226):
+def _choose(sample, level, seed=1):
     pts = noise.add_noise(sample.points, level, seed=seed) if level else sample.points
-    nb = build_neighbours(pts, k_max)
     ks = scale.jet_candidates(len(pts))
+    nb = build_neighbours(pts, ks[-1])
     k, frame, _, _ = scale.choose_jets(pts, sample.normals, nb, np.ones(len(pts), bool), ks, lambda *a: None)
     return pts, k, frame
 

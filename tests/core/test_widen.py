@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from core import build_neighbours, estimate, noise, scale, shapes, stages
+from core import build_neighbours, estimate, noise, plan, scale, shapes, stages
 from core.wide_neighbours import LazyNeighbours, WidenableNeighbours, search_in_spatial_order
 from core.stage_cache import StageCache
 
@@ -92,8 +92,9 @@ def test_truncated_jet_rule_reruns_the_points_at_its_last_sizes(half_noisy, full
 
 def test_result_neighbours_are_the_full_graph_and_pass_back(half_noisy, full_width):
     res = estimate(half_noisy)
-    assert res.neighbours.k_max == 226
-    full = build_neighbours(half_noisy, 226)
+    top = plan(len(half_noisy), k="auto").k_search
+    assert res.neighbours.k_max == top
+    full = build_neighbours(half_noisy, top)
     _same(estimate(half_noisy, neighbours=res.neighbours), full_width)
     assert np.array_equal(res.neighbours.indices, full.indices)
     assert np.array_equal(res.neighbours.distances, full.distances)
@@ -159,7 +160,8 @@ def test_noise_free_cloud_searches_few_rows_wide(monkeypatch):
     res = estimate(pts)
     assert isinstance(res.neighbours, LazyNeighbours) and res.neighbours._made is None
     assert sum(searched) < 0.05 * len(pts)
-    assert res.neighbours.k_max == 226 and res.neighbours.indices.shape == (len(pts), 226)
+    top = plan(len(pts), k="auto").k_search
+    assert res.neighbours.k_max == top and res.neighbours.indices.shape == (len(pts), top)
 
 
 def test_pickled_as_the_whole_graph(quantised):
