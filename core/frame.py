@@ -69,6 +69,14 @@ def darboux_frame(t1, t2, z, mu, W):
     return DarbouxFrame(normal, k1, k2, e1, e2, ok)
 
 
+def turned_over(normal, k1, k2, e1, e2, flip):
+    """The frame with its normal turned over where ``flip`` (N,) bool: k1, k2 -> -k2, -k1 and
+    e1 <-> e2, so that k1 >= k2 and e1 x e2 = n still hold (the SPEC conventions)."""
+    col = flip[:, None]
+    return (np.where(col, -normal, normal), np.where(flip, -k2, k1), np.where(flip, -k1, k2),
+            np.where(col, e2, e1), np.where(col, e1, e2))
+
+
 def height_field_derivatives(fu, fv, fuu, fuv, fvv):
     """(mu, W) of the graph z = f(u, v) at the origin, with the upward normal.
 

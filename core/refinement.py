@@ -10,6 +10,7 @@ from typing import NamedTuple
 import numpy as np
 
 from . import passes
+from .frame import turned_over
 from .orientation import resettle
 from .passes import PassRule, few_fits
 from .stages import Fit, Initial, Scale, _empty_fit, _Fitter
@@ -159,8 +160,8 @@ def settle_signs(pts, best: Refined, nb, plan, confidence):
     """The kept fit's signs re-decided on its own (refined) normals
     (:func:`core.orientation.resettle`) where the plan decides signs ("outward",
     "propagate"): the fits do not depend on the signs (each centre's neighbours are turned
-    to its side), so a flip here is a flip of the result: normal, k1, k2 -> -k2, -k1 and
-    e1 <-> e2 (e1 x e2 stays the normal). Returns ``(best, confidence)``, both new where
+    to its side), so a flip here is a flip of the result (:func:`core.frame.turned_over`).
+    Returns ``(best, confidence)``, both new where
     anything changed."""
     if not isinstance(plan.orientation, str) or plan.orientation == "keep":
         return best, confidence
@@ -170,8 +171,5 @@ def settle_signs(pts, best: Refined, nb, plan, confidence):
     flip = sign < 0
     if not flip.any():
         return best, confidence
-    col = flip[:, None]
-    fit = fit._replace(normals=np.where(col, -fit.normals, fit.normals), k1=np.where(flip, -fit.k2, fit.k1),
-                       k2=np.where(flip, -fit.k1, fit.k2), e1=np.where(col, fit.e2, fit.e1),
-                       e2=np.where(col, fit.e1, fit.e2))
-    return best._replace(fit=fit, input_normals=np.where(col, -best.input_normals, best.input_normals)), confidence
+    fit = fit._replace(**dict(zip(Fit._fields[:5], turned_over(*fit[:5], flip))))
+    return best._replace(fit=fit, input_normals=np.where(flip[:, None], -best.input_normals, best.input_normals)), confidence

@@ -85,7 +85,7 @@ import warnings
 import numpy as np
 
 from . import kernels
-from .frame import darboux_frame, height_field_derivatives
+from .frame import darboux_frame, height_field_derivatives, turned_over
 from .kernels import jets as jet_kernels
 from .kernels import pool as pool_kernels
 from .linalg import tangent_basis
@@ -285,7 +285,7 @@ def choose_jets(points, normals, nb, has_normal, ks, report):
     quiet = np.flatnonzero(fitted & (noise <= JET_QUIET) & (k <= reach))
     if len(quiet):
         f = _jet_frames(points, normals, _rows(idx_all, quiet, max(reach, ks[0])), quiet, s, t1, t2)
-        kq, dq, cq = _higher_degrees(f, k[quiet], sigma2[quiet] / s[quiet] ** 2)
+        kq, dq, cq = _higher_degrees(f, k[quiet], sigma2_h[quiet])
         higher = dq != JET_DEGREE
         k[quiet], degree[quiet] = kq, dq
         coef[quiet[higher], :6] = cq[higher]
@@ -359,9 +359,7 @@ def aligned_jets(jets, normals):
     nrm, k1, k2, e1, e2, ok = jets
     with np.errstate(invalid="ignore"):
         flip = np.einsum("ij,ij->i", nrm, np.nan_to_num(normals)) < 0
-    f = flip[:, None]
-    return (np.where(f, -nrm, nrm), np.where(flip, -k2, k1), np.where(flip, -k1, k2),
-            np.where(f, e2, e1), np.where(f, e1, e2), ok)
+    return (*turned_over(nrm, k1, k2, e1, e2, flip), ok)
 
 
 def choose_model(points, normals, nb, has_normal, ks, report):

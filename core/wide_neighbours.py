@@ -1,7 +1,7 @@
 """Neighbour graphs that hold the first columns of every row and search the rest on
 demand (issue 15, speed).
 
-With k="auto" a plan allows up to 226 neighbours per point, but the jet rule stops at
+With k="auto" a plan allows up to 226-320 neighbours per point, but the jet rule stops at
 15-28 of them at nearly every point of a noise-free cloud: searching all 226 for every
 point was the largest single cost of an estimate of 100k points (0.69 CPU s, against 0.22
 for 56), and moving that graph to the caller's order the next. The search's answer is
@@ -47,7 +47,7 @@ class WidenableNeighbours(Neighbours):
     extends the one held, bit for bit. :meth:`rows` serves some rows at any k up to
     ``k_max``; :meth:`take` beyond the width, :attr:`indices` and :attr:`distances`
     widen every row to ``k_max`` first (:meth:`widen`), once. With k="auto" most points
-    of a noise-free cloud use at most 40 neighbours of the 226 the plan allows.
+    of a noise-free cloud use at most 40 neighbours of the 226-320 the plan allows.
     """
 
     def __init__(self, points, indices, distances, *, k_max, tree, rank):
@@ -131,8 +131,9 @@ class WidenableNeighbours(Neighbours):
 class LazyNeighbours(Neighbours):
     """The graph ``source`` (a :class:`WidenableNeighbours` on the points in spatial
     order, sorted point s being the caller's ``order[s]``) as neighbours of the caller's
-    ``points``, what :attr:`core.CurvatureResult.neighbours` holds when the estimate held
-    only the first columns of its graph. The columns held and the rows searched wider are
+    ``points``, what :attr:`core.CurvatureResult.neighbours` holds when the estimate ran in
+    spatial order (converting a graph nobody reads was 1.1 s of a 1M-point estimate; ``source``
+    may also be a plain :class:`Neighbours`). The columns held and the rows searched wider are
     served from ``source`` in the caller's order (:meth:`take`, :meth:`rows`, so an
     estimate it is passed back to searches no more than the first one did); reading
     :attr:`indices` or :attr:`distances` makes the whole graph once, by ``make()``."""
@@ -180,12 +181,7 @@ class LazyNeighbours(Neighbours):
         return self._k_max if source is None else source.width
 
     def _held(self):
-        with self._lock:
-            source, order, inverse = self._source, self._order, self._inverse
-        if source is None:
-            return self._made.indices, self._made.distances
-        idx, dist = source.take(source.width)
-        return order[idx[inverse]], dist[inverse]
+        return self.take(self.width)
 
     def take(self, k: int):
         self._check_k(k)
