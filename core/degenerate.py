@@ -20,6 +20,10 @@ MIN_EXTENT = 1e-150
 #: smallest extent relative to |coordinates|: below it the cloud spans fewer than ~4500
 #: float64 steps and its shape is rounding noise.
 MIN_RELATIVE_EXTENT = 1e-12
+#: a cloud whose second principal spread is below this share of its first lies on a line
+#: (no surface passes through it, so no point has a normal). The spreads come from the 3x3
+#: scatter matrix, whose rounding leaves a line ~1e-8; a 1000:1 thin tube measures 1e-3.
+MIN_WIDTH = 1e-6
 
 
 def reason(points: np.ndarray, min_k: int) -> str | None:
@@ -37,6 +41,15 @@ def reason(points: np.ndarray, min_k: int) -> str | None:
     if extent < MIN_EXTENT or extent < MIN_RELATIVE_EXTENT * size:
         return (f"the cloud spans only {extent:.3g} at coordinates up to {size:.3g} (too small to resolve "
                 "in float64); rescale or re-centre the cloud")
+    return _collinear(points)
+
+
+def _collinear(points: np.ndarray) -> str | None:
+    """The reason when every point lies on one straight line (within rounding), else None."""
+    centred = points - points.mean(axis=0)
+    spread = np.linalg.svd(centred.T @ centred, compute_uv=False) ** 0.5
+    if spread[1] <= MIN_WIDTH * spread[0]:
+        return "all points lie on one straight line: a surface needs points spread in two directions"
     return None
 
 

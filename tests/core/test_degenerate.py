@@ -116,3 +116,17 @@ def test_many_duplicates_not_quadratic():
     assert (nb.distances[:60_000] == 0).all()
     res = core.estimate(pts, k=20, neighbours=nb)
     assert not res.valid[:60_000].any() and res.valid[60_000:].mean() > 0.9
+
+
+@pytest.mark.parametrize("k", [15, "auto"])
+def test_collinear_cloud_invalid_with_reason(k):
+    t = np.linspace(-1.0, 2.0, 300)
+    line = np.c_[t, 3 * t + 1, -2 * t] @ np.linalg.qr(np.random.default_rng(3).normal(size=(3, 3)))[0]
+    _all_invalid(core.estimate(line, k=k), 300, "straight line")
+
+
+def test_thin_but_honest_cloud_is_not_called_a_line():
+    rng = np.random.default_rng(4)
+    t, a = rng.uniform(0, 1000, 3000), rng.uniform(0, 2 * np.pi, 3000)
+    tube = np.c_[t, np.cos(a), np.sin(a)]  # 1000:1, still a surface
+    assert "degenerate" not in core.estimate(tube, k=15).params
