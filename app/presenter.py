@@ -196,6 +196,8 @@ def status_line(out) -> str:
     if req.noise > 0:
         text += f"  ·  noise {req.noise:g}%"
     text += f"  ·  {invalid:,} invalid (grey)" if invalid else "  ·  all valid"
+    why = (getattr(res, "params", None) or {}).get("degenerate")
+    text += f" — no estimate: {why}" if why else ""
     border = getattr(res, "border", None)
     n_border = 0 if border is None else int(np.count_nonzero(border))
     text += f"  ·  {n_border:,} on a border (grey)" if n_border else ""

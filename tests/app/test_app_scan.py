@@ -36,3 +36,14 @@ def test_repaired_normals_and_border_in_the_status_bar(make_window, tmp_path):
     assert border.any() and f"{int(border.sum()):,} on a border" in text
     shown = w.scene._cloud.point_data["values"]
     assert np.isnan(shown[border]).all()
+
+
+def test_a_cloud_with_no_surface_says_why_in_the_status_bar(make_window, tmp_path):
+    """A file whose points lie on one line: every point invalid, and the status bar names the
+    reason instead of leaving a grey cloud unexplained."""
+    t = np.linspace(0.0, 1.0, 400)
+    path = tmp_path / "wire.xyz"
+    np.savetxt(path, np.c_[t, 2 * t, -t])
+    w = make_window(load_file(path))
+    text = w.status_label.text()
+    assert "400 invalid" in text and "no estimate: all points lie on one straight line" in text
