@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .kernels import sign_evidence as kern
-from .tuning import VOTE_GROWTH, VOTE_SIZE
+from .tuning import FOREST_SCREEN, SORT_PARTS, VOTE_GROWTH, VOTE_SIZE
 
 #: neighbours per point in the orientation graph. 10 rather than Hoppe's 8: the chord
 #: test needs the graph to reach across a thin part's edges; measured on the thin shapes
@@ -95,9 +95,9 @@ def orient(points, normals, idx, mode="outward", *, ok=None, rank=None) -> Orien
     elif mode != "keep":
         rows = np.empty(n, dtype=np.int64)
         rows[rank] = np.arange(n)
-        order = kern.strongest_first(ev, first, SORT_LEVELS, rows)
+        order = kern.strongest_first(ev, first, SORT_LEVELS, rows, SORT_PARTS)
         flip = np.zeros(n, dtype=np.int8)
-        roots = kern.voted_signs(order, graph, ev, flip, rank, VOTE_SIZE, VOTE_GROWTH)
+        roots = kern.voted_signs(order, graph, ev, flip, rank, VOTE_SIZE, VOTE_GROWTH, max(1, int(FOREST_SCREEN * n)))
         sign[flip == 1] = -1.0
         labels = np.where(ok, _numbered(roots), -1)
         _global_signs(pts, nrm * sign[:, None], labels, mode, sign, rank)
@@ -147,7 +147,7 @@ def resettle(points, normals, idx, mode, *, ok=None):
     ok = np.isfinite(nrm).all(axis=1) if ok is None else np.asarray(ok, dtype=bool)
     graph = np.ascontiguousarray(idx[:, :ORIENT_K], dtype=np.int64)
     n = len(pts)
-    ev, _ = _evidence(pts, np.where(ok[:, None], nrm, 0.0), graph, ok, np.arange(n))
+    ev, _ = _evidence(pts, np.where(ok[:, None], nrm, 0.0), graph, ok, np.arange(n), want_first=False)
     sign = np.ones(n)
     confidence = np.empty(n)
     kern.agreement(ev, graph, np.zeros(n, dtype=np.int8), ok, confidence)
@@ -199,8 +199,9 @@ def far_facing(rel, normals, rms):
     return far, np.nan_to_num(facing)
 
 
-def _evidence(points, normals, graph, ok, rank):
-    """The signed evidence of every graph edge, and which entries are an edge's first copy."""
+def _evidence(points, normals, graph, ok, rank, *, want_first=True):
+    """The signed evidence of every graph edge, and which entries are an edge's first copy
+    (all True without ``want_first``: :func:`resettle` reads only the evidence)."""
     n = len(points)
     packed = np.zeros((n, 8))  # one cache line per point for the random reads
     packed[:, :3] = points
@@ -208,5 +209,5 @@ def _evidence(points, normals, graph, ok, rank):
     kern.offset_spread(points, normals, graph, ok, packed[:, 6])
     ev = np.empty(graph.shape)
     first = np.empty(graph.shape, dtype=np.bool_)
-    kern.sign_evidence(packed, graph, ok, GATE, ev, first, rank)
+    kern.sign_evidence(packed, graph, ok, GATE, ev, first, rank, want_first)
     return ev, first
