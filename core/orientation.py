@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .kernels import sign_evidence as kern
-from .tuning import FOREST_SCREEN, SORT_PARTS, VOTE_GROWTH, VOTE_SIZE
+from .tuning import VOTE_GROWTH, VOTE_SIZE
 
 #: neighbours per point in the orientation graph. 10 rather than Hoppe's 8: the chord
 #: test needs the graph to reach across a thin part's edges; measured on the thin shapes
@@ -95,9 +95,9 @@ def orient(points, normals, idx, mode="outward", *, ok=None, rank=None) -> Orien
     elif mode != "keep":
         rows = np.empty(n, dtype=np.int64)
         rows[rank] = np.arange(n)
-        order = kern.strongest_first(ev, first, SORT_LEVELS, rows, SORT_PARTS)
+        order = kern.strongest_first(ev, first, SORT_LEVELS, rows)
         flip = np.zeros(n, dtype=np.int8)
-        roots = kern.voted_signs(order, graph, ev, flip, rank, VOTE_SIZE, VOTE_GROWTH, max(1, int(FOREST_SCREEN * n)))
+        roots = kern.voted_signs(order, graph, ev, flip, rank, VOTE_SIZE, VOTE_GROWTH)
         sign[flip == 1] = -1.0
         labels = np.where(ok, _numbered(roots), -1)
         _global_signs(pts, nrm * sign[:, None], labels, mode, sign, rank)

@@ -216,14 +216,3 @@ CREASE_NOISE = 3.0
 #: at a rim, whose seams are too short for a sum to beat one edge (-0.2 % on the bowl).
 VOTE_SIZE = 16
 VOTE_GROWTH = 4
-#: speed only (the forest is the same for any value): core.kernels.sign_evidence.voted_signs
-#: takes this many edges per point in order, then screens the edges still to come in
-#: parallel and drops those that join a part to itself, and so on. On a 100k torus at k = 15
-#: (5.2 edges per point) 33 % of the edges after the first 1 x N still joined two parts, 3 %
-#: after 2 x N. CPU s of the forest with one thread (the screen's share halves with two):
-#: no screen 0.053, 1 x N 0.066, 2 x N 0.055, i.e. about 0.039 s of wall time with two threads.
-FOREST_SCREEN = 2.0
-#: runs of the points that core.kernels.sign_evidence.strongest_first counts and places in
-#: parallel (a fixed number, so the order does not depend on the number of threads; speed
-#: only). CPU s on a 100k torus with one thread: 0.012 in one pass, 0.0135 in 16 runs.
-SORT_PARTS = 16

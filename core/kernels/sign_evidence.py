@@ -116,39 +116,30 @@ def _find(parent, parity, x):
     return root, total
 
 
-@njit(**_OPTS, parallel=True)
-def strongest_first(evidence, use, levels, rows, parts):
+@njit(**_OPTS)
+def strongest_first(evidence, use, levels, rows):
     """Indices of the non-zero entries of ``evidence`` (N, k) where ``use``, flattened, by
     decreasing |evidence| to within 1 / ``levels`` (a counting sort: linear time, where a
     comparison sort of 10^7 edges costs more than the whole spanning forest); within a
     level, row by row in the order ``rows`` (the caller's order of the points), so the
-    forest does not depend on the order of the points in memory. The rows are cut into
-    ``parts`` runs of ``rows``, counted and placed in parallel, each run's entries of a
-    level after the previous run's: the same order as one pass over ``rows``."""
+    forest does not depend on the order of the points in memory."""
     n, k = evidence.shape
-    count = np.zeros((parts, levels + 1), dtype=np.int64)
-    for p in prange(parts):
-        for t in range(p * n // parts, (p + 1) * n // parts):
-            i = rows[t]
-            for m in range(k):
-                if evidence[i, m] != 0.0 and use[i, m]:
-                    count[p, levels - min(levels - 1, int(abs(evidence[i, m]) * levels))] += 1
-    start = np.empty((parts, levels + 1), dtype=np.int64)
-    total = 0
-    for b in range(levels + 1):  # level by level, run by run
-        for p in range(parts):
-            start[p, b] = total
-            total += count[p, b]
-    order = np.empty(total, dtype=np.int64)
-    for p in prange(parts):
-        at = start[p]
-        for t in range(p * n // parts, (p + 1) * n // parts):
-            i = rows[t]
-            for m in range(k):
-                if evidence[i, m] != 0.0 and use[i, m]:
-                    b = levels - min(levels - 1, int(abs(evidence[i, m]) * levels))
-                    order[at[b]] = i * k + m
-                    at[b] += 1
+    count = np.zeros(levels + 1, dtype=np.int64)
+    for i in range(n):
+        for m in range(k):
+            if evidence[i, m] != 0.0 and use[i, m]:
+                count[levels - min(levels - 1, int(abs(evidence[i, m]) * levels))] += 1
+    start = np.zeros(levels + 1, dtype=np.int64)
+    for b in range(1, levels + 1):
+        start[b] = start[b - 1] + count[b - 1]
+    order = np.empty(start[levels] + count[levels], dtype=np.int64)
+    for t in range(n):
+        i = rows[t]
+        for m in range(k):
+            if evidence[i, m] != 0.0 and use[i, m]:
+                b = levels - min(levels - 1, int(abs(evidence[i, m]) * levels))
+                order[start[b]] = i * k + m
+                start[b] += 1
     return order
 
 
@@ -213,43 +204,7 @@ def _join(parent, parity, size, a, b, s):
 
 
 @njit(**_OPTS)
-def _take_edge(e, idx, evidence, parent, parity, size, min_size, ea, eb, ew, nd):
-    """Kruskal's step of :func:`voted_signs` for edge e: join its two parts, or set it
-    aside (into ``ea, eb, ew[nd]``) between two parts of ``min_size`` points or more;
-    returns the new count of edges set aside."""
-    k = idx.shape[1]
-    i, m = e // k, e % k
-    ri, pi = _find(parent, parity, i)
-    rj, pj = _find(parent, parity, idx[i, m])
-    if ri == rj:
-        return nd
-    if min(size[ri], size[rj]) >= min_size:
-        ea[nd], eb[nd], ew[nd] = ri, rj, evidence[i, m] * (1.0 - 2.0 * (pi ^ pj))
-        return nd + 1
-    _join(parent, parity, size, ri, rj, pi ^ pj ^ (1 if evidence[i, m] < 0.0 else 0))
-    return nd
-
-
-@njit(**_OPTS)
-def _root(parent, x):
-    """Root of x without compressing the path (safe to call from many threads)."""
-    while parent[x] != x:
-        x = parent[x]
-    return x
-
-
-@njit(**_OPTS, parallel=True)
-def _drop_joined(order, start, idx, parent, live):
-    """``live[t]`` = False for the edges ``order[start:]`` whose two ends are in one part."""
-    k = idx.shape[1]
-    for t in prange(start, len(order)):
-        if live[t]:
-            e = order[t]
-            live[t] = _root(parent, e // k) != _root(parent, idx[e // k, e % k])
-
-
-@njit(**_OPTS)
-def voted_signs(order, idx, evidence, flip, rank, min_size, growth, segment):
+def voted_signs(order, idx, evidence, flip, rank, min_size, growth):
     """Maximum spanning forest (Kruskal) of the evidence graph with a parity union-find,
     where two parts both of at least ``min_size`` points are not joined by their strongest
     edge alone.
@@ -266,12 +221,7 @@ def voted_signs(order, idx, evidence, flip, rank, min_size, growth, segment):
     decides which way a small part hangs; between large parts (the two sides of a plate
     met along its rim, a tube's halves) one wrong edge would flip a whole side, and the
     vote of the whole seam does not. ``rank``: each point's index in the caller's order
-    (the sums are taken in an order that does not depend on the order in memory).
-
-    Once the forest spans most of the graph, most edges join a part to itself (a no-op):
-    after every ``segment`` edges taken, the edges still to come are screened for that in
-    parallel (:func:`_drop_joined`, read-only finds: an edge within one part stays so) and
-    only the others are taken, in the same order: the same forest."""
+    (the sums are taken in an order that does not depend on the order in memory)."""
     n, k = idx.shape
     parent = np.arange(n)
     parity = np.zeros(n, dtype=np.int8)
@@ -280,17 +230,17 @@ def voted_signs(order, idx, evidence, flip, rank, min_size, growth, segment):
     eb = np.empty(len(order), dtype=np.int64)
     ew = np.empty(len(order))
     nd = 0
-    live = np.ones(len(order), dtype=np.bool_)  # False: found joining one part (a no-op)
-    t = 0
-    while t < len(order):
-        todo = segment
-        while t < len(order) and todo > 0:
-            if live[t]:
-                todo -= 1
-                nd = _take_edge(order[t], idx, evidence, parent, parity, size, min_size, ea, eb, ew, nd)
-            t += 1
-        if len(order) - t > segment:
-            _drop_joined(order, t, idx, parent, live)
+    for e in order:
+        i, m = e // k, e % k
+        ri, pi = _find(parent, parity, i)
+        rj, pj = _find(parent, parity, idx[i, m])
+        if ri == rj:
+            continue
+        if min(size[ri], size[rj]) >= min_size:
+            ea[nd], eb[nd], ew[nd] = ri, rj, evidence[i, m] * (1.0 - 2.0 * (pi ^ pj))
+            nd += 1
+            continue
+        _join(parent, parity, size, ri, rj, pi ^ pj ^ (1 if evidence[i, m] < 0.0 else 0))
     limit = min_size
     while nd > 0:
         limit *= growth

@@ -13,7 +13,6 @@ from core import neighbours, shapes, shapes_thin, spatial_order, stages
 from core.kernels.permute import move_rows
 from core.kernels.sign_evidence import strongest_first
 from core.orientation import ORIENT_K, SORT_LEVELS, _evidence, orient
-from core.tuning import SORT_PARTS
 
 FIELDS = ("normals", "k1", "k2", "e1", "e2", "valid", "k_point", "outlier_score", "crease",
           "orientation_confidence")
@@ -164,6 +163,6 @@ def test_orientation_edges_are_taken_in_the_caller_order():
     ev_s, first_s = _evidence(pts[perm], nrm[perm], inverse[graph[perm]], ok[perm], perm)
     np.testing.assert_array_equal(ev_s, ev[perm])
     np.testing.assert_array_equal(first_s, first[perm])
-    order = strongest_first(ev, first, SORT_LEVELS, np.arange(len(pts)), SORT_PARTS)
-    order_s = strongest_first(ev_s, first_s, SORT_LEVELS, inverse, SORT_PARTS)
+    order = strongest_first(ev, first, SORT_LEVELS, np.arange(len(pts)))
+    order_s = strongest_first(ev_s, first_s, SORT_LEVELS, inverse)
     np.testing.assert_array_equal(perm[order_s // ORIENT_K] * ORIENT_K + order_s % ORIENT_K, order)
