@@ -19,7 +19,8 @@ from __future__ import annotations
 import numpy as np
 
 from .kernels import border as kern
-from .neighbours import build_neighbours
+from ._validate import as_points
+from .neighbours import search_in_spatial_order
 
 #: neighbours per point for the test (the point itself included). With 30 the disc of
 #: neighbours reaches ~3.1 spacings, so that a point 1 spacing from a rim has a clear
@@ -71,10 +72,17 @@ def border_of(points, normals, nb):
     :class:`core.Neighbours`), or from a search of their own when ``nb`` holds fewer (or is None)."""
     k = min(BORDER_K, len(points))
     if served_by(nb, len(points)):
-        idx = nb.take(k)[0]
-    else:  # e.g. an integer k < 30: one more search, the test is meaningless on fewer
-        idx = build_neighbours(points, k).take(k)[0]
-    return border_flags(points, normals, idx)[0]
+        return border_flags(points, normals, nb.take(k)[0])[0]
+    # e.g. an integer k < 30: one more search, the test is meaningless on fewer. In spatial
+    # order (the same rows as build_neighbours, 5x faster at 100k points); each point's test
+    # reads only its own row, so the flags are the same
+    pts, _ = as_points(points)
+    own, order = search_in_spatial_order(pts, k)
+    if order is None:  # large groups of identical points: searched in the caller's order
+        return border_flags(pts, normals, own.take(k)[0])[0]
+    border = np.empty(len(pts), dtype=bool)
+    border[order] = border_flags(own.points, np.asarray(normals)[order], own.take(k)[0])[0]
+    return border
 
 
 def served_by(nb, n_points: int) -> bool:

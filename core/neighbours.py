@@ -15,7 +15,7 @@ from ._validate import as_points, check_int
 from .kernels.kdtree import build_tree, query_sorted
 from .kernels.knn import keep_nearest
 from .spacing import mean_spacing
-from .tuning import SEARCH_LEAF, SEARCH_RADIUS_NODE
+from .tuning import SEARCH_LEAF, SEARCH_RADIUS_NODE, SEARCH_REACH
 
 #: ``progress(fraction, stage)``; returning False cancels
 ProgressCallback = Callable[[float, str], Union[bool, None]]
@@ -235,7 +235,7 @@ def _query_tree(pts, tree, rank, idx, dist, report) -> None:
     want = max(k_max, SEARCH_RADIUS_NODE)
     for start in range(0, n, _CHUNK):
         stop = min(n, start + _CHUNK)
-        query_sorted(pts, tree, rank, start, dist[start:stop], idx[start:stop], want)
+        query_sorted(pts, tree, rank, start, dist[start:stop], idx[start:stop], want, SEARCH_REACH)
         report(stop / n, "neighbours")
     _self_first(idx, dist, np.arange(n))
 

@@ -147,7 +147,7 @@ def resettle(points, normals, idx, mode, *, ok=None):
     ok = np.isfinite(nrm).all(axis=1) if ok is None else np.asarray(ok, dtype=bool)
     graph = np.ascontiguousarray(idx[:, :ORIENT_K], dtype=np.int64)
     n = len(pts)
-    ev, _ = _evidence(pts, np.where(ok[:, None], nrm, 0.0), graph, ok, np.arange(n))
+    ev, _ = _evidence(pts, np.where(ok[:, None], nrm, 0.0), graph, ok, np.arange(n), want_first=False)
     sign = np.ones(n)
     confidence = np.empty(n)
     kern.agreement(ev, graph, np.zeros(n, dtype=np.int8), ok, confidence)
@@ -199,8 +199,9 @@ def far_facing(rel, normals, rms):
     return far, np.nan_to_num(facing)
 
 
-def _evidence(points, normals, graph, ok, rank):
-    """The signed evidence of every graph edge, and which entries are an edge's first copy."""
+def _evidence(points, normals, graph, ok, rank, *, want_first=True):
+    """The signed evidence of every graph edge, and which entries are an edge's first copy
+    (all True without ``want_first``: :func:`resettle` reads only the evidence)."""
     n = len(points)
     packed = np.zeros((n, 8))  # one cache line per point for the random reads
     packed[:, :3] = points
@@ -208,5 +209,5 @@ def _evidence(points, normals, graph, ok, rank):
     kern.offset_spread(points, normals, graph, ok, packed[:, 6])
     ev = np.empty(graph.shape)
     first = np.empty(graph.shape, dtype=np.bool_)
-    kern.sign_evidence(packed, graph, ok, GATE, ev, first, rank)
+    kern.sign_evidence(packed, graph, ok, GATE, ev, first, rank, want_first)
     return ev, first

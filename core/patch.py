@@ -8,7 +8,7 @@ from functools import cached_property
 import numpy as np
 
 from .kernels import Frames
-from .linalg import tangent_basis
+from .kernels.frame import local_frames
 
 
 @dataclass(frozen=True, eq=False)
@@ -34,8 +34,10 @@ class Chunk:
     @classmethod
     def build(cls, points, normals, idx, h, centres, kc=None):
         """``kc`` (M,): neighbours used per centre (default: all k columns of ``idx``)."""
-        z = normals[centres]
-        t1, t2 = tangent_basis(z)
+        centres = np.asarray(centres, dtype=np.int64)
+        m = len(centres)
+        z, t1, t2 = np.empty((m, 3)), np.empty((m, 3)), np.empty((m, 3))
+        local_frames(np.ascontiguousarray(normals, dtype=np.float64), centres, z, t1, t2)  # z and tangent_basis(z)
         if kc is None:
             kc = np.full(len(centres), idx.shape[1], dtype=np.int64)
         return cls(points, normals, np.ascontiguousarray(idx), h, centres, t1, t2, z, kc)

@@ -11,6 +11,7 @@ import numpy as np
 
 from . import kernels, scale
 from .frame import darboux_frame
+from .kernels.permute import put_rows
 from .border import border_of_valid, served_by
 from .neighbours import Neighbours, search_neighbours
 from .normal_repair import repair_normals
@@ -255,15 +256,20 @@ class _Fitter(NamedTuple):
 
 def _fit_chunk(chunk, method, opts, out: Fit) -> None:
     mu, W, ok, diag = method.fit(chunk, **opts)
-    c_n, c_k1, c_k2, c_e1, c_e2, ok2 = darboux_frame(chunk.t1, chunk.t2, chunk.z, mu, W / chunk.h[:, None, None])
-    good = ok & ok2
-    sel = chunk.centres[good]
-    out.normals[sel], out.e1[sel], out.e2[sel] = c_n[good], c_e1[good], c_e2[good]
-    out.k1[sel], out.k2[sel] = c_k1[good], c_k2[good]
+    frame = darboux_frame(chunk.t1, chunk.t2, chunk.z, mu, W / chunk.h[:, None, None])
+    good = ok & frame.ok
+    stored = [(frame.normal, out.normals), (frame.e1, out.e1), (frame.e2, out.e2), (frame.k1, out.k1), (frame.k2, out.k2)]
     if diag is not None and "rms" in diag:
-        out.rms[sel] = diag["rms"][good]
-        out.spread[sel] = diag["spread"][good]
-    out.valid[sel] = True
+        stored += [(diag["rms"], out.rms), (diag["spread"], out.spread)]
+    stored.append((good, out.valid))  # valid last: True where good
+    for src, dst in stored:  # dst[centres[good]] = src[good], one compiled loop per array
+        put_rows(good, chunk.centres, _columns(src, dst.dtype), dst.reshape(len(dst), -1))
+
+
+def _columns(a, dtype):
+    """``a`` as a C-contiguous (M, c) array of ``dtype`` (a view where it already is one)."""
+    a = np.ascontiguousarray(a, dtype=dtype)
+    return a.reshape(len(a), -1)
 
 
 def flags(fit: Fit, scores, plan, reference: Fit | None, *, nb=None, confidence=None) -> Flags:

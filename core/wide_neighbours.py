@@ -22,7 +22,7 @@ import numpy as np
 from ._progress import Progress
 from .kernels.kdtree import query_rows
 from .neighbours import _CHUNK, Neighbours, _query_tree, _search, _self_first
-from .tuning import SEARCH_RADIUS_NODE
+from .tuning import SEARCH_RADIUS_NODE, SEARCH_REACH
 
 __all__ = ["WidenableNeighbours", "LazyNeighbours", "rows_at_least", "search_in_spatial_order"]
 
@@ -108,7 +108,7 @@ class WidenableNeighbours(Neighbours):
         for start in range(0, len(centres), _CHUNK):
             stop = min(len(centres), start + _CHUNK)
             query_rows(self._points, self._tree, self._rank, centres[start:stop], dist[start:stop],
-                       idx[start:stop], max(k, SEARCH_RADIUS_NODE))
+                       idx[start:stop], max(k, SEARCH_RADIUS_NODE), SEARCH_REACH)
         _self_first(idx, dist, centres)
         return idx, dist
 

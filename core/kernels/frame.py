@@ -87,3 +87,23 @@ def frame_directions(t1, t2, z, mu, good, c, s, e1, e2):
         cm, sm = c[m], s[m]
         _to_world(cm * b1[0] + sm * b2[0], cm * b1[1] + sm * b2[1], cm * b1[2] + sm * b2[2], t1, t2, z, m, e1)
         _to_world(-sm * b1[0] + cm * b2[0], -sm * b1[1] + cm * b2[1], -sm * b1[2] + cm * b2[2], t1, t2, z, m, e2)
+
+
+@njit(**OPTS)
+def local_frames(normals, centres, z, t1, t2):
+    """z = normals[centres] and the orthonormal (t1, t2) of :func:`core.linalg.tangent_basis`
+    (Duff et al. 2017) in one loop, the same operations in the same order (numpy reference:
+    that function), instead of some 20 temporary arrays per chunk."""
+    for m in range(len(centres)):
+        i = centres[m]
+        n0, n1, n2 = normals[i, 0], normals[i, 1], normals[i, 2]
+        z[m, 0], z[m, 1], z[m, 2] = n0, n1, n2
+        sign = 1.0 if n2 >= 0.0 else -1.0
+        a = -1.0 / (sign + n2)
+        b = n0 * n1 * a
+        t1[m, 0] = 1.0 + sign * (n0 * n0) * a
+        t1[m, 1] = sign * b
+        t1[m, 2] = -sign * n0
+        t2[m, 0] = b
+        t2[m, 1] = sign + (n1 * n1) * a
+        t2[m, 2] = -n1

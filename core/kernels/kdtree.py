@@ -219,21 +219,21 @@ def _bucket_sort(cd, cj, m, r, rank, k, work):
 
 
 @njit(**OPTS, parallel=True)
-def query_sorted(p, tree, rank, start, dist, idx, want):
+def query_sorted(p, tree, rank, start, dist, idx, want, reach):
     """Rows ``start .. start + len(dist)`` of the k = ``dist.shape[1]`` nearest neighbours of
     the points ``p`` (in the order ``tree`` was built on), into ``dist`` / ``idx`` (indices
     into ``p``), ties in distance by ``rank`` (the caller's index of each point).
 
     Numpy reference, row i: ``d = sqrt(((p - p[i]) ** 2).sum(1)); o = np.lexsort((rank, d))[:k];
-    dist[i], idx[i] = d[o], o``."""
+    dist[i], idx[i] = d[o], o``. ``reach``: see :func:`_query_block` (speed only)."""
     rows = dist.shape[0]
     depth = 2 * int(np.log2(max(p.shape[0], 2))) + 8
     for b in prange((rows + BLOCK - 1) // BLOCK):
-        _query_block(p, tree, rank, start, None, b * BLOCK, min(rows, (b + 1) * BLOCK), dist, idx, want, depth)
+        _query_block(p, tree, rank, start, None, b * BLOCK, min(rows, (b + 1) * BLOCK), dist, idx, (want, reach), depth)
 
 
 @njit(**OPTS, parallel=True)
-def query_rows(p, tree, rank, rows, dist, idx, want):
+def query_rows(p, tree, rank, rows, dist, idx, want, reach):
     """:func:`query_sorted` for the points ``rows`` (any indices into ``p``, best in
     ascending order: each query starts from the previous one's radius): row r of
     ``dist`` / ``idx`` holds the k = ``dist.shape[1]`` nearest neighbours of point
@@ -241,13 +241,19 @@ def query_rows(p, tree, rank, rows, dist, idx, want):
     m = dist.shape[0]
     depth = 2 * int(np.log2(max(p.shape[0], 2))) + 8
     for b in prange((m + BLOCK - 1) // BLOCK):
-        _query_block(p, tree, rank, 0, rows, b * BLOCK, min(m, (b + 1) * BLOCK), dist, idx, want, depth)
+        _query_block(p, tree, rank, 0, rows, b * BLOCK, min(m, (b + 1) * BLOCK), dist, idx, (want, reach), depth)
 
 
 @njit(**OPTS)
-def _query_block(p, tree, rank, start, rows, r0, r1, dist, idx, want, depth):
+def _query_block(p, tree, rank, start, rows, r0, r1, dist, idx, sizes, depth):
     """Rows r0 .. r1 - 1 of :func:`query_sorted` (point ``start + r``) or of
-    :func:`query_rows` (point ``rows[r]``), scratch allocated once."""
+    :func:`query_rows` (point ``rows[r]``), scratch allocated once. ``sizes`` = (want,
+    reach): a query first gathers within the previous point's k-th distance plus ``reach``
+    x the step between the two, then, short of k points, within the sure radius (plus the
+    whole step: the triangle inequality), then within its node's (:func:`_radius`). Any
+    radius holding k points gives the same rows (all points within it are gathered, ties
+    at the k-th distance included), so ``reach`` trades candidates against retries only."""
+    want, reach = sizes
     k = dist.shape[1]
     stack = np.empty(2 * depth + 4, np.int64)
     cap = 8 * want + 2
@@ -262,15 +268,19 @@ def _query_block(p, tree, rank, start, rows, r0, r1, dist, idx, want, depth):
             i = rows[r]
         # the previous point's k nearest lie within d(i, prev) + its k-th distance of i
         step = _distance(p, i, prev) if last >= 0.0 else np.inf
-        radius = (step + last) * (1.0 + _SLACK) if step <= last else _radius(p, tree, i, k, want, rank, cd, cj)
+        sure = (step + last) * (1.0 + _SLACK) if step <= last else -1.0
+        radius = (reach * step + last) * (1.0 + _SLACK) if sure >= 0.0 else _radius(p, tree, i, k, want, rank, cd, cj)
         while True:
             m = _gather(p, tree, i, radius, cd, cj, stack)
             if m < 0:
                 cap *= 2
                 cd, cj = np.empty(cap, np.float64), np.empty(cap, np.int64)
                 work = (np.empty(cap, np.float64), np.empty(cap, np.int64), np.empty(cap + 1, np.int64), stack)
+            elif m < k and radius < sure:  # the guess was short: the sure radius
+                radius = sure
             elif m < k:  # short of k by rounding: the node's own radius
                 radius = _radius(p, tree, i, k, want, rank, cd, cj)
+                sure = -1.0
             else:
                 break
         _bucket_sort(cd, cj, m, radius, rank, k, work)

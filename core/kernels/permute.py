@@ -45,3 +45,15 @@ def move_rows(a, dest):
             r = dest[r]
         a[start] = carry
         done[start] = True
+
+
+@njit(**OPTS)
+def put_rows(good, rows, src, dst):
+    """``dst[rows[good]] = src[good]`` for (M, c) ``src`` and (N, c) ``dst`` (numpy
+    reference), without the two boolean selections and the fancy assignment: a chunk's
+    fit stored into the whole cloud's arrays."""
+    for m in range(len(good)):
+        if good[m]:
+            r = rows[m]
+            for c in range(src.shape[1]):
+                dst[r, c] = src[m, c]

@@ -49,7 +49,7 @@ def _median(t):
 
 
 @njit(**_OPTS, parallel=True)
-def sign_evidence(packed, idx, ok, gate, out, first, rank):
+def sign_evidence(packed, idx, ok, gate, out, first, rank, want_first=True):
     """Signed evidence that normals i and j = idx[i, m] point the same way (> 0) or not (< 0).
 
     ``packed`` rows are (p, n, spread, 0): one cache line per neighbour. With the chord
@@ -66,7 +66,8 @@ def sign_evidence(packed, idx, ok, gate, out, first, rank):
     both points on the same side of their consistently oriented normals (a_i a_j > 0).
     ``out[i, m]`` is 0 where either point has no normal or the chord has zero length;
     ``first[i, m]`` is False where the edge also appears in row j with rank[j] < rank[i]
-    (``rank``: the point's index in the caller's order, whatever the order in memory).
+    (``rank``: the point's index in the caller's order, whatever the order in memory);
+    without ``want_first`` ``first`` is left True (the search of row j skipped).
     """
     n, k = idx.shape
     for i in prange(n):
@@ -76,7 +77,7 @@ def sign_evidence(packed, idx, ok, gate, out, first, rank):
             first[i, m] = True
             if j == i or not ok[i] or not ok[j]:
                 continue
-            if rank[j] < rank[i]:
+            if want_first and rank[j] < rank[i]:
                 for q in range(k):
                     if idx[j, q] == i:
                         first[i, m] = False

@@ -12,6 +12,7 @@ from scipy.spatial import cKDTree
 
 from core import neighbours, noise, shapes
 from core.kernels.kdtree import build_tree, query_sorted
+from core.tuning import SEARCH_REACH
 
 
 def _brute(pts, k):
@@ -86,7 +87,7 @@ def test_search_does_not_depend_on_the_thread_count():
         for threads in (1, before):
             numba.set_num_threads(threads)
             dist, idx = np.empty((len(p), 25)), np.empty((len(p), 25), dtype=np.int64)
-            query_sorted(p, tree, order.astype(np.int64), 0, dist, idx, 64)
+            query_sorted(p, tree, order.astype(np.int64), 0, dist, idx, 64, SEARCH_REACH)
             outs.append((dist, idx))
     finally:
         numba.set_num_threads(before)

@@ -46,6 +46,7 @@ def test_warm_up_covers_cached_stages_and_given_neighbours():
         for k in (15, "auto") if auto else (15,):
             pts = np.array(cloud.points)
             estimate(pts, k=k, method=method, neighbours=build_neighbours(pts, plan(len(pts), k=k).k_search))
+    estimate(shapes.torus(20_000, seed=5).points, method="nr")  # data-dependent types of a larger cloud
     after = _signatures()
     added = {f.py_func.__qualname__: sorted(after[f] - before.get(f, set()))
              for f in after if after[f] - before.get(f, set())}
