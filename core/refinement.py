@@ -11,10 +11,13 @@ import numpy as np
 
 from . import passes
 from .frame import turned_over
+from ._progress import Progress
+from .kernels.kdtree import build_tree
+from .neighbours import _query_tree, search_neighbours
 from .orientation import resettle
 from .passes import PassRule, few_fits
 from .stages import Fit, Initial, Scale, _empty_fit, _Fitter
-from .tuning import HOLD_TURN, PASS_DECAY
+from .tuning import HOLD_TURN, PASS_DECAY, RESETTLE_K, SEARCH_LEAF
 from .wide_neighbours import rows_at_least
 
 
@@ -156,10 +159,11 @@ class _Rest:
         return self.reported
 
 
-def settle_signs(pts, best: Refined, nb, plan, confidence):
+def settle_signs(pts, best: Refined, nb, plan, confidence, rank=None):
     """The kept fit's signs re-decided on its own (refined) normals
     (:func:`core.orientation.resettle`) where the plan decides signs ("outward",
-    "propagate"): the fits do not depend on the signs (each centre's neighbours are turned
+    "propagate"; ``rank``: the points' indices in the caller's order, :func:`wider_ring`):
+    the fits do not depend on the signs (each centre's neighbours are turned
     to its side), so a flip here is a flip of the result (:func:`core.frame.turned_over`).
     Returns ``(best, confidence)``, both new where
     anything changed."""
@@ -167,9 +171,26 @@ def settle_signs(pts, best: Refined, nb, plan, confidence):
         return best, confidence
     fit = best.fit
     final = np.where(fit.valid[:, None], fit.normals, best.input_normals)
-    sign, confidence = resettle(pts, final, nb.take(plan.k_initial)[0], plan.orientation)
+    sign, confidence = resettle(pts, final, wider_ring(pts, nb, rank), plan.orientation)
     flip = sign < 0
     if not flip.any():
         return best, confidence
     fit = fit._replace(**dict(zip(Fit._fields[:5], turned_over(*fit[:5], flip))))
     return best._replace(fit=fit, input_normals=np.where(flip[:, None], -best.input_normals, best.input_normals)), confidence
+
+
+def wider_ring(pts, nb, rank=None):
+    """Each point's :data:`core.tuning.RESETTLE_K` nearest, whose evidence the re-decided
+    signs read: the ones ``nb`` holds in memory (k="auto" holds more), or one more search
+    (an integer k < 30), whose ties go to the lower ``rank`` (each point's index in the
+    caller's order, ``pts`` being in the kd-tree's leaf order; None: ``pts`` are in the
+    caller's order), as :func:`core.neighbours.search_in_spatial_order`'s do: the same
+    rows whatever the order in memory."""
+    k = min(RESETTLE_K, len(pts))
+    if nb.width >= k:  # held: no search, and a shared graph (a cache's) is not widened here
+        return nb.take(k)[0]
+    if rank is None:
+        return search_neighbours(pts, k).take(k)[0]
+    idx = np.empty((len(pts), k), dtype=rank.dtype)  # the first search's types: its compiled kernel
+    _query_tree(pts, build_tree(pts, SEARCH_LEAF), rank, idx, np.empty((len(pts), k)), Progress(None))
+    return idx
