@@ -127,7 +127,7 @@ def estimate(
     front = prepare(pts, normals, plan, neighbours, report, cache=cache)
     best = refine(front.pts, front.init, front.outlier, front.nb, front.scale, plan,
                   report.sub(0.7 if plan.auto else 0.45, 1.0))
-    best, confidence = settle_signs(front.pts, best, front.nb, plan, front.confidence, front.order.order)
+    best, confidence = settle_signs(front.pts, best, front.nb, plan, front.confidence)
     marks = flags(best.fit, front.scores, plan, front.reference, nb=front.nb, confidence=confidence)
     stages = front.order.to_caller((front.init, best, front.scale, marks))
     nb = stage_cache.caller_neighbours(cache, front.order, front.nb, pts)  # a cache keeps the sorted graph

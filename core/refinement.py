@@ -11,13 +11,10 @@ import numpy as np
 
 from . import passes
 from .frame import turned_over
-from ._progress import Progress
-from .kernels.kdtree import build_tree
-from .neighbours import _query_tree, search_neighbours
-from .orientation import resettle
+from .orientation import ORIENT_K, resettle
 from .passes import PassRule, few_fits
 from .stages import Fit, Initial, Scale, _empty_fit, _Fitter
-from .tuning import HOLD_TURN, PASS_DECAY, RESETTLE_K, SEARCH_LEAF
+from .tuning import HOLD_TURN, PASS_DECAY, RESETTLE_K
 from .wide_neighbours import rows_at_least
 
 
@@ -159,11 +156,10 @@ class _Rest:
         return self.reported
 
 
-def settle_signs(pts, best: Refined, nb, plan, confidence, rank=None):
+def settle_signs(pts, best: Refined, nb, plan, confidence):
     """The kept fit's signs re-decided on its own (refined) normals
     (:func:`core.orientation.resettle`) where the plan decides signs ("outward",
-    "propagate"; ``rank``: the points' indices in the caller's order, :func:`wider_ring`):
-    the fits do not depend on the signs (each centre's neighbours are turned
+    "propagate"; on the neighbours of :func:`wider_ring`): the fits do not depend on the signs (each centre's neighbours are turned
     to its side), so a flip here is a flip of the result (:func:`core.frame.turned_over`).
     Returns ``(best, confidence)``, both new where
     anything changed."""
@@ -171,7 +167,7 @@ def settle_signs(pts, best: Refined, nb, plan, confidence, rank=None):
         return best, confidence
     fit = best.fit
     final = np.where(fit.valid[:, None], fit.normals, best.input_normals)
-    sign, confidence = resettle(pts, final, wider_ring(pts, nb, rank), plan.orientation)
+    sign, confidence = resettle(pts, final, wider_ring(nb, plan), plan.orientation, trust=plan.auto)
     flip = sign < 0
     if not flip.any():
         return best, confidence
@@ -179,18 +175,10 @@ def settle_signs(pts, best: Refined, nb, plan, confidence, rank=None):
     return best._replace(fit=fit, input_normals=np.where(flip[:, None], -best.input_normals, best.input_normals)), confidence
 
 
-def wider_ring(pts, nb, rank=None):
-    """Each point's :data:`core.tuning.RESETTLE_K` nearest, whose evidence the re-decided
-    signs read: the ones ``nb`` holds in memory (k="auto" holds more), or one more search
-    (an integer k < 30), whose ties go to the lower ``rank`` (each point's index in the
-    caller's order, ``pts`` being in the kd-tree's leaf order; None: ``pts`` are in the
-    caller's order), as :func:`core.neighbours.search_in_spatial_order`'s do: the same
-    rows whatever the order in memory."""
-    k = min(RESETTLE_K, len(pts))
-    if nb.width >= k:  # held: no search, and a shared graph (a cache's) is not widened here
-        return nb.take(k)[0]
-    if rank is None:
-        return search_neighbours(pts, k).take(k)[0]
-    idx = np.empty((len(pts), k), dtype=rank.dtype)  # the first search's types: its compiled kernel
-    _query_tree(pts, build_tree(pts, SEARCH_LEAF), rank, idx, np.empty((len(pts), k)), Progress(None))
-    return idx
+def wider_ring(nb, plan):
+    """Each point's nearest whose evidence the re-decided signs read:
+    :data:`core.tuning.RESETTLE_K` where the plan searches that many (k="auto"), else the
+    ``plan.k_search`` it searches (15 with k=15: one more search of 30 cost NR k=15 on 100k
+    points 1.3x its CPU time); set by the plan alone, so a cache's wider graph gives the
+    same signs."""
+    return nb.take(max(min(RESETTLE_K, plan.k_search, len(nb.points)), min(ORIENT_K, plan.k_search)))[0]
