@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .kernels import sign_evidence as kern
-from .tuning import VOTE_GROWTH, VOTE_SIZE
+from .tuning import FOLD_TRUST, RESETTLE_K, VOTE_GROWTH, VOTE_SIZE
 
 #: neighbours per point in the orientation graph. 10 rather than Hoppe's 8: the chord
 #: test needs the graph to reach across a thin part's edges; measured on the thin shapes
@@ -46,6 +46,11 @@ SORT_LEVELS = 4096
 #: shapes at noise 0.2 spacing (20k points, k = 15, seeds 0-2): +0.03-0.10 % of the points
 #: agree with the truth after 3 sweeps; later sweeps flip almost nothing
 SETTLE_SWEEPS = 3
+#: the least trust an edge's point keeps (:func:`_evidence`): with none, a point whose edges
+#: all had zero evidence was left out of the forest and kept the sign its eigenvector
+#: happened to have, which depends on the order of the points in memory (3 of 3000 points
+#: of a sphere quantised to a grid, tests/core/test_spatial_order.py)
+TRUST_FLOOR = 0.01
 MODES = ("outward", "propagate", "keep")
 
 
@@ -59,7 +64,7 @@ class Orientation:
     labels: np.ndarray
 
 
-def orient(points, normals, idx, mode="outward", *, ok=None, rank=None) -> Orientation:
+def orient(points, normals, idx, mode="outward", *, ok=None, rank=None, trust=False) -> Orientation:
     """Make normal signs globally consistent.
 
     Parameters
@@ -76,6 +81,10 @@ def orient(points, normals, idx, mode="outward", *, ok=None, rank=None) -> Orien
     rank : (N,) int, optional, each point's index in the caller's order when the points
         are passed in another (:mod:`core.spatial_order`): equally strong edges are taken
         in that order, so the signs do not depend on the order in memory.
+    trust : scale each edge's evidence by its points' flatness (:func:`_evidence`,
+        :data:`core.tuning.FOLD_TRUST`): what ``k="auto"``'s wide initial normals need at a
+        rim 2 spacings high; on the k = 15 normals it cost the 3-spacing plate and the bowl
+        0.02-0.1 % of their points.
 
     Returns
     -------
@@ -88,7 +97,7 @@ def orient(points, normals, idx, mode="outward", *, ok=None, rank=None) -> Orien
     n = len(pts)
     labels = np.where(ok, 0, -1)
     rank = np.arange(n) if rank is None else np.asarray(rank, dtype=np.int64)
-    ev, first = _evidence(pts, nrm, graph, ok, rank)
+    ev, first = _evidence(pts, nrm, graph, ok, rank, trust=trust)
     sign = np.ones(n)
     if not isinstance(mode, str):
         sign[np.einsum("ij,ij->i", nrm, np.asarray(mode, dtype=float) - pts) < 0] = -1.0
@@ -128,26 +137,33 @@ def _settle(ev, graph, ok, sign, confidence):
         kern.agreement(ev, graph, (sign < 0).astype(np.int8), ok, confidence)
 
 
-def resettle(points, normals, idx, mode, *, ok=None):
+def resettle(points, normals, idx, mode, *, ok=None, trust=False):
     """Signs re-decided on better normals than the ones :func:`orient` was given: each
     point's chord-aware evidence (:func:`_evidence`) recomputed on ``normals`` (the
-    refined ones, whose signs :func:`orient` fixed) and the local majority of
-    :func:`_settle` run on it. At a sharp rim the initial normals are blends, and a point
-    or two hung on a blended neighbour keep a sign that their refined neighbours outvote
-    (measured on the thin shapes at noise 0.2 spacing, 20k points, seeds 0-4, k=15: of
-    all points 0.06-0.11 % more face the truth on the 3-spacing plate, 0.14-0.20 % on
-    the 2-spacing tube, 0.06-0.10 % on the two sheets 4 spacings apart). Whole parts are not re-decided: their signs came from the
+    refined ones, whose signs :func:`orient` fixed) with its :data:`core.tuning.RESETTLE_K`
+    nearest, a wider ring than the forest's (the noise gate still from the
+    :data:`ORIENT_K` nearest), and the local majority of :func:`_settle` run on it. At a
+    sharp rim the initial normals are blends, and a point or two hung on a blended
+    neighbour keep a sign that their refined neighbours outvote; the 10 nearest of a
+    blended rim point are mostly blends like it, the wider ring reaches the clean faces
+    (measured on the thin shapes at noise 0.2 spacing, 20k points, k=15: with 10
+    neighbours 0.06-0.11 % more of the points face the truth on the 3-spacing plate,
+    0.14-0.20 % on the 2-spacing tube (seeds 0-4); with 30, up to 0.1 % more again,
+    tuning.RESETTLE_K). Whole parts are not re-decided: their signs came from the
     spanning forest's seams, which the refined normals would not judge better. Only for
     the modes that decide signs ("outward", "propagate"); otherwise every sign is kept.
+    ``idx`` (N, K) holds at least :data:`ORIENT_K` neighbours; its first RESETTLE_K vote.
+    ``trust``: as :func:`orient`'s.
 
     Returns ``(sign, confidence)``: (N,) +1 / -1 to multiply the normals by and each point's
     evidence-weighted agreement with its new sign (as :attr:`Orientation.confidence`)."""
     pts = np.ascontiguousarray(points, dtype=np.float64)
     nrm = np.ascontiguousarray(normals, dtype=np.float64)
     ok = np.isfinite(nrm).all(axis=1) if ok is None else np.asarray(ok, dtype=bool)
-    graph = np.ascontiguousarray(idx[:, :ORIENT_K], dtype=np.int64)
+    graph = np.ascontiguousarray(idx[:, :RESETTLE_K], dtype=np.int64)
     n = len(pts)
-    ev, _ = _evidence(pts, np.where(ok[:, None], nrm, 0.0), graph, ok, np.arange(n), want_first=False)
+    ev, _ = _evidence(pts, np.where(ok[:, None], nrm, 0.0), graph, ok, np.arange(n), want_first=False,
+                      trust=trust)
     sign = np.ones(n)
     confidence = np.empty(n)
     kern.agreement(ev, graph, np.zeros(n, dtype=np.int8), ok, confidence)
@@ -199,14 +215,26 @@ def far_facing(rel, normals, rms):
     return far, np.nan_to_num(facing)
 
 
-def _evidence(points, normals, graph, ok, rank, *, want_first=True):
+def _evidence(points, normals, graph, ok, rank, *, trust=False, want_first=True):
     """The signed evidence of every graph edge, and which entries are an edge's first copy
-    (all True without ``want_first``: :func:`resettle` reads only the evidence)."""
+    (all True without ``want_first``: :func:`resettle` reads only the evidence; each point's
+    noise gate from its first :data:`ORIENT_K` neighbours, however wide the graph). With
+    ``trust`` each edge is scaled by its two points' trust, 1 - :data:`core.tuning.FOLD_TRUST` x
+    (the median offset of their neighbours from their plane) / (the distance to the farthest
+    of them), clipped to [:data:`TRUST_FLOOR`, 1]: ~1 on a sheet, small where the neighbours
+    fold over."""
     n = len(points)
     packed = np.zeros((n, 8))  # one cache line per point for the random reads
     packed[:, :3] = points
     packed[:, 3:6] = normals
-    kern.offset_spread(points, normals, graph, ok, packed[:, 6])
+    spread_graph = graph if graph.shape[1] <= ORIENT_K else np.ascontiguousarray(graph[:, :ORIENT_K])
+    kern.offset_spread(points, normals, spread_graph, ok, packed[:, 6])
+    packed[:, 7] = 1.0
+    if trust:
+        reach = np.linalg.norm(points[spread_graph[:, -1]] - points, axis=1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            packed[:, 7] = np.clip(1.0 - FOLD_TRUST * packed[:, 6] / reach, TRUST_FLOOR, 1.0)
+        packed[reach == 0.0, 7] = 1.0  # a point whose neighbours all coincide with it: nothing to read a fold from
     ev = np.empty(graph.shape)
     first = np.empty(graph.shape, dtype=np.bool_)
     kern.sign_evidence(packed, graph, ok, GATE, ev, first, rank, want_first)

@@ -61,6 +61,43 @@ def thin_plate(n=20000, *, thickness_spacings=3.0, size=1.0, seed=0):
                     spacing=spacing, size=size)
 
 
+def thin_wedge(n=20000, *, thickness_spacings=(2.0, 5.0), size=1.0, seed=0):
+    """A closed slab ``size`` x ``size`` whose thickness grows linearly along x from
+    ``thickness_spacings[0]`` to ``[1]`` spacings: a plate whose rim is thinner on one side
+    than :func:`thin_plate`'s and thicker on the other, its faces slightly tilted. All six
+    faces sampled by area; ``interior`` marks points of the two big faces at least 2
+    spacings from every edge. Flat: k1 = k2 = 0.
+    """
+    n, rng = _rng_n(n, seed)
+    c0, c1 = thickness_spacings
+    a = size / 2
+    # n s^2 = 2 size^2 (the big faces, tilt ~1e-4 left out) + 2 size s (c0 + c1) (the four sides)
+    spacing = (2 * size * (c0 + c1) + np.sqrt(4 * size**2 * (c0 + c1) ** 2 + 8 * n * size**2)) / (2 * n)
+    slope = spacing * (c1 - c0) / size  # d(thickness)/dx
+
+    def thick(x):
+        return spacing * (c0 + (c1 - c0) * (x + a) / size)
+
+    area = np.array([size**2, size**2, size * thick(-a), size * thick(a), size * thick(0.0), size * thick(0.0)])
+    face = rng.choice(6, size=n, p=area / area.sum())  # top, bottom, x-, x+, y-, y+
+    x, y, u = (rng.random(n) * 2 - 1) * a, (rng.random(n) * 2 - 1) * a, rng.random(n) - 0.5
+    pending = face >= 4  # the trapezoids' x by rejection: density ~ thickness
+    while pending.any():
+        pending[pending] = rng.random(int(pending.sum())) * thick(a) > thick(x[pending])
+        x[pending] = (rng.random(int(pending.sum())) * 2 - 1) * a
+    x = np.select([face == 2, face == 3], [-a, a], x)
+    y = np.select([face == 4, face == 5], [-a, a], y)
+    z = np.where(face == 0, thick(x) / 2, np.where(face == 1, -thick(x) / 2, u * thick(x)))
+    top = np.array([-slope / 2, 0.0, 1.0]) / np.hypot(slope / 2, 1.0)
+    table = np.array([top, top * [1, 1, -1], [-1, 0, 0], [1, 0, 0], [0, -1, 0], [0, 1, 0]])
+    nrm = table[face]
+    ea = _unit(np.cross(nrm, np.where(np.abs(nrm[:, 1:2]) < 0.9, [[0, 1.0, 0]], [[1.0, 0, 0]])))
+    interior = (face <= 1) & (np.minimum(a - np.abs(x), a - np.abs(y)) > 2 * spacing)
+    zeros = np.zeros(n)
+    return _ordered(nrm, zeros, zeros, ea, np.cross(nrm, ea), np.column_stack([x, y, z]), "thin_wedge", interior,
+                    spacing=spacing, size=size, faces=face)
+
+
 def two_sheets(n=20000, *, gap_spacings=4.0, radius=1.0, angle=np.pi / 2, seed=0):
     """Two concentric open cylinder patches (height ``radius``, ``angle`` wide) a few
     spacings apart, like the two layers of a bent sheet. Normals point away from the gap
@@ -228,4 +265,5 @@ THIN_SHAPES = {
     "thin_plate": thin_plate,
     "two_sheets": two_sheets,
     "thin_shell": thin_shell,
+    "thin_wedge": thin_wedge,
 }

@@ -113,7 +113,7 @@ def given_normals(pts, normals, nb, plan) -> tuple[Initial, dict]:
 def orient_signs(pts, init: Initial, idx, plan, *, rank=None) -> tuple[Initial, np.ndarray]:
     """Signs made consistent (:func:`core.orientation.orient`) and their confidence;
     ``rank``: the points' indices in the caller's order if they are in another."""
-    out = orient(pts, init.normals, idx, plan.orientation, ok=init.has_normal, rank=rank)
+    out = orient(pts, init.normals, idx, plan.orientation, ok=init.has_normal, rank=rank, trust=plan.auto)
     return init._replace(normals=out.normals), out.confidence
 
 

@@ -216,3 +216,23 @@ CREASE_NOISE = 3.0
 #: at a rim, whose seams are too short for a sum to beat one edge (-0.2 % on the bowl).
 VOTE_SIZE = 16
 VOTE_GROWTH = 4
+#: core.orientation.resettle's local majority reads the evidence of each point's RESETTLE_K
+#: nearest where the plan searches that many (k="auto"; an integer k: its k, core.refinement.
+#: wider_ring), on the refined normals (the noise gate still from the ORIENT_K nearest), not
+#: the ORIENT_K the forest joins: at a sharp rim the 10 nearest of a blended point are mostly
+#: its like-blended neighbours; 30 reach the clean faces beyond. Measured on the thin shapes
+#: at noise 0.2 spacing (20k points, seeds 0-9, face share), k="auto": tube 99.890-99.965 ->
+#: 99.920-99.975 %, plate 99.410-99.665 -> 99.435-99.685 % (with FOLD_TRUST). At k = 15 a
+#: search of 30 gave the plate 99.39-99.62 -> 99.45-99.655 % but cost NR on 100k points 1.3x
+#: its CPU time (left out); 15 and 20 gain about half as much
+RESETTLE_K = 30
+#: with k="auto" an edge's evidence is scaled by its points' flatness, 1 - FOLD_TRUST x median
+#: offset / neighbourhood radius (core.orientation._evidence). At the rim of a part 2 spacings
+#: thick (the thin end of shapes_thin.thin_wedge) k="auto"'s wide initial normals lie along the
+#: faces' (a blend of top and bottom), their noise gate (the median offset) silences the chord
+#: test, and Hoppe's term joined top and bottom as one side, strongly: at noise 0.2 spacing the
+#: face share was 77.4-98.975 % (seeds 0-9), with the scaling 98.73-99.435 %. 1 kept the plate
+#: a little better (k=15 seeds 5, 9: +0.05-0.08 %) but left the wedge's seed 9 at 95.3 %; 3
+#: and 4 cost the 2-spacing tube 2-7 % at the orientation stage. On the integer-k path (k=15
+#: PCA normals) it cost the plate and the bowl 0.02-0.1 %: not used there
+FOLD_TRUST = 2.0

@@ -52,7 +52,7 @@ def _median(t):
 def sign_evidence(packed, idx, ok, gate, out, first, rank, want_first=True):
     """Signed evidence that normals i and j = idx[i, m] point the same way (> 0) or not (< 0).
 
-    ``packed`` rows are (p, n, spread, 0): one cache line per neighbour. With the chord
+    ``packed`` rows are (p, n, spread, trust): one cache line per neighbour. With the chord
     c = p_j - p_i, d = |c|, the offsets t_i = n_i . c and t_j = -n_j . c, shrunk towards
     0 by ``gate`` x the pair's spread (so noise is not read as an offset), and
     a_i = t_i / d, a_j = t_j / d:
@@ -64,6 +64,9 @@ def sign_evidence(packed, idx, ok, gate, out, first, rank, want_first=True):
     them (across a thin part, a gap or a crease): a segment between two surface points that
     does not cross the surface lies wholly inside or wholly outside the solid, so it leaves
     both points on the same side of their consistently oriented normals (a_i a_j > 0).
+    The whole is scaled by the two points' ``trust`` (how flat each one's neighbourhood is,
+    :func:`core.orientation._evidence`): where a point's neighbours lie off its plane, a
+    fold (the thin rim of a part, its faces a spacing or two away), neither term means much.
     ``out[i, m]`` is 0 where either point has no normal or the chord has zero length;
     ``first[i, m]`` is False where the edge also appears in row j with rank[j] < rank[i]
     (``rank``: the point's index in the caller's order, whatever the order in memory);
@@ -93,7 +96,7 @@ def sign_evidence(packed, idx, ok, gate, out, first, rank, want_first=True):
             ai = np.sign(ti) * max(0.0, abs(ti) - floor) / d
             aj = np.sign(tj) * max(0.0, abs(tj) - floor) / d
             nn = packed[i, 3] * packed[j, 3] + packed[i, 4] * packed[j, 4] + packed[i, 5] * packed[j, 5]
-            out[i, m] = (1.0 - abs(ai)) * (1.0 - abs(aj)) * nn + ai * aj
+            out[i, m] = ((1.0 - abs(ai)) * (1.0 - abs(aj)) * nn + ai * aj) * packed[i, 7] * packed[j, 7]
 
 
 @njit(**_OPTS)

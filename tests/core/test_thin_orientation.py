@@ -138,7 +138,14 @@ def test_thin_shapes_are_what_they_say():
     shell = shapes_thin.thin_shell(20000)
     parts = shell.params["faces"]
     assert np.all(shell.mean[parts == 1] < 0) and np.all(shell.mean[parts == 0] > 0)
-    for s in (tube, plate, shell, shapes_thin.two_sheets(20000)):
+    wedge = shapes_thin.thin_wedge(20000)
+    ends = wedge.params["faces"]
+    for face, spacings in ((2, 2.0), (3, 5.0)):  # the x- and x+ sides: 2 and 5 spacings high
+        assert np.ptp(wedge.points[ends == face, 2]) == pytest.approx(spacings * wedge.params["spacing"], rel=0.05)
+    top = ends == 0
+    np.testing.assert_allclose(np.einsum("ij,ij->i", wedge.points[top] - wedge.points[top][:1], wedge.normals[top]), 0,
+                               atol=1e-12)  # the top is the plane of its normal
+    for s in (tube, plate, shell, shapes_thin.two_sheets(20000), wedge):
         np.testing.assert_allclose(np.linalg.norm(s.normals, axis=1), 1.0)
         assert np.all(s.k1 >= s.k2)
 
