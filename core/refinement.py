@@ -11,7 +11,7 @@ import numpy as np
 
 from . import passes
 from .frame import turned_over
-from .orientation import ORIENT_K, resettle
+from .orientation import resettle
 from .passes import PassRule, few_fits
 from .stages import Fit, Initial, Scale, _empty_fit, _Fitter
 from .tuning import HOLD_TURN, PASS_DECAY, RESETTLE_K
@@ -181,4 +181,4 @@ def wider_ring(nb, plan):
     ``plan.k_search`` it searches (15 with k=15: one more search of 30 cost NR k=15 on 100k
     points 1.3x its CPU time); set by the plan alone, so a cache's wider graph gives the
     same signs."""
-    return nb.take(max(min(RESETTLE_K, plan.k_search, len(nb.points)), min(ORIENT_K, plan.k_search)))[0]
+    return nb.take(min(RESETTLE_K, plan.k_search))[0]  # k_search <= N, and >= ORIENT_K unless k is smaller
