@@ -127,6 +127,7 @@ def estimate(
     front = prepare(pts, normals, plan, neighbours, report, cache=cache)
     best = refine(front.pts, front.init, front.outlier, front.nb, front.scale, plan,
                   report.sub(0.7 if plan.auto else 0.45, 1.0))
+    front = front._replace(scale=front.scale._replace(jets=None))  # merged into best: 86 MiB less at 1M points
     best, confidence = settle_signs(front.pts, best, front.nb, plan, front.confidence)
     marks = flags(best.fit, front.scores, plan, front.reference, nb=front.nb, confidence=confidence)
     stages = front.order.to_caller((front.init, best, front.scale, marks))

@@ -289,11 +289,23 @@ def choose_jets(points, normals, nb, has_normal, ks, report):
         higher = dq != JET_DEGREE
         k[quiet], degree[quiet] = kq, dq
         coef[quiet[higher], :6] = cq[higher]
-    mu, W = height_field_derivatives(coef[:, 1], coef[:, 2], 2 * coef[:, 3], coef[:, 4], 2 * coef[:, 5])
-    with np.errstate(invalid="ignore", divide="ignore"):
-        frame = darboux_frame(t1, t2, np.where(has_normal[:, None], normals, [0.0, 0.0, 1.0]),
-                              np.nan_to_num(mu), np.nan_to_num(W) / s[:, None, None])
+    frame = _jet_frames_of(coef, t1, t2, np.where(has_normal[:, None], normals, [0.0, 0.0, 1.0]), s)
     return k, (*frame[:-1], frame[-1] & fitted), noise, degree
+
+
+def _jet_frames_of(coef, t1, t2, z, s):
+    """The Darboux frames of the jets ``coef`` (N, 10) in the frames (t1, t2, z), lengths in units of
+    ``s``, by chunks: the same numbers, without N-long temporaries (~250 MiB at 1M points)."""
+    n = len(coef)
+    out = (np.empty((n, 3)), np.empty(n), np.empty(n), np.empty((n, 3)), np.empty((n, 3)), np.empty(n, dtype=bool))
+    for start in range(0, n, _CHUNK):
+        r, c = slice(start, start + _CHUNK), coef[start:start + _CHUNK]
+        mu, W = height_field_derivatives(c[:, 1], c[:, 2], 2 * c[:, 3], c[:, 4], 2 * c[:, 5])
+        with np.errstate(invalid="ignore", divide="ignore"):
+            frame = darboux_frame(t1[r], t2[r], z[r], np.nan_to_num(mu), np.nan_to_num(W) / s[r, None, None])
+        for dst, src in zip(out, frame):
+            dst[r] = src
+    return out
 
 
 def _jet_ici(nb, idx, usable, ks, frames, sigma2_h, report):

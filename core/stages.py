@@ -161,14 +161,23 @@ def noise_samples(pts, nrm, ok, idx_p, dist_p, outlier):
     return jet, ratio, ~outlier[idx_p].any(axis=1)
 
 
-def crease_reference(pts, nrm, has_normal, nb, plan, report) -> Fit:
+class Residuals(NamedTuple):
+    """What creases are judged by (:func:`flags`): a fit's ``valid``, ``rms`` and ``spread``."""
+
+    valid: np.ndarray
+    rms: np.ndarray
+    spread: np.ndarray
+
+
+def crease_reference(pts, nrm, has_normal, nb, plan, report) -> Residuals:
     """The paper's linear fit at the initial scale, which creases are judged by with
     k="auto": a cubic over a wide neighbourhood explains half of a step, so its
-    residuals do not show it."""
+    residuals do not show it. Only its residuals are kept (its frames were 84 MiB at 1M points)."""
     idx_p, dist_p = nb.take(plan.k_initial)
     linear = {**plan.options, "degree": 1, "robust": None}
     kc = np.full(len(pts), idx_p.shape[1])
-    return fit_all(pts, nrm, idx_p, kc, dist_p[:, -1], has_normal, method=plan.method, options=linear, report=report)
+    fit = fit_all(pts, nrm, idx_p, kc, dist_p[:, -1], has_normal, method=plan.method, options=linear, report=report)
+    return Residuals(fit.valid, fit.rms, fit.spread)
 
 
 class Scale(NamedTuple):
@@ -272,7 +281,7 @@ def _columns(a, dtype):
     return a.reshape(len(a), -1)
 
 
-def flags(fit: Fit, scores, plan, reference: Fit | None, *, nb=None, confidence=None) -> Flags:
+def flags(fit: Fit, scores, plan, reference: Residuals | None, *, nb=None, confidence=None) -> Flags:
     """Per-point flags: the outlier scores, creases judged on ``reference`` (the linear
     fit at the initial scale, k="auto") or on the fit itself, and, given the neighbours
     ``nb``, the border points among the valid ones (on the refined normals)."""
