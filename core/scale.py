@@ -294,12 +294,12 @@ def choose_jets(points, normals, nb, has_normal, ks, report):
 
 
 def _jet_frames_of(coef, t1, t2, z, s):
-    """The Darboux frames of the jets ``coef`` (N, 10) in the frames (t1, t2, z), lengths in units of
-    ``s``, by chunks: the same numbers, without N-long temporaries (~250 MiB at 1M points)."""
-    n = len(coef)
+    """The Darboux frames of the jets ``coef`` (N, 10) in (t1, t2, z), lengths in units of ``s``, by 128k rows:
+    the same numbers without N-long temporaries (~250 MiB at 1M points; 32k rows: 0.25 CPU s more)."""
+    n, rows = len(coef), 4 * _CHUNK
     out = (np.empty((n, 3)), np.empty(n), np.empty(n), np.empty((n, 3)), np.empty((n, 3)), np.empty(n, dtype=bool))
-    for start in range(0, n, _CHUNK):
-        r, c = slice(start, start + _CHUNK), coef[start:start + _CHUNK]
+    for start in range(0, n, rows):
+        r, c = slice(start, start + rows), coef[start:start + rows]
         mu, W = height_field_derivatives(c[:, 1], c[:, 2], 2 * c[:, 3], c[:, 4], 2 * c[:, 5])
         with np.errstate(invalid="ignore", divide="ignore"):
             frame = darboux_frame(t1[r], t2[r], z[r], np.nan_to_num(mu), np.nan_to_num(W) / s[r, None, None])
