@@ -9,11 +9,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import passes, tuning
+from . import passes
 from .frame import turned_over
 from .orientation import resettle
 from .passes import PassRule, few_fits
-from .shared_fits import SharedFitter, satellites
 from .stages import Fit, Initial, Scale, _empty_fit, _Fitter
 from .tuning import HOLD_TURN, PASS_DECAY, RESETTLE_K
 from .wide_neighbours import rows_at_least
@@ -39,17 +38,17 @@ def refine(pts, initial: Initial, outlier, nb, sc: Scale, plan, report) -> Refin
     meaningless on a handful of points)."""
     rule = PassRule(plan, few_fits(float((initial.has_normal & ~sc.quiet).mean()), plan))
     judged = passes.rule_sample(pts, plan.n_points) if plan.adaptive else None
-    best = kept = None
+    best = None
     for p, fit, nrm, complete in fit_passes(pts, initial, outlier, nb, sc, plan, report, n_fits=rule.n_fits,
                                             first=judged):
         seen = fit.valid if judged is None else fit.valid & judged
         change = passes.mean_turn_deg(fit.normals, nrm, seen) if rule.measures else None
         keep, more = rule.step(p, change)
         if keep:
-            best, kept = Refined(complete(), nrm, p), complete
+            best = Refined(complete(), nrm, p)
         if not more:
             break
-    return finish(best if kept is None else kept.own(best), sc, outlier, plan)
+    return finish(best, sc, outlier, plan)
 
 
 def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n_fits, fitted=None, first=None):
@@ -67,9 +66,6 @@ def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n
     if sc.on_jet.any():  # the jets' normals are the neighbours' input where the jet is kept
         nrm = np.where(sc.on_jet[:, None], sc.jets[0], nrm)
     fitter = _Fitter(pts, idx, kc, h, plan.method, dict(plan.options))
-    if plan.auto and fitted is None and plan.method.name in ("nf", "nr"):  # NF's fields are shared
-        centre_of = satellites(nb, nrm, kc, h, has_normal & ~sc.on_jet & ~sc.quiet & ~outlier)
-        fitter = fitter if centre_of is None else SharedFitter(fitter, centre_of, nb)
     share = 1.0 if first is None else float(first.mean())
     held = _Held(len(pts)) if plan.adaptive else None
     for p in range(n_fits):
@@ -81,8 +77,6 @@ def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n
         yield p, fit, nrm, complete
         complete()
         new = np.where(fit.valid[:, None], fit.normals, nrm)
-        if isinstance(fitter, SharedFitter):
-            new = fitter.blended(fit, nrm, new)
         if plan.robust and p == 0:  # outliers leave their neighbours' fits (and are not estimated)
             has_normal = has_normal & ~outlier
             new[outlier] = np.nan
@@ -151,7 +145,7 @@ class _Rest:
 
     def __init__(self, fitter, fit, nrm, mask, report, held=None):
         self.fitter, self.args = fitter, None if mask is None or not mask.any() else (fit, nrm, mask, report)
-        self.fit, self.nrm, self.held, self.reported, self.held_now = fit, nrm, held, None, None
+        self.fit, self.nrm, self.held, self.reported = fit, nrm, held, None
 
     def __call__(self) -> Fit:
         if self.args is not None:
@@ -159,22 +153,7 @@ class _Rest:
             self.fitter.into(*args)
         if self.reported is None:
             self.reported = self.fit if self.held is None else self.held.report(self.fit, self.nrm)
-            self.held_now = None if self.held is None else self.held.held
         return self.reported
-
-    def own(self, best: Refined) -> Refined:
-        """``best`` (this pass, reported) with the satellites of shared fits
-        (:mod:`core.shared_fits`) fitted on their own neighbours where the pass is reported
-        (not held): only the passes before the kept one share (with SHARE_KEPT_OWN)."""
-        if not isinstance(self.fitter, SharedFitter) or not tuning.SHARE_KEPT_OWN:
-            return best
-        fit = best.fit
-        mine = (self.fitter.centre_of >= 0) & fit.valid
-        if self.held_now is not None:
-            mine &= ~self.held_now
-        fixed = Fit(*(a.copy() for a in fit))
-        self.fitter.fitter.into(fixed, self.nrm, mine, lambda *a: None)
-        return best._replace(fit=fixed)
 
 
 def settle_signs(pts, best: Refined, nb, plan, confidence):

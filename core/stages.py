@@ -241,9 +241,8 @@ class _Fitter(NamedTuple):
     method: object
     options: dict
 
-    def into(self, out: Fit, nrm, has_normal, report, sink=None) -> None:
-        """Fit the points with ``has_normal`` (and h > 0) to the normals ``nrm``, into ``out``;
-        ``sink(centres, coef)``, optional, receives each chunk's polynomial coefficients."""
+    def into(self, out: Fit, nrm, has_normal, report) -> None:
+        """Fit the points with ``has_normal`` (and h > 0) to the normals ``nrm``, into ``out``."""
         n = len(self.pts)
         usable = has_normal & (self.h > 0)
         for start in range(0, n, _CHUNK):
@@ -251,14 +250,12 @@ class _Fitter(NamedTuple):
             c = c[usable[c]]
             if len(c):
                 chunk = Chunk.build(self.pts, nrm, self.idx[c], self.h[c], c, self.kc[c])
-                _fit_chunk(chunk, self.method, self.options, out, sink)
+                _fit_chunk(chunk, self.method, self.options, out)
             report(min(n, start + _CHUNK) / n, self.method.name)
 
 
-def _fit_chunk(chunk, method, opts, out: Fit, sink=None) -> None:
+def _fit_chunk(chunk, method, opts, out: Fit) -> None:
     mu, W, ok, diag = method.fit(chunk, **opts)
-    if sink is not None:
-        sink(chunk.centres, diag["coef"])
     frame = darboux_frame(chunk.t1, chunk.t2, chunk.z, mu, W / chunk.h[:, None, None])
     good = ok & frame.ok
     stored = [(frame.normal, out.normals), (frame.e1, out.e1), (frame.e2, out.e2), (frame.k1, out.k1), (frame.k2, out.k2)]

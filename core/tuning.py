@@ -236,18 +236,3 @@ RESETTLE_K = 30
 #: and 4 cost the 2-spacing tube 2-7 % at the orientation stage. On the integer-k path (k=15
 #: PCA normals) it cost the plate and the bowl 0.02-0.1 %: not used there
 FOLD_TRUST = 2.0
-#: k="auto" with noise shares wide normal fits (core.shared_fits): a point whose fit is at
-#: least SHARE_MIN_K wide, within SHARE_REACH x the fit radius of a centre whose k is within
-#: a factor SHARE_K_RATIO of its own and whose initial normal is within acos(SHARE_COS) of
-#: the centre's, takes the centre's fitted normal field at its own offset (0 reach: off)
-SHARE_REACH = 0.15
-SHARE_MIN_K = 113
-SHARE_K_RATIO = 1.5
-SHARE_COS = 0.9
-#: the kept pass's satellites are fitted on their own neighbours (only the earlier passes share)
-SHARE_KEPT_OWN = False
-#: a satellite's normal, the next pass's input, is blended from the fields of every centre
-#: within SHARE_BLEND x the centre's fit radius (0: its own centre's alone)
-SHARE_BLEND = 0.0
-#: neighbours a centre scans for satellites (SHARE_REACH^2 x k of them are within reach)
-SHARE_SCAN = 48

@@ -28,7 +28,6 @@ from numba import njit, prange
 from ._base import BLOCK, OPTS, theta
 from .lstsq import (BX, BY, C1, C2, CX, CY, accumulate, fit_scratch, monomials, reset, slope_variances, solve,
                     solve_coefficients)
-from .algebra import n_terms
 from .robust import robust_weights
 
 
@@ -75,9 +74,7 @@ class Fits(NamedTuple):
     """What the fit writes per centre: mu (M, 2), W (M, 2, 2) in units of 1/h, var (M, 3)
     the least-squares variances of W11, (W12 + W21)/2, W22, rms (M,) the weighted RMS
     residual of the normal components, spread (M,) their weighted RMS deviation from
-    their mean (how much the normals turn), ok (M,) bool, coef (M, 2, T) the fitted
-polynomials' coefficients of X and Y (T >= the degree's monomials, :func:`poly_row`'s
-order; before the constraint), which :mod:`core.shared_fits` evaluates off the centre."""
+    their mean (how much the normals turn), ok (M,) bool."""
 
     mu: np.ndarray
     W: np.ndarray
@@ -85,7 +82,6 @@ order; before the constraint), which :mod:`core.shared_fits` evaluates off the c
     rms: np.ndarray
     spread: np.ndarray
     ok: np.ndarray
-    coef: np.ndarray
 
 
 @njit(**OPTS)
@@ -193,9 +189,6 @@ def _exact_constraint(vec):
 def _store(opt, r, n, s, out):
     """Write centre r's mu and W (under the constraint of eq. 22) and diagnostics."""
     vec, acc = s.vec, s.acc
-    for a in range(n_terms(opt.degree)):
-        out.coef[r, 0, a] = vec[CX, a]
-        out.coef[r, 1, a] = vec[CY, a]
     if opt.constraint == 2:
         cx0, cy0, w11, w12, w21, w22 = _exact_constraint(vec)
     else:

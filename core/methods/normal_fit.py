@@ -56,8 +56,7 @@ def fit(chunk, *, weights="uniform", constraint="project", robust=None, degree=1
 
     Returns a :class:`MethodFit` whose ``diag`` holds the least-squares variances of
     W11, (W12 + W21)/2, W22 ("var", units of 1/h^2), the RMS residual of the normal components ("rms") and
-    their RMS deviation from their mean ("spread"), and the polynomials' coefficients ("coef",
-(M, 2, monomials): X's and Y's, before the constraint).
+    their RMS deviation from their mean ("spread").
     """
     check(weights=weights, constraint=constraint, robust=robust, degree=degree)
     m = len(chunk.centres)
@@ -69,6 +68,5 @@ def fit(chunk, *, weights="uniform", constraint="project", robust=None, degree=1
     ok = np.empty(m, dtype=bool)
     settings = kernels.Settings(THETA_REACH, _WEIGHTS.index(weights), _CONSTRAINTS.index(constraint),
                                 _ROBUST.index(robust), IRLS_ITERATIONS, degree, RCOND)
-    coef = np.zeros((m, 2, (degree + 1) * (degree + 2) // 2))
-    kernels.normal_fit(chunk.frames(), settings, kernels.Fits(mu, W, var, rms, spread, ok, coef))
-    return MethodFit(mu, W, ok, {"var": var, "rms": rms, "spread": spread, "coef": coef})
+    kernels.normal_fit(chunk.frames(), settings, kernels.Fits(mu, W, var, rms, spread, ok))
+    return MethodFit(mu, W, ok, {"var": var, "rms": rms, "spread": spread})
