@@ -24,8 +24,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .kernels import patches
 from .kernels import sign_evidence as kern
-from .tuning import FOLD_TRUST, RESETTLE_K, VOTE_GROWTH, VOTE_SIZE
+from .tuning import FOLD_TRUST, PATCH_COS, PATCH_MAX, PATCH_ROUNDS, PATCH_TILT, RESETTLE_K, VOTE_GROWTH, VOTE_SIZE
 
 #: neighbours per point in the orientation graph. 10 rather than Hoppe's 8: the chord
 #: test needs the graph to reach across a thin part's edges; measured on the thin shapes
@@ -163,13 +164,35 @@ def resettle(points, normals, idx, mode, *, ok=None, trust=False):
     graph = np.ascontiguousarray(idx[:, :RESETTLE_K], dtype=np.int64)
     n = len(pts)
     ev, _ = _evidence(pts, np.where(ok[:, None], nrm, 0.0), graph, ok, np.arange(n), want_first=False,
-                      trust=trust)
+                      trust=trust, raw_weight=True)
     sign = np.ones(n)
     confidence = np.empty(n)
     kern.agreement(ev, graph, np.zeros(n, dtype=np.int8), ok, confidence)
     if isinstance(mode, str) and mode != "keep":
         _settle(ev, graph, ok, sign, confidence)
+        _flip_patches(pts, np.where(ok[:, None], nrm, 0.0), graph, ok, ev, sign, confidence)
     return sign, confidence
+
+
+def _flip_patches(points, normals, graph, ok, ev, sign, confidence):
+    """Patches that disagree with their seam flipped whole (in ``sign``, updating
+    ``confidence``; :func:`core.kernels.patches.flip_patches`), then the local majority once
+    more. The local majority flips a point at a time, and a patch of points that agree with
+    each other keeps whatever sign the forest gave it, however its rim votes: a patch of
+    120 points of the thin end of :func:`core.shapes_thin.thin_wedge`'s top (k = 15, noise
+    0.2 spacing, seed 1), of 10-20 points of the plate's side strips. A patch is a smooth
+    face's piece whose chords stay near its tangent planes (:data:`core.tuning.PATCH_TILT`),
+    so it does not grow round a rim into the other face, and at most
+    :data:`core.tuning.PATCH_MAX` points: a whole face is the forest's to decide."""
+    flipped = 0
+    for _ in range(PATCH_ROUNDS):
+        step = patches.flip_patches(points, normals, graph, ok, sign, ev, PATCH_COS, PATCH_TILT, PATCH_MAX)
+        flipped += step
+        if not step:
+            break
+    if flipped:
+        kern.agreement(ev, graph, (sign < 0).astype(np.int8), ok, confidence)
+        _settle(ev, graph, ok, sign, confidence)
 
 
 def orient_normals(points, normals, idx, mode, *, ok=None):
@@ -215,7 +238,7 @@ def far_facing(rel, normals, rms):
     return far, np.nan_to_num(facing)
 
 
-def _evidence(points, normals, graph, ok, rank, *, trust=False, want_first=True):
+def _evidence(points, normals, graph, ok, rank, *, trust=False, want_first=True, raw_weight=False):
     """The signed evidence of every graph edge, and which entries are an edge's first copy
     (all True without ``want_first``: :func:`resettle` reads only the evidence; each point's
     noise gate from its first :data:`ORIENT_K` neighbours, however wide the graph). With
@@ -237,5 +260,5 @@ def _evidence(points, normals, graph, ok, rank, *, trust=False, want_first=True)
         packed[reach == 0.0, 7] = 1.0  # a point whose neighbours all coincide with it: nothing to read a fold from
     ev = np.empty(graph.shape)
     first = np.empty(graph.shape, dtype=np.bool_)
-    kern.sign_evidence(packed, graph, ok, GATE, ev, first, rank, want_first)
+    kern.sign_evidence(packed, graph, ok, GATE, ev, first, rank, want_first, raw_weight)
     return ev, first
