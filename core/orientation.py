@@ -150,7 +150,11 @@ def resettle(points, normals, idx, mode, *, ok=None, trust=False):
     (measured on the thin shapes at noise 0.2 spacing, 20k points, k=15: with 10
     neighbours 0.06-0.11 % more of the points face the truth on the 3-spacing plate,
     0.14-0.20 % on the 2-spacing tube (seeds 0-4); with 30, up to 0.1 % more again,
-    tuning.RESETTLE_K). Whole parts are not re-decided: their signs came from the
+    tuning.RESETTLE_K). Hoppe's term is weighted here by the chord offsets before the noise
+    gate (``raw_weight``: at a rim the gate, inflated by the fold, zeroed them and gave a rim
+    point's edges to the other face full weight), and patches that disagree with their seam
+    are flipped whole (:func:`_flip_patches`; up to :data:`core.tuning.PATCH_MAX` points).
+    Whole faces are not re-decided: their signs came from the
     spanning forest's seams, which the refined normals would not judge better. Only for
     the modes that decide signs ("outward", "propagate"); otherwise every sign is kept.
     ``idx`` (N, K) holds at least :data:`ORIENT_K` neighbours; its first RESETTLE_K vote.

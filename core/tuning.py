@@ -239,11 +239,12 @@ FOLD_TRUST = 2.0
 #: core.orientation.resettle re-decides flipped patches by their seam: a patch joins graph
 #: neighbours whose signed normals are within acos(PATCH_COS) and whose chord is within
 #: PATCH_TILT (sine) of both tangent planes (so it stops at a rim), PATCH_ROUNDS times, patches of
-#: at most PATCH_MAX points (a whole face is the spanning forest's). Measured offline on the final
-#: normals of the thin shapes (20k points, noise 0.2 spacing, seeds 0-9, k=15): plate face
-#: 99.405-99.65 -> 99.445-99.665 %, wedge 98.775-99.675 -> 99.44-99.68 % (seed 1's flipped patch
-#: of 120 points at the thin end); cos 0.8 / tilt 0.4 the same to 0.01 %; without the tilt
-#: test the patches grew round the rims into whole faces (19 911 of 20 000 points in one)
+#: at most PATCH_MAX points (a whole face is the spanning forest's). The thin shapes (20k points,
+#: noise 0.2 spacing, seeds 0-9, k=15, face share), with the raw-offset weight of Hoppe's term:
+#: plate 99.395-99.615 -> 99.445-99.675 %, wedge 98.725-99.655 -> 99.435-99.680 % (seed 1's
+#: flipped patch of 120 points at the thin end); offline, cos 0.8 / tilt 0.25-0.4 the same to
+#: 0.01 %; without the tilt test the patches grew round the rims into whole faces (19 911 of
+#: 20 000 points in one)
 PATCH_COS = 0.9
 PATCH_TILT = 0.5
 PATCH_ROUNDS = 2
