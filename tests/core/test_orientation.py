@@ -212,6 +212,10 @@ def test_thin_rim_does_not_bridge_the_two_faces():
     the faces', their noise gate silenced the chord test, and Hoppe's term joined top and
     bottom as one side, strongly: the forest flipped the thin end's top (77.4 % of all
     points right at seed 0, 77.7 % at seed 9). With k="auto" each edge's evidence is now
-    scaled by its points' flatness (tuning.FOLD_TRUST): 98.73-99.435 % (seeds 0-9)."""
+    scaled by its points' flatness (tuning.FOLD_TRUST): 98.73-99.435 % (seeds 0-9). The
+    re-decided signs then left seed 9 with a 72-point patch of its top flipped at the thin
+    corner (98.80 %), chained to the bottom through the rim's smeared normals; with only
+    flat points in a patch (tuning.PATCH_TRUST) 99.27-99.435 % (seeds 0, 3, 5, 9: 99.39,
+    99.425, 99.375, 99.27 %; main 99.285, 99.325, 99.265, 98.73 %)."""
     faces = _faces("thin_wedge", "auto", (0, 3, 5, 9))
-    assert min(faces) >= 0.985, faces
+    assert min(faces) >= 0.992 and np.mean(faces) >= 0.9935, faces
