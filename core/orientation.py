@@ -24,8 +24,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .kernels import patches
 from .kernels import sign_evidence as kern
-from .tuning import FOLD_TRUST, RESETTLE_K, VOTE_GROWTH, VOTE_SIZE
+from .tuning import FOLD_TRUST, PATCH_COS, PATCH_MAX, PATCH_ROUNDS, PATCH_TILT, PATCH_TRUST, RESETTLE_K, VOTE_GROWTH, VOTE_SIZE
 
 #: neighbours per point in the orientation graph. 10 rather than Hoppe's 8: the chord
 #: test needs the graph to reach across a thin part's edges; measured on the thin shapes
@@ -149,7 +150,11 @@ def resettle(points, normals, idx, mode, *, ok=None, trust=False):
     (measured on the thin shapes at noise 0.2 spacing, 20k points, k=15: with 10
     neighbours 0.06-0.11 % more of the points face the truth on the 3-spacing plate,
     0.14-0.20 % on the 2-spacing tube (seeds 0-4); with 30, up to 0.1 % more again,
-    tuning.RESETTLE_K). Whole parts are not re-decided: their signs came from the
+    tuning.RESETTLE_K). Hoppe's term is weighted here by the chord offsets before the noise
+    gate (``raw_weight``: at a rim the gate, inflated by the fold, zeroed them and gave a rim
+    point's edges to the other face full weight), and patches that disagree with their seam
+    are flipped whole (:func:`_flip_patches`; up to :data:`core.tuning.PATCH_MAX` points).
+    Whole faces are not re-decided: their signs came from the
     spanning forest's seams, which the refined normals would not judge better. Only for
     the modes that decide signs ("outward", "propagate"); otherwise every sign is kept.
     ``idx`` (N, K) holds at least :data:`ORIENT_K` neighbours; its first RESETTLE_K vote.
@@ -162,14 +167,42 @@ def resettle(points, normals, idx, mode, *, ok=None, trust=False):
     ok = np.isfinite(nrm).all(axis=1) if ok is None else np.asarray(ok, dtype=bool)
     graph = idx[:, :RESETTLE_K]  # a view in its own int type (an int64 copy: 229 MiB at 1M points)
     n = len(pts)
+    flat = np.empty(n)
     ev, _ = _evidence(pts, np.where(ok[:, None], nrm, 0.0), graph, ok, np.arange(n), want_first=False,
-                      trust=trust)
+                      trust=trust, raw_weight=True, flat=flat)
     sign = np.ones(n)
     confidence = np.empty(n)
     kern.agreement(ev, graph, np.zeros(n, dtype=np.int8), ok, confidence)
     if isinstance(mode, str) and mode != "keep":
         _settle(ev, graph, ok, sign, confidence)
+        joins = ok & (flat > PATCH_TRUST) if trust else ok
+        _flip_patches(pts, np.where(ok[:, None], nrm, 0.0), graph, (ok, joins), ev, sign, confidence)
     return sign, confidence
+
+
+def _flip_patches(points, normals, graph, masks, ev, sign, confidence):
+    """Patches that disagree with their seam flipped whole (in ``sign``, updating
+    ``confidence``; :func:`core.kernels.patches.flip_patches`), then the local majority once
+    more. The local majority flips a point at a time, and a patch of points that agree with
+    each other keeps whatever sign the forest gave it, however its rim votes: a patch of
+    120 points of the thin end of :func:`core.shapes_thin.thin_wedge`'s top (k = 15, noise
+    0.2 spacing, seed 1), of 10-20 points of the plate's side strips. A patch is a smooth
+    face's piece whose chords stay near its tangent planes (:data:`core.tuning.PATCH_TILT`),
+    so it does not grow round a rim into the other face, and at most
+    :data:`core.tuning.PATCH_MAX` points: a whole face is the forest's to decide. ``masks``:
+    the rows with a normal, and those that may join a patch (with ``trust``, only the flat
+    ones, :data:`core.tuning.PATCH_TRUST`: k="auto"'s wide normals at a 2-spacing rim are
+    smooth blends that chained the top and the bottom into one patch)."""
+    ok, joins = masks
+    flipped = 0
+    for _ in range(PATCH_ROUNDS):
+        step = patches.flip_patches(points, normals, graph, joins, sign, ev, PATCH_COS, PATCH_TILT, PATCH_MAX)
+        flipped += step
+        if not step:
+            break
+    if flipped:
+        kern.agreement(ev, graph, (sign < 0).astype(np.int8), ok, confidence)
+        _settle(ev, graph, ok, sign, confidence)
 
 
 def orient_normals(points, normals, idx, mode, *, ok=None):
@@ -215,14 +248,15 @@ def far_facing(rel, normals, rms):
     return far, np.nan_to_num(facing)
 
 
-def _evidence(points, normals, graph, ok, rank, *, trust=False, want_first=True):
+def _evidence(points, normals, graph, ok, rank, *, trust=False, want_first=True, raw_weight=False, flat=None):
     """The signed evidence of every graph edge, and which entries are an edge's first copy
     (all True without ``want_first``: :func:`resettle` reads only the evidence; each point's
     noise gate from its first :data:`ORIENT_K` neighbours, however wide the graph). With
     ``trust`` each edge is scaled by its two points' trust, 1 - :data:`core.tuning.FOLD_TRUST` x
     (the median offset of their neighbours from their plane) / (the distance to the farthest
     of them), clipped to [:data:`TRUST_FLOOR`, 1]: ~1 on a sheet, small where the neighbours
-    fold over."""
+    fold over. ``raw_weight``: as :func:`core.kernels.sign_evidence.sign_evidence`'s; ``flat``: an
+    (N,) array that receives each point's trust (1 without ``trust``)."""
     n = len(points)
     packed = np.zeros((n, 8))  # one cache line per point for the random reads
     packed[:, :3] = points
@@ -237,5 +271,7 @@ def _evidence(points, normals, graph, ok, rank, *, trust=False, want_first=True)
         packed[reach == 0.0, 7] = 1.0  # a point whose neighbours all coincide with it: nothing to read a fold from
     ev = np.empty(graph.shape)
     first = np.empty(graph.shape, dtype=np.bool_)
-    kern.sign_evidence(packed, graph, ok, GATE, ev, first, rank, want_first)
+    kern.sign_evidence(packed, graph, ok, GATE, ev, first, rank, want_first, raw_weight)
+    if flat is not None:
+        flat[:] = packed[:, 7]
     return ev, first

@@ -259,6 +259,56 @@ def cone_normals(sample, k=15):
     return _unit(sample.normals[idx].sum(axis=1))
 
 
+#: the L-bracket's outline in the x-z plane, counter-clockwise from the origin, in units of
+#: (leg length, thickness): each row (x0, z0, x1, z1) as a + b t, the outward normal (x, z)
+_BRACKET = np.array([  # (ax0, bx0, az0, bz0, ax1, bx1, az1, bz1, nx, nz)
+    [0, 0, 0, 0, 1, 0, 0, 0, 0, -1],  # bottom of the horizontal leg
+    [1, 0, 0, 0, 1, 0, 0, 1, 1, 0],  # its end
+    [1, 0, 0, 1, 0, 1, 0, 1, 0, 1],  # its top, up to the inner (concave) corner
+    [0, 1, 0, 1, 0, 1, 1, 0, 1, 0],  # the inner face of the vertical leg
+    [0, 1, 1, 0, 0, 0, 1, 0, 0, 1],  # the vertical leg's end
+    [0, 0, 1, 0, 0, 0, 0, 0, -1, 0],  # its back
+], dtype=float)
+
+
+def thin_bracket(n=20000, *, thickness_spacings=3.0, size=1.0, seed=0):
+    """A closed L-shaped bracket: two legs ``size`` long and wide, ``thickness_spacings``
+    spacings thick, meeting at 90 degrees (the outline of :data:`_BRACKET` in the x-z plane
+    extruded along y, with its two L-shaped end caps). Convex rims like the plate's and one
+    concave crease (the inner corner), where the solid lies on the far side of both faces.
+    ``params["faces"]``: 0-5 the outline's strips, 6 and 7 the caps (y = 0, y = size);
+    ``interior`` marks strip points at least 2 spacings from every edge. Flat: k1 = k2 = 0.
+    """
+    n, rng = _rng_n(n, seed)
+    c, L = thickness_spacings, size
+    # n s^2 = 4 L^2 (the strips) + 2 (2 L c s - c^2 s^2) (the caps)
+    spacing = (4 * L * c + np.sqrt(16 * L**2 * c**2 + 16 * L**2 * (n + 2 * c**2))) / (2 * (n + 2 * c**2))
+    t = c * spacing
+    ends = _BRACKET[:, [0, 2, 4, 6]] * L + _BRACKET[:, [1, 3, 5, 7]] * t  # x0, z0, x1, z1
+    length = np.hypot(ends[:, 2] - ends[:, 0], ends[:, 3] - ends[:, 1])
+    cap = 2 * L * t - t * t
+    area = np.r_[length * L, cap, cap]
+    face = rng.choice(8, size=n, p=area / area.sum())
+    u, y = rng.random(n), rng.random(n) * L
+    strip = np.minimum(face, 5)
+    x = ends[strip, 0] + u * (ends[strip, 2] - ends[strip, 0])
+    z = ends[strip, 1] + u * (ends[strip, 3] - ends[strip, 1])
+    on_cap = face >= 6
+    leg = rng.random(n) < L * t / cap  # the cap's horizontal leg [0, L] x [0, t], else [0, t] x [t, L]
+    cx, cz = np.where(leg, rng.random(n) * L, rng.random(n) * t), np.where(leg, rng.random(n) * t, t + rng.random(n) * (L - t))
+    x, z = np.where(on_cap, cx, x), np.where(on_cap, cz, z)
+    y = np.select([face == 6, face == 7], [0.0, L], y)
+    nrm = np.zeros((n, 3))
+    nrm[:, 0], nrm[:, 2] = _BRACKET[strip, 8], _BRACKET[strip, 9]
+    nrm[on_cap] = 0.0
+    nrm[on_cap, 1] = np.where(face[on_cap] == 6, -1.0, 1.0)
+    ea = _unit(np.cross(nrm, np.where(np.abs(nrm[:, 1:2]) < 0.9, [[0, 1.0, 0]], [[1.0, 0, 0]])))
+    interior = ~on_cap & (np.minimum(u, 1 - u) * length[strip] > 2 * spacing) & (np.minimum(y, L - y) > 2 * spacing)
+    zeros = np.zeros(n)
+    return _ordered(nrm, zeros, zeros, ea, np.cross(nrm, ea), np.column_stack([x, y, z]), "thin_bracket", interior,
+                    spacing=spacing, size=size, faces=face)
+
+
 #: thin-part shape name -> sampler(n, *, seed)
 THIN_SHAPES = {
     "thin_tube": thin_tube,
@@ -266,4 +316,5 @@ THIN_SHAPES = {
     "two_sheets": two_sheets,
     "thin_shell": thin_shell,
     "thin_wedge": thin_wedge,
+    "thin_bracket": thin_bracket,
 }

@@ -236,3 +236,21 @@ RESETTLE_K = 30
 #: and 4 cost the 2-spacing tube 2-7 % at the orientation stage. On the integer-k path (k=15
 #: PCA normals) it cost the plate and the bowl 0.02-0.1 %: not used there
 FOLD_TRUST = 2.0
+#: core.orientation.resettle re-decides flipped patches by their seam: a patch joins graph
+#: neighbours whose signed normals are within acos(PATCH_COS) and whose chord is within
+#: PATCH_TILT (sine) of both tangent planes (so it stops at a rim), PATCH_ROUNDS times, patches of
+#: at most PATCH_MAX points (a whole face is the spanning forest's). The thin shapes (20k points,
+#: noise 0.2 spacing, seeds 0-9, k=15, face share), with the raw-offset weight of Hoppe's term:
+#: plate 99.395-99.615 -> 99.445-99.675 %, wedge 98.725-99.655 -> 99.435-99.680 % (seed 1's
+#: flipped patch of 120 points at the thin end); offline, cos 0.8 / tilt 0.25-0.4 the same to
+#: 0.01 %; without the tilt test the patches grew round the rims into whole faces (19 911 of
+#: 20 000 points in one)
+PATCH_COS = 0.9
+PATCH_TILT = 0.5
+PATCH_ROUNDS = 2
+PATCH_MAX = 1000
+#: with k="auto" (core.orientation.resettle(trust=True)) only points whose flatness trust (FOLD_TRUST)
+#: exceeds this join a patch: at the wedge's 2-spacing thin end auto's smeared rim normals (trust
+#: ~0.4; a face's ~0.8) chained a flipped patch of its top into the bottom (one patch of 19 933
+#: points, seed 9); at 0.6 the patch is its own 55 points and flips
+PATCH_TRUST = 0.6

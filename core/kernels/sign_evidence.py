@@ -49,7 +49,7 @@ def _median(t):
 
 
 @njit(**_OPTS, parallel=True)
-def sign_evidence(packed, idx, ok, gate, out, first, rank, want_first=True):
+def sign_evidence(packed, idx, ok, gate, out, first, rank, want_first=True, raw_weight=False):
     """Signed evidence that normals i and j = idx[i, m] point the same way (> 0) or not (< 0).
 
     ``packed`` rows are (p, n, spread, trust): one cache line per neighbour. With the chord
@@ -71,6 +71,10 @@ def sign_evidence(packed, idx, ok, gate, out, first, rank, want_first=True):
     ``first[i, m]`` is False where the edge also appears in row j with rank[j] < rank[i]
     (``rank``: the point's index in the caller's order, whatever the order in memory);
     without ``want_first`` ``first`` is left True (the search of row j skipped).
+    With ``raw_weight`` Hoppe's term is weighted by the offsets before the gate,
+    (1 - |t_i| / d)(1 - |t_j| / d): the gate keeps noise out of the chord test, but it
+    also gave Hoppe's term its full weight across a rim whose offsets it swallowed
+    (:func:`core.orientation.resettle`).
     """
     n, k = idx.shape
     for i in prange(n):
@@ -96,7 +100,8 @@ def sign_evidence(packed, idx, ok, gate, out, first, rank, want_first=True):
             ai = np.sign(ti) * max(0.0, abs(ti) - floor) / d
             aj = np.sign(tj) * max(0.0, abs(tj) - floor) / d
             nn = packed[i, 3] * packed[j, 3] + packed[i, 4] * packed[j, 4] + packed[i, 5] * packed[j, 5]
-            out[i, m] = ((1.0 - abs(ai)) * (1.0 - abs(aj)) * nn + ai * aj) * packed[i, 7] * packed[j, 7]
+            wi, wj = (abs(ti) / d, abs(tj) / d) if raw_weight else (abs(ai), abs(aj))
+            out[i, m] = ((1.0 - wi) * (1.0 - wj) * nn + ai * aj) * packed[i, 7] * packed[j, 7]
 
 
 @njit(**_OPTS)

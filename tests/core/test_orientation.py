@@ -167,18 +167,20 @@ def test_thin_parts_meet_the_orientation_target(name, sigma, k):
     missed by one point in 20000 at k=15, seed 2. What is left is mostly the estimate, not
     the sign: rim normals more than 90 degrees off whichever way they face. Seeds 0-9 now:
     plate 99.395-99.615 % (k=15), 99.435-99.685 % (auto); the wedge 2-5 spacings thick
-    (shapes_thin.thin_wedge) 98.725-99.655 % (k=15: seed 1 keeps a patch of its thin end
-    flipped, clear 99.06 %), 98.73-99.435 % (auto, noise 0.2; its off share 1.0-1.25 %)."""
+    (shapes_thin.thin_wedge) 98.725-99.655 % (k=15: seed 1 kept a patch of its thin end
+    flipped, clear 99.06 %), 98.73-99.435 % (auto, noise 0.2; its off share 1.0-1.25 %).
+    Since resettle flips patches whole by their seam and weights Hoppe's term by the raw
+    offsets (seeds 0-9): plate 99.445-99.675 % (k=15), 99.465-99.680 % (auto); wedge
+    99.435-99.680 % (k=15; seed 1 clear 99.74 %), 98.80-99.435 % (auto); the L-bracket
+    (shapes_thin.thin_bracket, seeds 0-2) 99.44-99.59 % (k=15), 99.415-99.52 % (auto)."""
     for seed in THIN_SEEDS if (sigma or k == 15) else THIN_SEEDS[:1]:
         s = shapes_thin.THIN_SHAPES[name](20000, seed=seed)
         r = core.estimate(shapes_thin.noisy(s, sigma, seed + 1), k=k)
         clear, face, off = shapes_thin.sign_agreement(r.normals, s)
-        if (name, k, sigma) == ("thin_wedge", 15, 0.2):  # seed 1 flips a patch at the thin end (README)
-            assert clear >= 0.99 and face >= 0.985, (name, seed, clear, face, off)
-            continue
         assert clear >= 0.995, (name, seed, clear, face, off)
         # 0.9945 until the k="auto" evidence was scaled by flatness: the plate's seed 0 went 99.51 -> 99.435 %
-        assert face >= (0.991 if (name, k, sigma) == ("thin_wedge", "auto", 0.2) else 0.994), (name, seed, clear, face, off)
+        # (99.555 % since the patches are re-decided by their seam); the wedge at auto 0.991 until then
+        assert face >= (0.992 if (name, k, sigma) == ("thin_wedge", "auto", 0.2) else 0.994), (name, seed, clear, face, off)
 
 
 TEN_SEEDS = tuple(range(10))
@@ -210,6 +212,10 @@ def test_thin_rim_does_not_bridge_the_two_faces():
     the faces', their noise gate silenced the chord test, and Hoppe's term joined top and
     bottom as one side, strongly: the forest flipped the thin end's top (77.4 % of all
     points right at seed 0, 77.7 % at seed 9). With k="auto" each edge's evidence is now
-    scaled by its points' flatness (tuning.FOLD_TRUST): 98.73-99.435 % (seeds 0-9)."""
+    scaled by its points' flatness (tuning.FOLD_TRUST): 98.73-99.435 % (seeds 0-9). The
+    re-decided signs then left seed 9 with a 72-point patch of its top flipped at the thin
+    corner (98.80 %), chained to the bottom through the rim's smeared normals; with only
+    flat points in a patch (tuning.PATCH_TRUST) 99.27-99.435 % (seeds 0, 3, 5, 9: 99.39,
+    99.425, 99.375, 99.27 %; main 99.285, 99.325, 99.265, 98.73 %)."""
     faces = _faces("thin_wedge", "auto", (0, 3, 5, 9))
-    assert min(faces) >= 0.985, faces
+    assert min(faces) >= 0.992 and np.mean(faces) >= 0.9935, faces

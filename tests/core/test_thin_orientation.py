@@ -157,3 +157,46 @@ def test_result_carries_orientation_confidence():
     assert c.shape == (len(s.points),) and np.all((c >= 0) & (c <= 1))
     wrong = np.einsum("ij,ij->i", r.normals, s.normals) < 0
     assert np.median(c[~wrong]) > 0.99 and np.median(c[wrong]) < np.median(c[~wrong])
+
+
+@pytest.mark.parametrize("cap_z, flipped", [(0.9, 183), (0.6, 859)])
+def test_flipped_patch_is_turned_by_its_seam(cap_z, flipped):
+    """A cap of a sphere given inward normals (the rest outward): its points agree with
+    each other, so the local majority, which flips a point at a time, turns only its rim
+    (3 sweeps: 184 and 887 points still inward). resettle re-decides the patch whole by the
+    evidence across its seam (core.kernels.patches, tuning.PATCH_MAX = 1000 points)."""
+    s = core.shapes.sphere(4000, seed=3)
+    idx = build_neighbours(s.points, 15).take(15)[0]
+    cap = s.points[:, 2] > cap_z
+    assert cap.sum() == flipped
+    given = np.where(cap[:, None], -s.normals, s.normals)
+    sign, confidence = orientation.resettle(s.points, given, idx, "outward")
+    assert np.all(np.einsum("ij,ij->i", given * sign[:, None], s.normals) > 0)
+    assert np.min(confidence) > 0.9
+    kept, _ = orientation.resettle(s.points, given, idx, "keep")
+    np.testing.assert_array_equal(kept, 1.0)
+
+
+def _face_shares(name, k, seeds, sigma=0.2):
+    """Face shares (all points) of the default method, 20k points, noise ``sigma`` spacing."""
+    out = []
+    for seed in seeds:
+        s = shapes_thin.THIN_SHAPES[name](20000, seed=seed)
+        r = core.estimate(shapes_thin.noisy(s, sigma, seed + 1), k=k)
+        out.append(shapes_thin.sign_agreement(r.normals, s)[1])
+    return np.array(out)
+
+
+def test_rims_at_k15_ten_seeds():
+    """Issue 12 at k=15, noise 0.2 spacing, seeds 0-9 (README "Real scans"): the signs
+    re-decided on the refined normals weight Hoppe's term by the raw chord offsets and flip
+    patches whole by their seam (core.orientation.resettle). Face share before -> after
+    (min / mean): plate 99.395 / 99.512 -> 99.445 / 99.570 %; wedge 98.725 / 99.458 ->
+    99.435 / 99.578 % (seed 1 kept 120 points of its thin end's top flipped); the
+    L-bracket (shapes_thin.thin_bracket) 99.405 / 99.490 -> 99.410 / 99.511 %. The fits
+    are the paper's (only signs change), so 99.5 % at every seed is not reached: what is
+    left are rim normals more than 60 degrees off their face's, half of them across it."""
+    plate = _face_shares("thin_plate", 15, range(10))
+    assert plate.min() >= 0.9944 and plate.mean() >= 0.9955, plate
+    wedge = _face_shares("thin_wedge", 15, range(10))
+    assert wedge.min() >= 0.9940 and wedge.mean() >= 0.9955, wedge
