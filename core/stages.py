@@ -9,7 +9,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import kernels, scale
+from . import kernels, scale, tuning
 from .frame import darboux_frame
 from .kernels.permute import put_rows
 from .border import border_of_valid, served_by
@@ -142,11 +142,29 @@ def initial_normals(pts, nb, plan, outlier, report) -> Initial:
             jet = jet if jet is not None else jet_normals(pts, nrm, ok, idx_p, dist_p)[0]
             return Initial(jet, ok, noise, k_init)
         return Initial(nrm, ok, noise, k_init)
+    small = jet if jet is not None and plan.initial == "jet" else nrm
     idx, dist = nb.take_without(k_init, outlier) if shun else nb.take(k_init)
     nrm, ok = pca_normals(pts, idx, dist, progress=report.sub(0.37, 0.4))
     if plan.initial == "jet":
         nrm, _ = jet_normals(pts, nrm, ok, idx, dist, progress=report.sub(0.4, 0.43))
-    return Initial(nrm, ok, noise, k_init)
+    return Initial(unfolded(nrm, small, idx), ok, noise, k_init)
+
+
+def unfolded(wide, small, idx):
+    """``wide`` normals, but ``small``'s (the ``plan.k_initial`` neighbours') where the
+    small normals of the ``idx`` neighbours disagree with each other well beyond what the
+    cloud's noise makes them do (:func:`core.kernels.normal_spread` below
+    :data:`core.tuning.FOLD_SPREAD` x its median): a fold, the rim of a part a few spacings
+    thick, where a wide PCA plane lies across both faces and the side between them."""
+    spread = np.empty(len(idx))
+    kernels.normal_spread(small, idx, spread)
+    typical = np.nanmedian(spread) if np.isfinite(spread).any() else 0.0
+    folded = (spread < tuning.FOLD_SPREAD * typical) & np.isfinite(small[:, 0])
+    if not folded.any():
+        return wide
+    out = wide.copy()
+    out[folded] = small[folded]
+    return out
 
 
 def noise_samples(pts, nrm, ok, idx_p, dist_p, outlier):

@@ -64,6 +64,11 @@ COLLINEAR = 1e-10
 #: (the radius of 15 neighbours is ~4.2 spacings): measured best on the torus, saddle and
 #: ellipsoid at 0.05-1 spacing of noise.
 INITIAL_K0 = 182.0
+#: with k="auto" and noise (initial normals wider than PCA_K) a point keeps its PCA_K normal
+#: where the PCA_K normals of its wide neighbourhood agree less than this share of the
+#: cloud's median (core.stages.unfolded: the largest eigenvalue of their unsigned scatter):
+#: at the 2-spacing rim of shapes_thin.thin_wedge the 58-neighbour plane lay across both faces
+FOLD_SPREAD = 0.8
 
 # ----------------------------------------------------------------------------- automatic k (core.scale)
 
