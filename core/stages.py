@@ -142,7 +142,9 @@ def initial_normals(pts, nb, plan, outlier, report) -> Initial:
             jet = jet if jet is not None else jet_normals(pts, nrm, ok, idx_p, dist_p)[0]
             return Initial(jet, ok, noise, k_init)
         return Initial(nrm, ok, noise, k_init)
-    small = jet if jet is not None and plan.initial == "jet" else nrm
+    if plan.initial == "jet" and jet is None:  # noise given (tiles, cached stages): the same small normals
+        jet = jet_normals(pts, nrm, ok, idx_p, dist_p)[0]
+    small = jet if plan.initial == "jet" else nrm
     idx, dist = nb.take_without(k_init, outlier) if shun else nb.take(k_init)
     nrm, ok = pca_normals(pts, idx, dist, progress=report.sub(0.37, 0.4))
     if plan.initial == "jet":

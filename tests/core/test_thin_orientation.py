@@ -213,3 +213,15 @@ def test_thin_rims_at_auto_ten_seeds():
     for name, seeds in (("thin_wedge", range(10)), ("thin_plate", range(10)), ("thin_bracket", range(3))):
         faces = _face_shares(name, "auto", seeds)
         assert faces.min() >= 0.995, (name, faces)
+
+
+def test_fold_fallback_is_the_same_when_the_noise_is_given():
+    """A plan with the noise fixed (what tiles and cached stages pass) keeps the same
+    normals at a thin rim's folded points as an estimate that measures the noise itself:
+    the fallback is the 15-neighbour jet in both (it was the plain PCA with the noise given)."""
+    s = shapes_thin.THIN_SHAPES["thin_wedge"](6000, seed=0)
+    pts = shapes_thin.noisy(s, 0.2, 1)
+    measured = core.estimate(pts)
+    given = core.estimate(pts, plan=core.plan(len(pts), noise=measured.params["noise"]))
+    np.testing.assert_array_equal(given.normals, measured.normals)
+    np.testing.assert_array_equal(given.k1, measured.k1)
