@@ -142,14 +142,21 @@ def initial_normals(pts, nb, plan, outlier, report) -> Initial:
             jet = jet if jet is not None else jet_normals(pts, nrm, ok, idx_p, dist_p)[0]
             return Initial(jet, ok, noise, k_init)
         return Initial(nrm, ok, noise, k_init)
-    if plan.initial == "jet" and jet is None:  # noise given (tiles, cached stages): the same small normals
-        jet = jet_normals(pts, nrm, ok, idx_p, dist_p)[0]
-    small = jet if plan.initial == "jet" else nrm
+    small = _small_normals(pts, nrm, ok, idx_p, dist_p, jet, plan)
     idx, dist = nb.take_without(k_init, outlier) if shun else nb.take(k_init)
     nrm, ok = pca_normals(pts, idx, dist, progress=report.sub(0.37, 0.4))
     if plan.initial == "jet":
         nrm, _ = jet_normals(pts, nrm, ok, idx, dist, progress=report.sub(0.4, 0.43))
     return Initial(unfolded(nrm, small, idx), ok, noise, k_init)
+
+
+def _small_normals(pts, nrm, ok, idx_p, dist_p, jet, plan):
+    """The ``plan.k_initial`` normals a fold falls back to: the 2-jet's where the plan asks
+    for jets, computed here when the noise was given (tiles, cached stages) rather than
+    measured by :func:`noise_samples`, so both paths fall back to the same normals."""
+    if plan.initial != "jet":
+        return nrm
+    return jet if jet is not None else jet_normals(pts, nrm, ok, idx_p, dist_p)[0]
 
 
 def unfolded(wide, small, idx):
