@@ -21,9 +21,10 @@ import time
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .. import build_neighbours, estimate, noise as add, plan, shapes
+from .. import build_neighbours, estimate, plan, shapes
 from .._progress import Progress
 from ..methods import get_method
+from ..noise import add_noise
 from ..neighbours import search_in_spatial_order
 from ..normals import pca_normals
 from ..orientation import orient
@@ -112,7 +113,7 @@ def _best_of_two(fn):
 def _torus(n, seed, noise):
     """The measured cloud: a torus of ``n`` points, with ``noise`` x the mean spacing if any."""
     pts = shapes.torus(n, seed=seed).points
-    return add.add_noise(pts, noise, seed=seed + 1) if noise else pts
+    return add_noise(pts, noise, seed=seed + 1) if noise else pts
 
 
 def run(sizes=(100_000, 1_000_000), k=15, seed=0, out=print, noise=0.0):

@@ -50,8 +50,8 @@ def pca_normals(points, idx, dist, start, reach, collinear, normals, ok):
 def normal_spread(normals, idx, out):
     """``out[i]``: how much the normals of the neighbours ``idx[i]`` agree with each other,
     as the largest eigenvalue of their unsigned scatter mean(n n^T) (1: all on one line;
-    about 1/2 where two faces at 90 degrees share the neighbourhood), by power iteration
-    from the centre's own normal. Neighbours without a normal (NaN) are left out; NaN
+    about 1/2 where two faces at 90 degrees share the neighbourhood), in closed form
+    (:func:`core.kernels.algebra.smallest_eigvec_sym3`). Neighbours without a normal (NaN) are left out; NaN
     where none has one."""
     n, k = idx.shape
     for i in prange(n):
@@ -70,18 +70,6 @@ def normal_spread(normals, idx, out):
             c22 += z * z
             seen += 1
         out[i] = math.nan
-        if seen == 0:
-            continue
-        x, y, z = normals[i, 0], normals[i, 1], normals[i, 2]
-        if not math.isfinite(x):
-            x, y, z = 0.577, 0.577, 0.577
-        lam = 0.0
-        for _ in range(8):
-            a = c00 * x + c01 * y + c02 * z
-            b = c01 * x + c11 * y + c12 * z
-            c = c02 * x + c12 * y + c22 * z
-            lam = math.sqrt(a * a + b * b + c * c)
-            if lam == 0.0:
-                break
-            x, y, z = a / lam, b / lam, c / lam
-        out[i] = lam / seen
+        if seen > 0:
+            _, _, largest, _, _, _ = smallest_eigvec_sym3(c00, c01, c02, c11, c12, c22)
+            out[i] = largest / seen
