@@ -88,9 +88,9 @@ def estimate(
     plan : :class:`core.EstimatePlan`, optional, from :func:`core.plan` for these points
         (after dropping non-finite rows), instead of ``k``, ``method``, ``passes``,
         ``tol``, ``initial``, ``orientation`` and ``options`` (leave those at their
-        defaults). Through it the noise and the typical crease residual can be fixed
-        rather than measured on this cloud (``params["noise"]``,
-        ``params["crease_typical"]`` report what was used).
+        defaults). Through it the noise, the typical fold spread and the typical crease
+        residual can be fixed rather than measured on this cloud (``params["noise"]``,
+        ``params["fold_typical"]``, ``params["crease_typical"]`` report what was used).
     cache : :class:`core.stage_cache.StageCache`, optional. Passed to successive calls on
         the same cloud, it keeps the stages a change does not touch (neighbours to the
         chosen k when only ``passes`` or ``tol`` change); the result is bit-identical.
@@ -213,7 +213,8 @@ def _result(pts, kept, plan, *, stages, neighbours, repaired) -> CurvatureResult
         orientation=plan.orientation_label, options=dict(plan.options), n_points=len(pts),
         dropped=int(np.count_nonzero(~kept)), normals_given=normals_given,
         initial=None if normals_given else plan.initial, initial_k=init.k, noise=init.noise,
-        crease_typical=marks.crease_typical, normals_repaired=repaired, jet_fraction=float(kc.on_jet.mean()),
+        fold_typical=init.fold_typical, crease_typical=marks.crease_typical, normals_repaired=repaired,
+        jet_fraction=float(kc.on_jet.mean()),
     )
     degree = np.where(kc.on_jet, JET_DEGREE if kc.jet_degree is None else kc.jet_degree, plan.options.get("degree", -1))
     return CurvatureResult(

@@ -66,6 +66,10 @@ class EstimatePlan:
         measures it on this cloud (``result.params["noise"]``).
     crease_typical : float or None. The typical normal-fit residual a crease must stand
         out against; None takes this cloud's median (``result.params["crease_typical"]``).
+    fold_typical : float or None. The typical spread of the small initial normals over a
+        point's wide initial neighbourhood, which a fold must fall below
+        (:func:`core.stages.unfolded`); None takes this cloud's median
+        (``result.params["fold_typical"]``; None where the initial scale did not grow).
     """
 
     n_points: int
@@ -84,6 +88,7 @@ class EstimatePlan:
     orientation_label: str
     noise: float | None = None
     crease_typical: float | None = None
+    fold_typical: float | None = None
 
     @property
     def robust(self) -> bool:
@@ -92,7 +97,8 @@ class EstimatePlan:
 
     @classmethod
     def build(cls, n_points, *, k="auto", method="nr", passes=None, tol=None, initial="auto",
-              orientation="auto", options=None, normals_given=False, noise=None, crease_typical=None):
+              orientation="auto", options=None, normals_given=False, noise=None, crease_typical=None,
+              fold_typical=None):
         """Check every argument (ValueError naming it, its value and what is allowed)
         and resolve the defaults; see :func:`core.estimate` for their meaning."""
         n = check_int(n_points, name="n_points", low=3)
@@ -114,6 +120,7 @@ class EstimatePlan:
             candidates=ks, k_search=ks[-1], k_initial=k_initial, passes=passes, adaptive=auto,
             tol=_tol(tol), initial=_initial(initial, auto), orientation=view, orientation_label=label,
             noise=_measure("noise", noise), crease_typical=_measure("crease_typical", crease_typical),
+            fold_typical=_measure("fold_typical", fold_typical),
         )
 
 

@@ -36,7 +36,7 @@ from .wide_neighbours import LazyNeighbours
 
 __all__ = ["StageCache", "STAGE_FIELDS"]
 
-_BASE = ("k_initial", "k_search", "initial", "auto", "noise", "robust")
+_BASE = ("k_initial", "k_search", "initial", "auto", "noise", "fold_typical", "robust")
 #: Plan fields (:class:`core.planning.EstimatePlan`) each cached stage depends on, on top of
 #: the cloud, its given normals and the neighbour graph. Each stage lists those of the
 #: stages it takes its inputs from. The fit/refine and flags stages are not cached: they

@@ -27,12 +27,14 @@ _CHUNK = 32_768
 
 class Initial(NamedTuple):
     """Initial normals: ``normals`` (N, 3), ``has_normal`` (N,) bool, and with k="auto"
-    the measured (or given) ``noise`` ratio and the ``k`` it chose (None otherwise)."""
+    the measured (or given) ``noise`` ratio, the ``k`` it chose and the ``fold_typical``
+    spread folds were judged against (:func:`unfolded`; None otherwise)."""
 
     normals: np.ndarray
     has_normal: np.ndarray
     noise: float | None = None
     k: int | None = None
+    fold_typical: float | None = None
 
 
 class Fit(NamedTuple):
@@ -136,18 +138,24 @@ def initial_normals(pts, nb, plan, outlier, report) -> Initial:
     k_init = scale.initial_k(noise, plan.k_initial, plan.k_search)
     if k_init > nb.width:  # noise this large grows most jets to k_search too: search them all once
         nb.widen(plan.k_search)
-    shun = plan.robust and outlier.any()
-    if k_init == plan.k_initial and not shun:
-        if plan.initial == "jet":
-            jet = jet if jet is not None else jet_normals(pts, nrm, ok, idx_p, dist_p)[0]
-            return Initial(jet, ok, noise, k_init)
-        return Initial(nrm, ok, noise, k_init)
     small = _small_normals(pts, nrm, ok, idx_p, dist_p, jet, plan)
-    idx, dist = nb.take_without(k_init, outlier) if shun else nb.take(k_init)
+    if k_init == plan.k_initial and not (plan.robust and outlier.any()):
+        return Initial(small, ok, noise, k_init)
+    idx, dist = initial_rows(nb, k_init, outlier, plan)
     nrm, ok = pca_normals(pts, idx, dist, progress=report.sub(0.37, 0.4))
     if plan.initial == "jet":
         nrm, _ = jet_normals(pts, nrm, ok, idx, dist, progress=report.sub(0.4, 0.43))
-    return Initial(unfolded(nrm, small, idx), ok, noise, k_init)
+    if k_init == plan.k_initial:  # only outliers left out: no wide plane to lie across a fold
+        return Initial(nrm, ok, noise, k_init)
+    clean = ~outlier[nb.take(k_init)[0]].any(axis=1) if plan.robust and outlier.any() else None
+    nrm, typical = unfolded(nrm, small, idx, plan.fold_typical, clean)
+    return Initial(nrm, ok, noise, k_init, typical)
+
+
+def initial_rows(nb, k_init, outlier, plan):
+    """The ``k_init`` nearest a point's initial normal is fitted on, without the known
+    outliers in robust mode."""
+    return nb.take_without(k_init, outlier) if plan.robust and outlier.any() else nb.take(k_init)
 
 
 def _small_normals(pts, nrm, ok, idx_p, dist_p, jet, plan):
@@ -159,21 +167,38 @@ def _small_normals(pts, nrm, ok, idx_p, dist_p, jet, plan):
     return jet if jet is not None else jet_normals(pts, nrm, ok, idx_p, dist_p)[0]
 
 
-def unfolded(wide, small, idx):
-    """``wide`` normals, but ``small``'s (the ``plan.k_initial`` neighbours') where the
-    small normals of the ``idx`` neighbours disagree with each other well beyond what the
-    cloud's noise makes them do (:func:`core.kernels.normal_spread` below
-    :data:`core.tuning.FOLD_SPREAD` x its median): a fold, the rim of a part a few spacings
-    thick, where a wide PCA plane lies across both faces and the side between them."""
+def fold_spread(small, idx) -> np.ndarray:
+    """Per point, how well the ``small`` normals of its ``idx`` neighbours agree (the
+    largest eigenvalue of their unsigned scatter, :func:`core.kernels.normal_spread`)."""
     spread = np.empty(len(idx))
     kernels.normal_spread(small, idx, spread)
-    typical = np.nanmedian(spread) if np.isfinite(spread).any() else 0.0
+    return spread
+
+
+def typical_spread(spread, clean=None) -> float:
+    """The median :func:`fold_spread` over the points with no outlier among the rows
+    (``clean``, None: all), or over all points if none is clean (0.0 if none is finite)."""
+    if clean is not None and clean.any():
+        spread = spread[clean]
+    return float(np.nanmedian(spread)) if np.isfinite(spread).any() else 0.0
+
+
+def unfolded(wide, small, idx, typical=None, clean=None):
+    """(``wide`` normals, but ``small``'s (the ``plan.k_initial`` neighbours') where the
+    small normals of the ``idx`` neighbours disagree with each other well beyond what the
+    cloud's noise makes them do (:func:`fold_spread` below :data:`core.tuning.FOLD_SPREAD`
+    x ``typical``, by default :func:`typical_spread` of this cloud; a tiled run fixes the
+    whole cloud's): a fold, the rim of a part a few spacings thick, where a wide PCA plane
+    lies across both faces and the side between them; the ``typical`` spread used)."""
+    spread = fold_spread(small, idx)
+    if typical is None:
+        typical = typical_spread(spread, clean)
     folded = (spread < tuning.FOLD_SPREAD * typical) & np.isfinite(small[:, 0])
     if not folded.any():
-        return wide
+        return wide, typical
     out = wide.copy()
     out[folded] = small[folded]
-    return out
+    return out, typical
 
 
 def noise_samples(pts, nrm, ok, idx_p, dist_p, outlier):

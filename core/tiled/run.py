@@ -224,11 +224,16 @@ def _estimate(store, plan, sizes, spec, tasks, report):
     auto = spec.k == "auto"
     if auto:
         spec = dataclasses.replace(spec, n_points=plan.n_points)
-        todo = [t for t in range(plan.n_tiles) if not wholecloud.sampled(store, t, "before")]
-        before = engine.run_tasks(store.root, todo, sizes, spec, fn=wholecloud.run_before,
-                                  stage="whole-cloud medians", progress=report.sub(0.0, 0.1), **tasks)
-        fixed = wholecloud.reduce(store, plan.n_tiles, auto_plan(spec), "before")
-        spec = dataclasses.replace(spec, fixed=tuple(sorted(fixed.items())))
+        before = []
+        for when, fn, span in (("before", wholecloud.run_before, (0.0, 0.05)),
+                               ("initial", wholecloud.run_initial, (0.05, 0.1))):
+            if spec.normals_given and when == "initial" or not wholecloud.wanted(auto_plan(spec), when):
+                continue  # given normals are not estimated: no folds to test
+            todo = [t for t in range(plan.n_tiles) if not wholecloud.sampled(store, t, when)]
+            before += engine.run_tasks(store.root, todo, sizes, spec, fn=fn, stage="whole-cloud medians",
+                                       progress=report.sub(*span), **tasks)
+            fixed = wholecloud.reduce(store, plan.n_tiles, auto_plan(spec), when)
+            spec = dataclasses.replace(spec, fixed=tuple(sorted({**dict(spec.fixed), **fixed}.items())))
     todo = [t for t in range(plan.n_tiles) if not store.finished(t)]
     done = engine.run_tasks(store.root, todo, sizes, spec, fn=run_auto_tile if auto else None,
                             progress=report.sub(0.1 if auto else 0.0, 1.0), **tasks)

@@ -9,8 +9,10 @@ selects the median exactly from the sorted files (:func:`median_of`), so no tile
 scheduler ever holds the whole cloud's values.
 
 A quantity is one :class:`Quantity` line in :data:`QUANTITIES`: the plan field, when it
-is needed ("before" the fits, in a pre-pass round of tile tasks; or "after", sampled by
-the main tile tasks and reported), its samples per tile and its reduction.
+is needed ("before" the fits, in a pre-pass round of tile tasks; "initial", in a second
+pre-pass round, for what depends on a "before" value: the fold test's typical spread is
+taken over the neighbourhoods the noise chose; or "after", sampled by the main tile
+tasks and reported), its samples per tile and its reduction.
 """
 
 from __future__ import annotations
@@ -23,7 +25,8 @@ from typing import Callable
 import numpy as np
 
 from ..normals import pca_normals
-from ..stages import noise_samples, outlier_scores
+from ..scale import initial_k
+from ..stages import _small_normals, fold_spread, initial_rows, noise_samples, outlier_scores
 from ..tuning import OUTLIER_SCORE
 from .plan import TilePlan
 from .store import TileStore
@@ -46,6 +49,15 @@ class Quantity:
     wanted: Callable = lambda plan: True
 
 
+#: what a pre-pass round's tiles load: (k_max, dependency chain) of the plan, see
+#: :func:`core.tiled.halo.shortfall`
+_LOADS = {
+    "before": lambda plan: (plan.k_initial, ((1, plan.k_initial),)),
+    # own rows to the initial k, their points' small normals and outlier flags
+    "initial": lambda plan: (_k_init(plan), ((0, _k_init(plan)), (1, plan.k_initial))),
+}
+
+
 def _noise_samples(ctx):
     """The noise ratios (:func:`core.stages.noise_samples`) of the tile's own points,
     apart for those with an outlier among their neighbours."""
@@ -59,8 +71,36 @@ def _noise_samples(ctx):
             {"clean": int(np.count_nonzero(own & clean))})
 
 
-def _noise(median, counts):
-    """:func:`core.scale.noise_ratio` over the clean points if any, else over all."""
+def _fold_samples(ctx):
+    """The fold test's spreads (:func:`core.stages.unfolded`) of the tile's own points, at
+    the initial scale the whole cloud's noise chose, apart for those with an outlier among
+    those neighbours (their robust rows reach further than the tile loads: exact only where
+    the cloud has clean points, which the median then takes alone)."""
+    pts, nb, plan, own = ctx.pts, ctx.nb, ctx.plan, ctx.own
+    idx_p, dist_p = nb.take(plan.k_initial)
+    outlier = outlier_scores(pts, idx_p) > OUTLIER_SCORE
+    nrm, ok = pca_normals(pts, idx_p, dist_p)
+    small = _small_normals(pts, nrm, ok, idx_p, dist_p, None, plan)
+    idx, _ = initial_rows(nb, _k_init(plan), outlier, plan)
+    spread = fold_spread(small, idx)
+    clean = ~outlier[nb.take(_k_init(plan))[0]].any(axis=1)
+    finite = np.isfinite(spread)
+    return ({"clean": spread[own & clean & finite], "other": spread[own & ~clean & finite]},
+            {"clean": int(np.count_nonzero(own & clean))})
+
+
+def _k_init(plan) -> int:
+    return initial_k(plan.noise, plan.k_initial, plan.k_search)
+
+
+def _folds_tested(plan) -> bool:
+    """Whether :func:`core.stages.initial_normals` tests folds: the noise grew the initial scale."""
+    return plan.auto and plan.fold_typical is None and plan.noise is not None and _k_init(plan) > plan.k_initial
+
+
+def _clean_median(median, counts):
+    """:func:`core.scale.noise_ratio` (or :func:`core.stages.typical_spread`) over the
+    clean points if any, else over all."""
     return median(["clean"] if counts["clean"] else ["clean", "other"])
 
 
@@ -71,7 +111,8 @@ def _crease_samples(ctx):
 
 
 QUANTITIES = (
-    Quantity("noise", "before", _noise_samples, _noise, wanted=lambda plan: plan.noise is None),
+    Quantity("noise", "before", _noise_samples, _clean_median, wanted=lambda plan: plan.noise is None),
+    Quantity("fold_typical", "initial", _fold_samples, _clean_median, wanted=_folds_tested),
     Quantity("crease_typical", "after", _crease_samples, lambda median, counts: median(["rms"]),
              wanted=lambda plan: plan.auto and plan.crease_typical is None),
 )
@@ -83,22 +124,32 @@ def wanted(plan, when: str) -> tuple:
 
 # ---------------------------------------------------------------------------------- tiles
 def run_before(root, tile: int, spec) -> dict:
-    """The pre-pass task of tile ``tile``: the "before" quantities' samples of its points
-    (their chain: the own points and one ring of ``k_initial`` neighbours)."""
+    """The first pre-pass task of tile ``tile``: the "before" quantities' samples of its
+    points (their chain: the own points and one ring of ``k_initial`` neighbours)."""
+    return _run_prepass(root, tile, spec, "before")
+
+
+def run_initial(root, tile: int, spec) -> dict:
+    """The second pre-pass task of tile ``tile`` (``spec`` holds the "before" values):
+    the "initial" quantities' samples of its points."""
+    return _run_prepass(root, tile, spec, "initial")
+
+
+def _run_prepass(root, tile: int, spec, when: str) -> dict:
     store = TileStore(root)
     n_own = len(store.read_bin(tile))
-    if sampled(store, tile, "before"):
+    if sampled(store, tile, when):
         return {"tile": tile, "skipped": True, "points": n_own}
     plan = auto_plan(spec)
-    quantities = wanted(plan, "before")
+    quantities = wanted(plan, when)
     samples = {}
     if n_own and quantities:
-        rec, owner, nb, _ = load_with_halo(store, TilePlan.load(store.plan_path), tile, plan.k_initial,
-                                           ((1, plan.k_initial),))
+        k_max, chain = _LOADS[when](plan)
+        rec, owner, nb, _ = load_with_halo(store, TilePlan.load(store.plan_path), tile, k_max, chain)
         pts = nb.points
         ctx = _Context(pts, nb, dataclasses.replace(plan, n_points=len(pts)), owner == tile, None)
         samples = {q.field: q.samples(ctx) for q in quantities}
-    save_samples(store, tile, "before", samples)
+    save_samples(store, tile, when, samples)
     return {"tile": tile, "skipped": False, "points": n_own}
 
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import core
-from core import noise, passes, scale, shapes
+from core import noise, passes, scale, shapes, shapes_thin
 from core.io import read_cloud
 from core.tiled import auto, estimate_tiled, halo, task, wholecloud
 
@@ -69,6 +69,21 @@ def test_auto_in_16_tiles_is_the_in_memory_estimate(tmp_path, small_candidates, 
     assert (tmp_path / "out.ply").read_bytes() == ref
     for name in ("noise", "crease_typical", "passes_run"):  # the whole cloud's, exactly
         assert run.params[name] == mem.params[name]
+
+
+def test_a_thin_rims_fold_test_is_the_whole_clouds(tmp_path, small_candidates):
+    """The fold test (core.stages.unfolded) compares a point's spread with the whole cloud's
+    median, which a second pre-pass fixes (it depends on the noise the first one fixes):
+    with each tile's own median, a noisy wedge's tiles judge folds against other values."""
+    s = shapes_thin.THIN_SHAPES["thin_wedge"](6000, seed=0)
+    pts = np.concatenate([shapes_thin.noisy(s, 0.2, 1), [[0.5, 0.5, 0.3], [0.2, 0.9, -0.4]]])  # robust rows
+    mem = core.estimate(pts, passes=1)
+    assert mem.params["fold_typical"] is not None and mem.outlier.sum() >= 2
+    run = estimate_tiled(pts, tmp_path / "out.ply", tile_points=375, workers=0, passes=1,
+                         workdir=tmp_path / "work")
+    for name in ("noise", "fold_typical", "crease_typical", "passes_run"):
+        assert run.params[name] == mem.params[name], name
+    _same(tmp_path / "out.ply", mem)
 
 
 def test_the_candidates_come_from_the_whole_cloud(small_candidates):
