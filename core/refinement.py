@@ -14,9 +14,7 @@ from .frame import turned_over
 from .orientation import resettle
 from .passes import PassRule, few_fits
 from .stages import Fit, Initial, Scale, _empty_fit, _Fitter
-from .kernels import Memo
-from .methods import normal_fit
-from .tuning import HOLD_TURN, IRLS_WARM, PASS_DECAY, RESETTLE_K
+from .tuning import HOLD_TURN, PASS_DECAY, RESETTLE_K
 from .wide_neighbours import rows_at_least
 
 
@@ -67,11 +65,10 @@ def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n
     nrm, has_normal = initial.normals, initial.has_normal
     if sc.on_jet.any():  # the jets' normals are the neighbours' input where the jet is kept
         nrm = np.where(sc.on_jet[:, None], sc.jets[0], nrm)
-    fitters = _fitters(_Fitter(pts, idx, kc, h, plan.method, dict(plan.options)), plan)
+    fitter = _Fitter(pts, idx, kc, h, plan.method, dict(plan.options))
     share = 1.0 if first is None else float(first.mean())
     held = _Held(len(pts)) if plan.adaptive else None
     for p in range(n_fits):
-        fitter = fitters[min(p, 1)]
         sub = report.sub(p / n_fits, (p + 1) / n_fits)
         fit = _empty_fit(len(pts))
         centres = has_normal & ~sc.on_jet if fitted is None else has_normal & ~sc.on_jet & fitted[p]
@@ -84,22 +81,6 @@ def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n
             has_normal = has_normal & ~outlier
             new[outlier] = np.nan
         nrm = new
-
-
-def _fitters(fitter, plan):
-    """(the first fit's fitter, the refinement passes'). With k="auto" and a robust fit each
-    fit leaves its final weights per centre (a :class:`core.kernels.Memo`, N x k bytes) and
-    a pass's IRLS starts from them, with IRLS_WARM reweightings instead of IRLS_ITERATIONS
-    from plain least squares: the neighbours a centre's fit weighted down (outliers, the
-    far side of a crease) stay down from the start, and the solves saved are a third of
-    the wide fits' time. The first fit starts cold."""
-    if not (plan.auto and plan.robust) or plan.method.fit is not normal_fit.fit:
-        return fitter, fitter
-    n = len(fitter.pts)
-    wt, has = np.zeros((n, int(fitter.kc.max())), dtype=np.uint8), np.zeros(n, dtype=bool)
-    cold, warm = Memo(wt, has, 0, 1, IRLS_WARM), Memo(wt, has, 1, 1, IRLS_WARM)
-    return (fitter._replace(options={**fitter.options, "memo": cold}),
-            fitter._replace(options={**fitter.options, "memo": warm}))
 
 
 def finish(best: Refined, sc: Scale, outlier, plan) -> Refined:

@@ -108,11 +108,6 @@ FOLD_MIN_BAD = 3
 
 #: reweighting iterations of the robust fits (each one re-solves the least squares)
 IRLS_ITERATIONS = 2
-#: reweightings of k="auto"'s refinement passes, whose IRLS starts from the weights the same
-#: centre's fit ended with in the pass before (core.refinement.fit_passes): that start is robust
-#: already, one reweighting from it is what a cold start's second is. Plain least squares in
-#: the passes (0) was 5x worse in H with 3 % outliers; one reweighting from a cold start +3-12 %.
-IRLS_WARM = 1
 #: most NR refinement passes a user may ask for
 MAX_PASSES = 20
 # ----------------------------------------------------------------------------- the jet rule (issue 15, core.scale)

@@ -70,24 +70,6 @@ class Settings(NamedTuple):
     rcond: float
 
 
-class Memo(NamedTuple):
-    """The robust weights a fit leaves for the next pass's fit at the same centre (a warm
-    start of its IRLS: k="auto"'s refinement passes). wt (N, k) uint8: centre i's final
-    Tukey/Huber weights of its neighbours j (x 255); has (N,) bool: stored; read, write:
-    0 or 1; rounds: reweightings after a warm start (instead of ``Settings.irls``)."""
-
-    wt: np.ndarray
-    has: np.ndarray
-    read: int
-    write: int
-    rounds: int
-
-
-def no_memo() -> Memo:
-    """A :class:`Memo` that is neither read nor written (every fit but k="auto"'s passes)."""
-    return Memo(np.zeros((1, 1), dtype=np.uint8), np.zeros(1, dtype=np.bool_), 0, 0, 0)
-
-
 class Fits(NamedTuple):
     """What the fit writes per centre: mu (M, 2), W (M, 2, 2) in units of 1/h, var (M, 3)
     the least-squares variances of W11, (W12 + W21)/2, W22, rms (M,) the weighted RMS
@@ -134,50 +116,39 @@ def gather(f, r, row, n, weighting, theta_reach, s):
 
 
 @njit(**OPTS, parallel=True)
-def normal_fit(f, opt, out, rows, memo):
+def normal_fit(f, opt, out, rows):
     """NF at every centre of the :class:`Frames` ``f`` with the :class:`Settings` ``opt``,
     written into the :class:`Fits` ``out`` (see the module docstring). Centre r's
     neighbours are row ``rows[r]`` of ``f.idx``, which may be the whole cloud's graph: a
-    chunk of centres then needs no copy of its rows (320 wide with noise at k="auto"). ``memo``: the
-    :class:`Memo` of robust weights read and written."""
+    chunk of centres then needs no copy of its rows (320 wide with noise at k="auto")."""
     m = len(f.centres)
     kmax = f.idx.shape[1]
     n_blocks = (m + BLOCK - 1) // BLOCK
     for blk in prange(n_blocks):
-        _fit_block(f, opt, out, rows, memo, blk * BLOCK, min(m, (blk + 1) * BLOCK), fit_scratch(kmax))
+        _fit_block(f, opt, out, rows, blk * BLOCK, min(m, (blk + 1) * BLOCK), fit_scratch(kmax))
 
 
 @njit(**OPTS)
-def _fit_block(f, opt, out, rows, memo, start, stop, s):
+def _fit_block(f, opt, out, rows, start, stop, s):
     """NF at centres start..stop-1 with the scratch ``s`` (allocated once per block: a
     per-point allocation would cost more than the fit)."""
     for r in range(start, stop):
         n = f.kc[r]
-        out.ok[r] = _fit_point(f, opt, r, rows[r], n, s, memo)
+        out.ok[r] = _fit_point(f, opt, r, rows[r], n, s)
         if out.ok[r]:
             _store(opt, r, n, s, out)
-            if memo.write and opt.robust > 0:
-                _remember(memo, f.centres[r], n, s)
 
 
 @njit(**OPTS)
-def _fit_point(f, opt, r, row, n, s, memo):
+def _fit_point(f, opt, r, row, n, s):
     """Least squares (eqs. 25-26) of centre r's n neighbours (row ``row`` of f.idx), then ``opt.irls`` robust
     reweightings; False when the system is singular. Only the last solve computes the
-    columns of G^-1 that the variances and the exact constraint need. Where ``memo`` holds
-    the centre's weights from the pass before, the first solve takes them (it is robust
-    already) and ``memo.rounds`` reweightings follow."""
+    columns of G^-1 that the variances and the exact constraint need."""
     gather(f, r, row, n, opt.weighting, opt.theta_reach, s)
-    i = f.centres[r]
-    warm = opt.robust > 0 and memo.read != 0 and memo.has[i]
-    if warm:
-        for j in range(n):
-            s.wt[j] = s.base[j] * (memo.wt[i, j] * (1.0 / 255.0))
-    else:
-        for j in range(n):
-            s.wt[j] = s.base[j]
+    for j in range(n):
+        s.wt[j] = s.base[j]
     monomials(s.u, s.v, n, opt.degree, s.R)
-    rounds = (memo.rounds if warm else opt.irls) if opt.robust > 0 else 0
+    rounds = opt.irls if opt.robust > 0 else 0
     for it in range(rounds + 1):
         if it > 0:
             robust_weights(s, n, opt.degree, opt.robust)
@@ -189,15 +160,6 @@ def _fit_point(f, opt, r, row, n, s, memo):
         elif not solve(opt.degree, opt.rcond, s.vec, s.G, s.L, s.acc):
             return False
     return True
-
-
-@njit(**OPTS)
-def _remember(memo, i, n, s):
-    """Centre i's final robust weights (relative to its base weights) into ``memo``."""
-    for j in range(n):
-        q = s.wt[j] / s.base[j] if s.base[j] > 0.0 else 0.0
-        memo.wt[i, j] = np.uint8(min(max(q, 0.0), 1.0) * 255.0 + 0.5)
-    memo.has[i] = True
 
 
 @njit(**OPTS)

@@ -51,13 +51,12 @@ def min_k(degree=1, **_):
     return (degree + 1) * (degree + 2) // 2 + 1
 
 
-def fit(chunk, *, weights="uniform", constraint="project", robust=None, degree=1, memo=None):
+def fit(chunk, *, weights="uniform", constraint="project", robust=None, degree=1):
     """Fit (mu, W) per point of a :class:`core.patch.Chunk`; see :data:`NF_DOC`.
 
     Returns a :class:`MethodFit` whose ``diag`` holds the least-squares variances of
     W11, (W12 + W21)/2, W22 ("var", units of 1/h^2), the RMS residual of the normal components ("rms") and
-    their RMS deviation from their mean ("spread"). ``memo``: a :class:`core.kernels.Memo` of
-    robust weights kept between passes (k="auto"'s refinement), else none.
+    their RMS deviation from their mean ("spread").
     """
     check(weights=weights, constraint=constraint, robust=robust, degree=degree)
     m = len(chunk.centres)
@@ -69,6 +68,5 @@ def fit(chunk, *, weights="uniform", constraint="project", robust=None, degree=1
     ok = np.empty(m, dtype=bool)
     settings = kernels.Settings(THETA_REACH, _WEIGHTS.index(weights), _CONSTRAINTS.index(constraint),
                                 _ROBUST.index(robust), IRLS_ITERATIONS, degree, RCOND)
-    kernels.normal_fit(chunk.frames(), settings, kernels.Fits(mu, W, var, rms, spread, ok), chunk.kernel_rows(),
-                       kernels.no_memo() if memo is None else memo)
+    kernels.normal_fit(chunk.frames(), settings, kernels.Fits(mu, W, var, rms, spread, ok), chunk.kernel_rows())
     return MethodFit(mu, W, ok, {"var": var, "rms": rms, "spread": spread})
