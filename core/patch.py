@@ -18,7 +18,10 @@ class Chunk:
     ``points`` and ``normals`` are the whole cloud's arrays (normals NaN where a point
     has none); ``idx`` (M, k) are the centres' neighbours, ``h`` (M,) the distance to the
     k-th neighbour. Fitting methods take a chunk and return ``(mu, W, ok)`` with W in
-    units of 1/h (lengths divided by h).
+    units of 1/h (lengths divided by h). With ``rows`` (M,), ``idx`` is a larger graph
+    (the whole cloud's) and centre r's neighbours are its row ``rows[r]``: the compiled
+    NF kernel reads them in place, without a copy of the chunk's rows (:attr:`row_idx`
+    makes one for the numpy methods).
     """
 
     points: np.ndarray
@@ -30,17 +33,30 @@ class Chunk:
     t2: np.ndarray
     z: np.ndarray
     kc: np.ndarray
+    rows: np.ndarray | None = None
 
     @classmethod
-    def build(cls, points, normals, idx, h, centres, kc=None):
-        """``kc`` (M,): neighbours used per centre (default: all k columns of ``idx``)."""
+    def build(cls, points, normals, idx, h, centres, kc=None, rows=None):
+        """``kc`` (M,): neighbours used per centre (default: all k columns of ``idx``);
+        ``rows`` (M,): the row of ``idx`` of each centre (default: row r for centre r)."""
         centres = np.asarray(centres, dtype=np.int64)
         m = len(centres)
         z, t1, t2 = np.empty((m, 3)), np.empty((m, 3)), np.empty((m, 3))
         local_frames(np.ascontiguousarray(normals, dtype=np.float64), centres, z, t1, t2)  # z and tangent_basis(z)
         if kc is None:
             kc = np.full(len(centres), idx.shape[1], dtype=np.int64)
-        return cls(points, normals, np.ascontiguousarray(idx), h, centres, t1, t2, z, kc)
+        if rows is not None:
+            rows = np.asarray(rows, dtype=np.int64)
+        return cls(points, normals, np.ascontiguousarray(idx), h, centres, t1, t2, z, kc, rows)
+
+    @property
+    def row_idx(self) -> np.ndarray:
+        """(M, k) the centres' neighbours (a copy of their rows when ``rows`` is given)."""
+        return self.idx if self.rows is None else self.idx[self.rows]
+
+    def kernel_rows(self) -> np.ndarray:
+        """(M,) the row of :attr:`idx` of each centre, as the compiled kernels take it."""
+        return np.arange(len(self.centres), dtype=np.int64) if self.rows is None else self.rows
 
     def frames(self) -> Frames:
         """The chunk as the record the compiled kernels take."""
@@ -85,7 +101,7 @@ class Patch:
 
 def make_patch(chunk: Chunk) -> Patch:
     """Express each centre's neighbours in its local frame, lengths in units of h."""
-    points, normals, idx, centres, h = chunk.points, chunk.normals, chunk.idx, chunk.centres, chunk.h
+    points, normals, idx, centres, h = chunk.points, chunk.normals, chunk.row_idx, chunk.centres, chunk.h
     t1, t2, z = chunk.t1, chunk.t2, chunk.z
     d = points[idx] - points[centres][:, None, :]
     inv_h = 1.0 / h

@@ -85,10 +85,10 @@ class Fits(NamedTuple):
 
 
 @njit(**OPTS)
-def gather(f, r, n, weighting, theta_reach, s):
-    """Neighbours 0..n-1 of centre r of the :class:`Frames` ``f`` in its frame, into the
-    scratch ``s``: offsets (u, v) / h, normal components (X, Y) flipped to agree with the
-    frame's z (§4.3), and base weights (0 without a normal)."""
+def gather(f, r, row, n, weighting, theta_reach, s):
+    """Neighbours 0..n-1 of centre r of the :class:`Frames` ``f`` (row ``row`` of
+    ``f.idx``) in its frame, into the scratch ``s``: offsets (u, v) / h, normal components
+    (X, Y) flipped to agree with the frame's z (§4.3), and base weights (0 without a normal)."""
     points, normals, idx = f.points, f.normals, f.idx
     u, v, X, Y, base = s.u, s.v, s.X, s.Y, s.base
     i = f.centres[r]
@@ -97,7 +97,7 @@ def gather(f, r, n, weighting, theta_reach, s):
     b0, b1, b2 = f.t2[r, 0], f.t2[r, 1], f.t2[r, 2]
     c0, c1, c2 = f.z[r, 0], f.z[r, 1], f.z[r, 2]
     for j in range(n):
-        q = idx[r, j]
+        q = idx[row, j]
         nx, ny, nz = normals[q, 0], normals[q, 1], normals[q, 2]
         dx = (points[q, 0] - points[i, 0]) / hi
         dy = (points[q, 1] - points[i, 1]) / hi
@@ -116,33 +116,35 @@ def gather(f, r, n, weighting, theta_reach, s):
 
 
 @njit(**OPTS, parallel=True)
-def normal_fit(f, opt, out):
+def normal_fit(f, opt, out, rows):
     """NF at every centre of the :class:`Frames` ``f`` with the :class:`Settings` ``opt``,
-    written into the :class:`Fits` ``out`` (see the module docstring)."""
+    written into the :class:`Fits` ``out`` (see the module docstring). Centre r's
+    neighbours are row ``rows[r]`` of ``f.idx``, which may be the whole cloud's graph: a
+    chunk of centres then needs no copy of its rows (320 wide with noise at k="auto")."""
     m = len(f.centres)
     kmax = f.idx.shape[1]
     n_blocks = (m + BLOCK - 1) // BLOCK
     for blk in prange(n_blocks):
-        _fit_block(f, opt, out, blk * BLOCK, min(m, (blk + 1) * BLOCK), fit_scratch(kmax))
+        _fit_block(f, opt, out, rows, blk * BLOCK, min(m, (blk + 1) * BLOCK), fit_scratch(kmax))
 
 
 @njit(**OPTS)
-def _fit_block(f, opt, out, start, stop, s):
+def _fit_block(f, opt, out, rows, start, stop, s):
     """NF at centres start..stop-1 with the scratch ``s`` (allocated once per block: a
     per-point allocation would cost more than the fit)."""
     for r in range(start, stop):
         n = f.kc[r]
-        out.ok[r] = _fit_point(f, opt, r, n, s)
+        out.ok[r] = _fit_point(f, opt, r, rows[r], n, s)
         if out.ok[r]:
             _store(opt, r, n, s, out)
 
 
 @njit(**OPTS)
-def _fit_point(f, opt, r, n, s):
-    """Least squares (eqs. 25-26) of centre r's n neighbours, then ``opt.irls`` robust
+def _fit_point(f, opt, r, row, n, s):
+    """Least squares (eqs. 25-26) of centre r's n neighbours (row ``row`` of f.idx), then ``opt.irls`` robust
     reweightings; False when the system is singular. Only the last solve computes the
     columns of G^-1 that the variances and the exact constraint need."""
-    gather(f, r, n, opt.weighting, opt.theta_reach, s)
+    gather(f, r, row, n, opt.weighting, opt.theta_reach, s)
     for j in range(n):
         s.wt[j] = s.base[j]
     monomials(s.u, s.v, n, opt.degree, s.R)

@@ -163,7 +163,7 @@ def _choose_block(f, ks, rule, chosen, start, stop):
     bounds = np.empty((2, 3))
     ref = np.empty(8)
     for r in range(start, stop):
-        gather(f, r, kmax, 0, 1.0, s)
+        gather(f, r, r, kmax, 0, 1.0, s)
         monomials(s.u, s.v, kmax, rule.degree, s.R)
         reset(rule.degree, s.vec, s.G, s.acc)
         _local_reference(f.points, f.normals, f.idx, r, ks[0], f.z, rule.fold_cos, ref)

@@ -68,5 +68,5 @@ def fit(chunk, *, weights="uniform", constraint="project", robust=None, degree=1
     ok = np.empty(m, dtype=bool)
     settings = kernels.Settings(THETA_REACH, _WEIGHTS.index(weights), _CONSTRAINTS.index(constraint),
                                 _ROBUST.index(robust), IRLS_ITERATIONS, degree, RCOND)
-    kernels.normal_fit(chunk.frames(), settings, kernels.Fits(mu, W, var, rms, spread, ok))
+    kernels.normal_fit(chunk.frames(), settings, kernels.Fits(mu, W, var, rms, spread, ok), chunk.kernel_rows())
     return MethodFit(mu, W, ok, {"var": var, "rms": rms, "spread": spread})
