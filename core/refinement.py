@@ -35,9 +35,10 @@ def refine(pts, initial: Initial, outlier, nb, sc: Scale, plan, report) -> Refin
     their neighbours' fits after the first one. Where ``sc.on_jet`` the jet is the result
     (and its normal the neighbours' input); passes run only if NR fits at least
     PASS_MIN_SHARE of the points with noise (the pass rule judges by mean turns,
-    meaningless on a handful of points). Where the undone pass repeats the kept pass's change
-    of H, the kept pass drifted: those points report the pass before's curvatures
-    (:func:`core.drift.step_back`; the undone pass is then fitted at every point)."""
+    meaningless on a handful of points). When the rule keeps one pass and undoes the 2nd,
+    where the 2nd repeats the 1st's change of H the 1st drifted: those points report the
+    first fit's curvatures (:func:`core.drift.step_back`; the 2nd pass is then fitted at
+    every point)."""
     rule = PassRule(plan, few_fits(float((initial.has_normal & ~sc.quiet).mean()), plan))
     judged = passes.rule_sample(pts, plan.n_points) if plan.adaptive else None
     best = before = None
@@ -48,7 +49,7 @@ def refine(pts, initial: Initial, outlier, nb, sc: Scale, plan, report) -> Refin
         keep, more = rule.step(p, change)
         if keep:
             before, best = best, Refined(complete(), nrm, p)
-        elif before is not None:  # the undone pass, fitted everywhere: where it repeats the kept one's change, drift
+        elif best.passes_run == 1:  # pass 2 undone, fitted everywhere: where it repeats pass 1's change, drift
             pool = nb.take(min(DRIFT_POOL, plan.k_search))[0]
             best = best._replace(fit=drift.step_back(before.fit, best.fit, complete(), pool))
         if not more:

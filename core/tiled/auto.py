@@ -53,7 +53,7 @@ def run_auto_tile(root, tile: int, spec) -> dict:
     outputs, stats = [], np.zeros((tplan.passes + 2, 2))  # per pass: sum of turns, count; then the noisy points
     # fit p where later fits use it, and one ring more: an own point's border flag counts its valid neighbours
     reach = [rings_from(own, nb.indices, tplan.passes - p + 1) for p in range(tplan.passes + 1)]
-    fits, back = [], []  # the last three passes' fits; pass p - 1 stepped back where pass p drifts (core.drift)
+    fits, back = [], []  # the last three passes' fits; pass 1 stepped back where pass 2 drifts (core.drift)
     pool = nb.take(min(DRIFT_POOL, tplan.k_search))[0]
 
     def output(fit, nrm, p):
@@ -70,9 +70,9 @@ def run_auto_tile(root, tile: int, spec) -> dict:
         stats[p] = math.fsum(turn_angles(fit.normals, nrm, seen)), int(seen.sum())
         fits = (fits + [(complete(), nrm)])[-3:]
         outputs.append(output(*fits[-1], p))
-        if p >= 2:
+        if p == 2:
             (f0, _), (f1, n1), (f2, _) = fits
-            back.append(output(drift.step_back(f0, f1, f2, pool), n1, p - 1))
+            back.append(output(drift.step_back(f0, f1, f2, pool), n1, 1))
     stats[-1, 0] = np.count_nonzero(front.init.has_normal & ~front.scale.quiet & own)
     _save(store, tile, outputs, stats, wholecloud.samples_after(front, tplan, own), back)
     return {"tile": tile, "skipped": False, "points": int(own.sum()), "loaded": len(pts)}
@@ -96,8 +96,8 @@ def _empty():
 
 
 def _save(store, tile, outputs, stats, samples, back=()) -> None:
-    """Every pass's arrays (and pass p's stepped back, ``back[p - 1]``: ``.pass{p}b``), the
-    tile's shares of the whole-cloud reductions, then the marker."""
+    """Every pass's arrays (and pass 1's stepped back, ``back[0]``: ``.pass1b``), the tile's
+    shares of the whole-cloud reductions, then the marker."""
     named = [(f".pass{p}", arrays) for p, arrays in enumerate(outputs)]
     named += [(f".pass{p}b", arrays) for p, arrays in enumerate(back, start=1)]
     for name, arrays in named:
@@ -114,8 +114,8 @@ def kept_pass(store: TileStore, n_tiles: int, plan: EstimatePlan) -> int:
 
 
 def pass_choice(store: TileStore, n_tiles: int, plan: EstimatePlan) -> tuple[int, bool]:
-    """(the pass the in-memory estimate keeps, whether it steps back where the pass after
-    it drifts: memory does when that pass was undone and the kept one is not the first,
+    """(the pass the in-memory estimate keeps, whether it steps back where the 2nd pass
+    drifts: memory does when it keeps the 1st pass and undoes the 2nd,
     :func:`core.refinement.refine`): each pass's mean turn of the normals and the
     share of points NR fits with noise, summed over the tiles, through its :class:`PassRule`.
 
@@ -132,7 +132,7 @@ def pass_choice(store: TileStore, n_tiles: int, plan: EstimatePlan) -> tuple[int
     for p in range(rule.n_fits):
         change = (sums[p] / counts[p] if counts[p] else 0.0) if rule.measures else None
         keep, more = rule.step(p, change)
-        kept, back = (p, False) if keep else (kept, kept >= 1)
+        kept, back = (p, False) if keep else (kept, kept == 1)
         if not more:
             break
     return kept, back

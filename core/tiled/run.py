@@ -44,10 +44,10 @@ DEFAULT_MEMORY = "1.5GB"
 #: pass's result of its own points until the whole cloud chooses one): counted as this many
 #: more neighbours (24 bytes each) per pass. Measured: one tile of 300k points with the
 #: candidates (20,) of a large cloud peaked at 0.52 GB over the runtime, 1730 bytes a
-#: point = 250 + 24 x (20 + 4 x 11) with the 4 default passes. 16 since the tiles also keep
-#: each pass stepped back where the next one drifts (core.drift; passes 1 to 3: 3 x 144 bytes
-#: of rows a point, ~4.5 neighbours a pass) and three passes' fits (~310 bytes): estimated
-AUTO_PASS_NEIGHBOURS = 16
+#: point = 250 + 24 x (20 + 4 x 11) with the 4 default passes. 15 since the tiles also keep
+#: pass 1 stepped back where pass 2 drifts (core.drift: 144 bytes of rows a point) and three
+#: passes' fits (~310 bytes): ~4 neighbours a pass more, estimated, not measured
+AUTO_PASS_NEIGHBOURS = 15
 _VERSION = 4  # bumped when the work directory's layout changes: old ones are cleared
 
 
