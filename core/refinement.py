@@ -9,12 +9,12 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import passes
+from . import drift, passes
 from .frame import turned_over
 from .orientation import resettle
 from .passes import PassRule, few_fits
 from .stages import Fit, Initial, Scale, _empty_fit, _Fitter
-from .tuning import HOLD_TURN, PASS_DECAY, RESETTLE_K
+from .tuning import DRIFT_POOL, HOLD_TURN, PASS_DECAY, RESETTLE_K
 from .wide_neighbours import rows_at_least
 
 
@@ -35,17 +35,23 @@ def refine(pts, initial: Initial, outlier, nb, sc: Scale, plan, report) -> Refin
     their neighbours' fits after the first one. Where ``sc.on_jet`` the jet is the result
     (and its normal the neighbours' input); passes run only if NR fits at least
     PASS_MIN_SHARE of the points with noise (the pass rule judges by mean turns,
-    meaningless on a handful of points)."""
+    meaningless on a handful of points). When the rule keeps one pass and undoes the 2nd,
+    where the 2nd repeats the 1st's change of H the 1st drifted: those points report the
+    first fit's curvatures (:func:`core.drift.step_back`; the 2nd pass is then fitted at
+    every point)."""
     rule = PassRule(plan, few_fits(float((initial.has_normal & ~sc.quiet).mean()), plan))
     judged = passes.rule_sample(pts, plan.n_points) if plan.adaptive else None
-    best = None
+    best = before = None
     for p, fit, nrm, complete in fit_passes(pts, initial, outlier, nb, sc, plan, report, n_fits=rule.n_fits,
                                             first=judged):
         seen = fit.valid if judged is None else fit.valid & judged
         change = passes.mean_turn_deg(fit.normals, nrm, seen) if rule.measures else None
         keep, more = rule.step(p, change)
         if keep:
-            best = Refined(complete(), nrm, p)
+            before, best = best, Refined(complete(), nrm, p)
+        elif best.passes_run == 1:  # pass 2 undone, fitted everywhere: where it repeats pass 1's change, drift
+            pool = nb.take(min(DRIFT_POOL, plan.k_search))[0]
+            best = best._replace(fit=drift.step_back(before.fit, best.fit, complete(), pool))
         if not more:
             break
     return finish(best, sc, outlier, plan)

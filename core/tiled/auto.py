@@ -20,9 +20,11 @@ import numpy as np
 from ..estimate import _result as result_of, prepare  # the in-memory result's fields and flags
 from ..planning import EstimatePlan
 from ..passes import PassRule, few_fits, rule_sample, turn_angles
+from .. import drift
 from ..refinement import Refined, finish, fit_passes, settle_signs
 from ..stages import flags
 from .._progress import Progress
+from ..tuning import DRIFT_POOL
 from .halo import auto_chain, rings_from
 from .plan import TilePlan
 from .store import TileStore
@@ -51,18 +53,28 @@ def run_auto_tile(root, tile: int, spec) -> dict:
     outputs, stats = [], np.zeros((tplan.passes + 2, 2))  # per pass: sum of turns, count; then the noisy points
     # fit p where later fits use it, and one ring more: an own point's border flag counts its valid neighbours
     reach = [rings_from(own, nb.indices, tplan.passes - p + 1) for p in range(tplan.passes + 1)]
-    for p, fit, nrm, complete in fit_passes(pts, front.init, front.outlier, nb, front.scale, tplan, Progress(None),
-                                         n_fits=tplan.passes + 1, fitted=reach):
-        seen = fit.valid & judged
-        stats[p] = math.fsum(turn_angles(fit.normals, nrm, seen)), int(seen.sum())
-        best = finish(Refined(complete(), nrm, p), front.scale, front.outlier, tplan)
+    fits, back = [], []  # the last three passes' fits; pass 1 stepped back where pass 2 drifts (core.drift)
+    pool = nb.take(min(DRIFT_POOL, tplan.k_search))[0]
+
+    def output(fit, nrm, p):
+        best = finish(Refined(fit, nrm, p), front.scale, front.outlier, tplan)
         best, confidence = settle_signs(pts, best, nb, tplan, front.confidence)
         marks = flags(best.fit, front.scores, tplan, front.reference, nb=nb, confidence=confidence)
         res = result_of(pts, np.ones(len(pts), dtype=bool), tplan, stages=(front.init, best, front.scale, marks),
                         neighbours=nb, repaired=front.repaired)
-        outputs.append(_outputs(rec, res, nb, own, owner, exact, spec, front.init.normals))
+        return _outputs(rec, res, nb, own, owner, exact, spec, front.init.normals)
+
+    for p, fit, nrm, complete in fit_passes(pts, front.init, front.outlier, nb, front.scale, tplan, Progress(None),
+                                         n_fits=tplan.passes + 1, fitted=reach):
+        seen = fit.valid & judged
+        stats[p] = math.fsum(turn_angles(fit.normals, nrm, seen)), int(seen.sum())
+        fits = (fits + [(complete(), nrm)])[-3:]
+        outputs.append(output(*fits[-1], p))
+        if p == 2:
+            (f0, _), (f1, n1), (f2, _) = fits
+            back.append(output(drift.step_back(f0, f1, f2, pool), n1, 1))
     stats[-1, 0] = np.count_nonzero(front.init.has_normal & ~front.scale.quiet & own)
-    _save(store, tile, outputs, stats, wholecloud.samples_after(front, tplan, own))
+    _save(store, tile, outputs, stats, wholecloud.samples_after(front, tplan, own), back)
     return {"tile": tile, "skipped": False, "points": int(own.sum()), "loaded": len(pts)}
 
 
@@ -83,18 +95,28 @@ def _empty():
     return np.zeros(0, ROW_DTYPE), np.zeros(0, LINK_DTYPE), np.zeros(0, NODE_DTYPE)
 
 
-def _save(store, tile, outputs, stats, samples) -> None:
-    """Every pass's arrays, the tile's shares of the whole-cloud reductions, then the marker."""
-    for p, arrays in enumerate(outputs):
+def _save(store, tile, outputs, stats, samples, back=()) -> None:
+    """Every pass's arrays (and pass 1's stepped back, ``back[0]``: ``.pass1b``), the tile's
+    shares of the whole-cloud reductions, then the marker."""
+    named = [(f".pass{p}", arrays) for p, arrays in enumerate(outputs)]
+    named += [(f".pass{p}b", arrays) for p, arrays in enumerate(back, start=1)]
+    for name, arrays in named:
         for part, arr in zip(("", ".links", ".nodes"), arrays):
-            store.save_array(store.result_path(tile, f".pass{p}{part}"), arr)
+            store.save_array(store.result_path(tile, f"{name}{part}"), arr)
     wholecloud.save_samples(store, tile, "after", samples)
     store.save_array(store.result_path(tile, ".stats"), stats)
     store.mark_finished(tile)
 
 
 def kept_pass(store: TileStore, n_tiles: int, plan: EstimatePlan) -> int:
-    """The pass the in-memory estimate keeps: each pass's mean turn of the normals and the
+    """The pass the in-memory estimate keeps (:func:`pass_choice`)."""
+    return pass_choice(store, n_tiles, plan)[0]
+
+
+def pass_choice(store: TileStore, n_tiles: int, plan: EstimatePlan) -> tuple[int, bool]:
+    """(the pass the in-memory estimate keeps, whether it steps back where the 2nd pass
+    drifts: memory does when it keeps the 1st pass and undoes the 2nd,
+    :func:`core.refinement.refine`): each pass's mean turn of the normals and the
     share of points NR fits with noise, summed over the tiles, through its :class:`PassRule`.
 
     The sums are exact (``math.fsum``) where memory sums pairwise, so a mean may differ in
@@ -106,23 +128,23 @@ def kept_pass(store: TileStore, n_tiles: int, plan: EstimatePlan) -> int:
     sums, counts = zip(*[(math.fsum(s[p, 0] for s in stats), sum(int(s[p, 1]) for s in stats))
                          for p in range(plan.passes + 1)])
     rule = PassRule(plan, few_fits(noisy / plan.n_points, plan))
-    kept = 0
+    kept, back = 0, False
     for p in range(rule.n_fits):
         change = (sums[p] / counts[p] if counts[p] else 0.0) if rule.measures else None
         keep, more = rule.step(p, change)
-        kept = p if keep else kept
+        kept, back = (p, False) if keep else (kept, kept == 1)
         if not more:
             break
-    return kept
+    return kept, back
 
 
 class PassView(TileStore):
     """The run's store seen through one pass: its results are the tiles' results (what
     :mod:`.signs` and :mod:`.assemble` read)."""
 
-    def __init__(self, root, kept: int):
+    def __init__(self, root, kept: int, back: bool = False):
         super().__init__(root)
-        self.kept = kept
+        self.kept, self.back = kept, back
 
     def result_path(self, tile: int, part: str = ""):
-        return super().result_path(tile, f".pass{self.kept}{part}")
+        return super().result_path(tile, f".pass{self.kept}{'b' if self.back else ''}{part}")

@@ -14,12 +14,12 @@ import numpy as np
 from .._progress import Progress
 from .._validate import check_int
 from ..methods import check_options, get_method
-from ..tuning import MAX_PASSES
+from ..tuning import DRIFT_POOL, DRIFT_SHARE, MAX_PASSES
 from . import assemble, binning, engine, signs
 from .source import open_source
 from .store import TileStore, directory_for
 from . import wholecloud
-from .auto import PassView, kept_pass, run_auto_tile
+from .auto import PassView, pass_choice, run_auto_tile
 from .task import TileSpec, auto_plan
 
 #: memory of an in-memory estimate per point at integer k: ~250 bytes of arrays per point
@@ -44,8 +44,10 @@ DEFAULT_MEMORY = "1.5GB"
 #: pass's result of its own points until the whole cloud chooses one): counted as this many
 #: more neighbours (24 bytes each) per pass. Measured: one tile of 300k points with the
 #: candidates (20,) of a large cloud peaked at 0.52 GB over the runtime, 1730 bytes a
-#: point = 250 + 24 x (20 + 4 x 11) with the 4 default passes
-AUTO_PASS_NEIGHBOURS = 11
+#: point = 250 + 24 x (20 + 4 x 11) with the 4 default passes. 15 since the tiles also keep
+#: pass 1 stepped back where pass 2 drifts (core.drift: 144 bytes of rows a point) and three
+#: passes' fits (~310 bytes): ~4 neighbours a pass more, estimated, not measured
+AUTO_PASS_NEIGHBOURS = 15
 _VERSION = 4  # bumped when the work directory's layout changes: old ones are cleared
 
 
@@ -116,7 +118,8 @@ def _auto_rules(spec):
     if spec.k != "auto":
         return None
     plan = auto_plan(spec)
-    return repr((plan.candidates, plan.k_initial, sorted(plan.options.items()), plan.passes, plan.initial))
+    return repr((plan.candidates, plan.k_initial, sorted(plan.options.items()), plan.passes, plan.initial,
+                 DRIFT_SHARE, DRIFT_POOL))
 
 
 def _memory_k(spec) -> int:
@@ -241,9 +244,9 @@ def _estimate(store, plan, sizes, spec, tasks, report):
     if not auto:
         return spec, store, params
     whole = auto_plan(spec)
-    kept = kept_pass(store, plan.n_tiles, whole)
+    kept, back = pass_choice(store, plan.n_tiles, whole)
     params.update(dict(spec.fixed), passes_run=kept, **wholecloud.reduce(store, plan.n_tiles, whole, "after"))
-    return spec, PassView(store.root, kept), params
+    return spec, PassView(store.root, kept, back), params
 
 
 def _output(src, output) -> pathlib.Path:

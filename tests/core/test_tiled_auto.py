@@ -86,6 +86,21 @@ def test_a_thin_rims_fold_test_is_the_whole_clouds(tmp_path, small_candidates):
     _same(tmp_path / "out.ply", mem)
 
 
+def test_tiles_step_back_where_memory_does(tmp_path):
+    """The chirp at 0.1 spacing of noise keeps one pass and undoes the 2nd, which repeats the
+    1st's change of H on its tightening ridges: memory reports the first fit's curvatures
+    there (core.drift); the tiles write pass 1 stepped back and the run reads it."""
+    pts = noise.add_noise(shapes.chirp(6000, seed=0).points, 0.1, seed=17)
+    mem = core.estimate(pts)
+    assert mem.params["passes_run"] == 1
+    run = estimate_tiled(pts, tmp_path / "out.ply", tile_points=1500, workers=0, workdir=tmp_path / "work",
+                         keep_workdir=True)
+    assert run.n_tiles >= 4
+    plan = task.auto_plan(task.TileSpec(k="auto", method="nr", passes=4, orientation="propagate", n_points=len(pts)))
+    assert auto.pass_choice(auto.TileStore(tmp_path / "work"), run.n_tiles, plan) == (1, True)
+    _same(tmp_path / "out.ply", mem)
+
+
 def test_the_candidates_come_from_the_whole_cloud(small_candidates):
     spec = task.TileSpec(k="auto", method="nr", passes=4, orientation="propagate", n_points=8000)
     assert task.auto_plan(spec, 500).candidates == core.plan(8000).candidates == (20, 28)
