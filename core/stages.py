@@ -23,6 +23,11 @@ from .wide_neighbours import search_in_spatial_order
 from .tuning import CREASE_NOISE, CREASE_RATIO, CREASE_SPREAD, JET_SCORE, OUTLIER_FLOOR, SEARCH_WIDTH
 
 _CHUNK = 32_768
+#: a fit's chunk holds at least _CHUNK centres, more when their neighbourhoods are narrow:
+#: up to this many (centre, neighbour) entries, the most a chunk of _CHUNK held at k = 56
+#: (k = 15: 122k centres, so 100k points are one chunk, where 4 chunks cost 4 launches of each
+#: kernel and 4 rounds of numpy between them; the results do not depend on the chunks)
+_CHUNK_ENTRIES = _CHUNK * 56
 
 
 class Initial(NamedTuple):
@@ -281,13 +286,18 @@ class _Fitter(NamedTuple):
         """Fit the points with ``has_normal`` (and h > 0) to the normals ``nrm``, into ``out``."""
         n = len(self.pts)
         usable = has_normal & (self.h > 0)
-        for start in range(0, n, _CHUNK):
-            c = np.arange(start, min(n, start + _CHUNK))
-            c = c[usable[c]]
+        step = max(_CHUNK, _CHUNK_ENTRIES // max(int(self.kc.max()), 1)) if n else _CHUNK
+        for start in range(0, n, step):
+            stop = min(n, start + step)
+            whole = bool(usable[start:stop].all()) and isinstance(self.idx, np.ndarray)
+            c = np.arange(start, stop) if whole else start + np.flatnonzero(usable[start:stop])
+            rows = slice(start, stop) if whole else c  # views of whole chunks, not copies
             if len(c):
-                chunk = Chunk.build(self.pts, nrm, self.idx[c], self.h[c], c, self.kc[c])
+                idx = np.ascontiguousarray(self.idx[rows])
+                idx.setflags(write=False)  # one array type for the kernels, view or copy
+                chunk = Chunk.build(self.pts, nrm, idx, self.h[rows], c, self.kc[rows])
                 _fit_chunk(chunk, self.method, self.options, out)
-            report(min(n, start + _CHUNK) / n, self.method.name)
+            report(stop / n, self.method.name)
 
 
 def _fit_chunk(chunk, method, opts, out: Fit) -> None:
