@@ -5,8 +5,10 @@ method of Cheng & Zhang (2009) and the baselines it is compared with. numpy/scip
 """
 
 from ._numba_cache import configure as _configure_numba_cache
+from ._threads import configure as _configure_threads
 
 _configure_numba_cache()  # before any kernel is compiled: a read-only install must still import
+_configure_threads()  # before the first parallel loop loads OpenMP: idle workers sleep, not spin
 
 from . import io, metrics, noise, shapes  # noqa: E402
 from ._progress import Cancelled  # noqa: E402

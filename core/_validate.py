@@ -20,7 +20,7 @@ def as_points(points, *, name: str = "points", drop_nonfinite: bool = False):
     if arr.ndim != 2 or arr.shape[1] != 3:
         raise ValueError(f"{name} must have shape (N, 3), got shape {arr.shape}")
     arr = np.array(arr, dtype=np.float64, order="C", copy=True)
-    finite = np.isfinite(arr).all(axis=1)
+    finite = np.ones(len(arr), dtype=bool) if np.isfinite(arr).all() else np.isfinite(arr).all(axis=1)
     if not finite.all():
         bad = int((~finite).sum())
         if not drop_nonfinite:

@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._validate import as_normals, check_int
+from .kernels.bounds import bounds
 from .methods import check_options, get_method
 from .result import CurvatureResult
 
@@ -31,7 +32,8 @@ def reason(points: np.ndarray, min_k: int) -> str | None:
     n = len(points)
     if n < min_k:
         return f"{n} points are fewer than the {min_k} the method needs for one fit"
-    lo, hi = points.min(axis=0), points.max(axis=0)
+    lo, hi = np.empty(3), np.empty(3)
+    bounds(np.ascontiguousarray(points, dtype=np.float64), lo, hi)  # points.min(axis=0), points.max(axis=0)
     size = float(np.abs(np.concatenate([lo, hi])).max())
     if size > MAX_COORD:
         return f"coordinates up to {size:.3g} exceed {MAX_COORD:g} (squared distances overflow); rescale the cloud"

@@ -130,7 +130,7 @@ def estimate(
     front = front._replace(scale=front.scale._replace(jets=None))  # merged into best: 86 MiB less at 1M points
     best, confidence = settle_signs(front.pts, best, front.nb, plan, front.confidence)
     marks = flags(best.fit, front.scores, plan, front.reference, nb=front.nb, confidence=confidence)
-    stages = front.order.to_caller((front.init, best, front.scale, marks))
+    stages = front.order.to_caller(_reported((front.init, best, front.scale, marks)))
     nb = stage_cache.caller_neighbours(cache, front.order, front.nb, pts)  # a cache keeps the sorted graph
     report(1.0, "done")
     return _result(pts, kept, plan, stages=stages, neighbours=nb, repaired=front.repaired)
@@ -201,6 +201,19 @@ def _plan(plan, n, asked, normals_given) -> EstimatePlan:
     return plan
 
 
+def _reported(stages):
+    """The stages' outputs (initial normals, refined fit, k per point, flags) cut to the
+    arrays :func:`_result` reads, the result's normals already chosen (a fit's where valid,
+    else its input's): only these go back to the caller's order (the initial normals, the
+    fit's residuals, its input normals and the scale's ``k`` and ``quiet`` were moved there
+    too and dropped)."""
+    init, best, kc, marks = stages
+    fit = best.fit
+    chosen = np.where(fit.valid[:, None], fit.normals, best.input_normals)
+    best = best._replace(fit=fit._replace(normals=chosen, rms=None, spread=None), input_normals=None)
+    return init._replace(normals=None, has_normal=None), best, kc._replace(k=None, quiet=None, jets=None), marks
+
+
 def _result(pts, kept, plan, *, stages, neighbours, repaired) -> CurvatureResult:
     """The result and its params from the stages' outputs (initial normals, refined fit,
     k per point, flags); ``repaired``: the counts of the given normals' repair, or None
@@ -218,7 +231,9 @@ def _result(pts, kept, plan, *, stages, neighbours, repaired) -> CurvatureResult
     )
     degree = np.where(kc.on_jet, JET_DEGREE if kc.jet_degree is None else kc.jet_degree, plan.options.get("degree", -1))
     return CurvatureResult(
-        points=pts, normals=np.where(fit.valid[:, None], fit.normals, best.input_normals), k1=fit.k1, k2=fit.k2,
+        points=pts, normals=fit.normals if best.input_normals is None else np.where(fit.valid[:, None], fit.normals,
+                                                                                  best.input_normals),
+        k1=fit.k1, k2=fit.k2,
         e1=fit.e1, e2=fit.e2, valid=fit.valid, k_point=kc.k_point, degree_point=degree, outlier_score=marks.outlier_score,
         crease=marks.crease, _border=marks.border, orientation_confidence=marks.orientation_confidence,
         method=plan.method.name, k=plan.k, passes=plan.passes, params=params, neighbours=neighbours,

@@ -196,11 +196,18 @@ _MIX = np.array([0x9E3779B97F4A7C15, 0xC2B2AE3D27D4EB4F, 0x165667B19E3779F9], dt
 
 
 def _largest_group_bound(pts) -> int:
-    """An upper bound on the size of the largest group of identical points: the largest
-    group of equal hashes of their coordinates (a sort of N integers, 30x faster than
-    sorting the points by their three coordinates; a collision only overestimates)."""
+    """An upper bound on the size of the largest group of identical points, from a hash
+    of their coordinates (a collision only overestimates): the largest of ~2N buckets of
+    the hashes' top bits (a count, no sort), and where that exceeds :data:`MAX_DUPLICATES`
+    the largest group of equal hashes (a sort of N integers, 30x faster than sorting the
+    points by their three coordinates), so the search is chosen as by the sort alone
+    (100k torus: 7.8 -> 2.0 CPU ms; 1M: 88 -> 25)."""
     bits = (pts + 0.0).view(np.uint64)  # + 0.0: -0.0 and 0.0 are the same coordinate
     h = bits[:, 0] * _MIX[0] ^ bits[:, 1] * _MIX[1] ^ bits[:, 2] * _MIX[2]
+    shift = np.uint64(64 - max(int(2 * len(h) - 1).bit_length(), 1))  # the top bits mix every input bit
+    bound = int(np.bincount((h >> shift).astype(np.int64)).max())
+    if bound <= MAX_DUPLICATES:
+        return bound
     h.sort()
     new = np.ones(len(h) + 1, dtype=bool)
     np.not_equal(h[1:], h[:-1], out=new[1:-1])

@@ -94,7 +94,9 @@ def orient(points, normals, idx, mode="outward", *, ok=None, rank=None, trust=Fa
     pts = np.ascontiguousarray(points, dtype=np.float64)
     nrm = np.array(normals, dtype=np.float64, order="C", copy=True)
     ok = np.isfinite(nrm).all(axis=1) if ok is None else np.asarray(ok, dtype=bool)
-    graph = np.ascontiguousarray(idx[:, :ORIENT_K], dtype=np.int64)
+    graph = np.asarray(idx)[:, :ORIENT_K]  # a view in its own int type (as resettle's): no copy of the graph
+    if graph.dtype not in (np.int32, np.int64):
+        graph = graph.astype(np.int64)
     n = len(pts)
     labels = np.where(ok, 0, -1)
     rank = np.arange(n) if rank is None else np.asarray(rank, dtype=np.int64)
@@ -105,9 +107,9 @@ def orient(points, normals, idx, mode="outward", *, ok=None, rank=None, trust=Fa
     elif mode != "keep":
         rows = np.empty(n, dtype=np.int64)
         rows[rank] = np.arange(n)
-        order = kern.strongest_first(ev, first, SORT_LEVELS, rows)
+        edges = kern.strongest_first(ev, first, SORT_LEVELS, rows, graph)
         flip = np.zeros(n, dtype=np.int8)
-        roots = kern.voted_signs(order, graph, ev, flip, rank, VOTE_SIZE, VOTE_GROWTH)
+        roots = kern.voted_signs(edges, n, flip, rank, VOTE_SIZE, VOTE_GROWTH)
         sign[flip == 1] = -1.0
         labels = np.where(ok, _numbered(roots), -1)
         _global_signs(pts, nrm * sign[:, None], labels, mode, sign, rank)

@@ -23,6 +23,11 @@ from .wide_neighbours import search_in_spatial_order
 from .tuning import CREASE_NOISE, CREASE_RATIO, CREASE_SPREAD, JET_SCORE, OUTLIER_FLOOR, SEARCH_WIDTH
 
 _CHUNK = 32_768
+#: a fit's chunk holds at least _CHUNK centres, more when their neighbourhoods are narrow:
+#: up to this many (centre, neighbour) entries, the most a chunk of _CHUNK held at k = 56
+#: (k = 15: 122k centres, so 100k points are one chunk, where 4 chunks cost 4 launches of each
+#: kernel and 4 rounds of numpy between them; the results do not depend on the chunks)
+_CHUNK_ENTRIES = _CHUNK * 56
 
 
 class Initial(NamedTuple):
@@ -307,12 +312,13 @@ class _Fitter(NamedTuple):
         n = len(self.pts)
         usable = has_normal & (self.h > 0)
         whole = isinstance(self.idx, np.ndarray) and self.idx.flags.c_contiguous
-        for start in range(0, n, _CHUNK):
-            c = np.arange(start, min(n, start + _CHUNK))
-            c = c[usable[c]]
+        step = max(_CHUNK, _CHUNK_ENTRIES // max(int(self.kc.max()), 1)) if n else _CHUNK
+        for start in range(0, n, step):
+            stop = min(n, start + step)
+            c = start + np.flatnonzero(usable[start:stop])
             if len(c):
                 _fit_chunk(self._chunk(nrm, c, whole), self.method, self.options, out)
-            report(min(n, start + _CHUNK) / n, self.method.name)
+            report(stop / n, self.method.name)
 
     def _chunk(self, nrm, c, whole):
         """The :class:`Chunk` of centres ``c``: on the whole graph by row (``whole``: the NF kernel reads

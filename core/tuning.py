@@ -272,3 +272,15 @@ PATCH_MAX = 1000
 #: ~0.4; a face's ~0.8) chained a flipped patch of its top into the bottom (one patch of 19 933
 #: points, seed 9); at 0.6 the patch is its own 55 points and flips
 PATCH_TRUST = 0.6
+
+# ----------------------------------------------------------------------------- threads
+
+#: OpenMP's wait policy for numba's worker threads when the environment sets none
+#: (core._threads; numba's threading layer is libgomp here). libgomp's default lets an idle
+#: worker spin ~300k times after every parallel loop before it sleeps, so each serial stretch
+#: between two loops (numpy, the spanning forest, cKDTree's build) also burnt the other core.
+#: One NR k = 15 estimate of a 100k torus, CPU s with 2 threads: 0.96 spinning, 0.71 passive
+#: (1 thread: 0.65). Against the bare kNN search, same process, median of 8 interleaved pairs,
+#: load 10 on 2 cores: wall 2.05 / 2.47 -> 1.51 / 1.90, CPU 1.89 / 2.20 -> 1.40 / 1.65 (two
+#: processes each). The results are the same bits (the policy only decides how threads wait).
+OMP_WAIT_POLICY = "PASSIVE"

@@ -125,12 +125,16 @@ def _find(parent, parity, x):
 
 
 @njit(**_OPTS)
-def strongest_first(evidence, use, levels, rows):
-    """Indices of the non-zero entries of ``evidence`` (N, k) where ``use``, flattened, by
+def strongest_first(evidence, use, levels, rows, idx):
+    """The non-zero entries of ``evidence`` (N, k) where ``use``, as the edge list
+    ``(ei, ej, ew)`` (the row i, its neighbour ``idx[i, m]`` and the evidence) by
     decreasing |evidence| to within 1 / ``levels`` (a counting sort: linear time, where a
     comparison sort of 10^7 edges costs more than the whole spanning forest); within a
     level, row by row in the order ``rows`` (the caller's order of the points), so the
-    forest does not depend on the order of the points in memory."""
+    forest does not depend on the order of the points in memory. The list is what
+    :func:`voted_signs` reads, in order: written here, where each row's ``idx`` and
+    ``evidence`` are read in one go, it spares the forest two scattered reads per edge
+    (100k torus, one thread: forest 0.075 -> 0.028 CPU s, this sort +0.004)."""
     n, k = evidence.shape
     count = np.zeros(levels + 1, dtype=np.int64)
     for i in range(n):
@@ -140,15 +144,18 @@ def strongest_first(evidence, use, levels, rows):
     start = np.zeros(levels + 1, dtype=np.int64)
     for b in range(1, levels + 1):
         start[b] = start[b - 1] + count[b - 1]
-    order = np.empty(start[levels] + count[levels], dtype=np.int64)
+    total = start[levels] + count[levels]
+    ei, ej, ew = np.empty(total, dtype=np.int64), np.empty(total, dtype=np.int64), np.empty(total)
     for t in range(n):
         i = rows[t]
         for m in range(k):
-            if evidence[i, m] != 0.0 and use[i, m]:
-                b = levels - min(levels - 1, int(abs(evidence[i, m]) * levels))
-                order[start[b]] = i * k + m
-                start[b] += 1
-    return order
+            e = evidence[i, m]
+            if e != 0.0 and use[i, m]:
+                b = levels - min(levels - 1, int(abs(e) * levels))
+                s = start[b]
+                ei[s], ej[s], ew[s] = i, idx[i, m], e
+                start[b] = s + 1
+    return ei, ej, ew
 
 
 @njit(**_OPTS, parallel=True)
@@ -212,17 +219,18 @@ def _join(parent, parity, size, a, b, s):
 
 
 @njit(**_OPTS)
-def voted_signs(order, idx, evidence, flip, rank, min_size, growth):
+def voted_signs(edges, n, flip, rank, min_size, growth):
     """Maximum spanning forest (Kruskal) of the evidence graph with a parity union-find,
     where two parts both of at least ``min_size`` points are not joined by their strongest
     edge alone.
 
-    Edges (the flat indices e of ``idx`` (N, k) and ``evidence`` (N, k), edge e joins
-    row e // k and ``idx.flat[e]``) are taken in ``order`` (decreasing |evidence|); an
-    edge joining two parts fixes their relative sign (flip when its evidence is
+    ``edges`` = (ei, ej, ew) from :func:`strongest_first`: edge t joins points ei[t] and
+    ej[t] of the N = ``n`` with the evidence ew[t], taken in that order (decreasing
+    |evidence|); an edge joining two parts fixes their relative sign (flip when its evidence is
     negative). Writes ``flip`` (1: flip the normal) and returns the component root of
     every node. Edges between two parts of ``min_size`` points or more (``min_size`` > N:
-    none, the plain forest) are set aside, and once the pass is
+    none, the plain forest) are set aside (into the edge list's own entries already read: the
+    list is overwritten), and once the pass is
     over, the evidence of all set-aside edges between the same two parts is summed (signed
     by the parts' current parities) and the parts are joined strongest sum first, parts of
     ``min_size x growth`` points again by a sum, and so on. Kruskal's one strongest edge
@@ -230,25 +238,22 @@ def voted_signs(order, idx, evidence, flip, rank, min_size, growth):
     met along its rim, a tube's halves) one wrong edge would flip a whole side, and the
     vote of the whole seam does not. ``rank``: each point's index in the caller's order
     (the sums are taken in an order that does not depend on the order in memory)."""
-    n, k = idx.shape
+    ea, eb, ew = edges
     parent = np.arange(n)
     parity = np.zeros(n, dtype=np.int8)
     size = np.ones(n, dtype=np.int64)
-    ea = np.empty(len(order), dtype=np.int64)
-    eb = np.empty(len(order), dtype=np.int64)
-    ew = np.empty(len(order))
     nd = 0
-    for e in order:
-        i, m = e // k, e % k
-        ri, pi = _find(parent, parity, i)
-        rj, pj = _find(parent, parity, idx[i, m])
+    for t in range(len(ea)):
+        ri, pi = _find(parent, parity, ea[t])
+        rj, pj = _find(parent, parity, eb[t])
         if ri == rj:
             continue
-        if min(size[ri], size[rj]) >= min_size:
-            ea[nd], eb[nd], ew[nd] = ri, rj, evidence[i, m] * (1.0 - 2.0 * (pi ^ pj))
+        w = ew[t]
+        if min(size[ri], size[rj]) >= min_size:  # nd <= t: entry t has been read
+            ea[nd], eb[nd], ew[nd] = ri, rj, w * (1.0 - 2.0 * (pi ^ pj))
             nd += 1
             continue
-        _join(parent, parity, size, ri, rj, pi ^ pj ^ (1 if evidence[i, m] < 0.0 else 0))
+        _join(parent, parity, size, ri, rj, pi ^ pj ^ (1 if w < 0.0 else 0))
     limit = min_size
     while nd > 0:
         limit *= growth

@@ -130,3 +130,19 @@ def test_thin_but_honest_cloud_is_not_called_a_line():
     t, a = rng.uniform(0, 1000, 3000), rng.uniform(0, 2 * np.pi, 3000)
     tube = np.c_[t, np.cos(a), np.sin(a)]  # 1000:1, still a surface
     assert "degenerate" not in core.estimate(tube, k=15).params
+
+
+def test_bounds_kernel_is_numpys_min_and_max():
+    """core.kernels.bounds (the degenerate check's bounding box in one pass) gives
+    ``points.min(axis=0)``, ``points.max(axis=0)``: on one point, on signed values and on
+    extremes of the float range."""
+    from core.kernels.bounds import bounds
+
+    rng = np.random.default_rng(3)
+    clouds = [rng.normal(size=(1, 3)), rng.normal(size=(1000, 3)) * [1e-300, 1.0, 1e300],
+              np.array([[0.0, -0.0, 5.0], [-1.0, 2.0, 5.0], [3.0, -7.0, 5.0]])]
+    for pts in clouds:
+        lo, hi = np.empty(3), np.empty(3)
+        bounds(pts, lo, hi)
+        np.testing.assert_array_equal(lo, pts.min(axis=0))
+        np.testing.assert_array_equal(hi, pts.max(axis=0))

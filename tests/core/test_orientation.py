@@ -136,13 +136,15 @@ def test_large_parts_are_joined_by_their_whole_seam(part, flipped):
     assert 5 < VOTE_SIZE <= 20
     idx, ev = _seam_graph(part)
     n = len(idx)
-    order = kern.strongest_first(ev, np.ones(ev.shape, dtype=np.bool_), 4096, np.arange(n))
+    def edges():  # voted_signs overwrites the list
+        return kern.strongest_first(ev, np.ones(ev.shape, dtype=np.bool_), 4096, np.arange(n), idx)
+
     flip = np.zeros(n, dtype=np.int8)
-    kern.voted_signs(order, idx, ev, flip, np.arange(n), VOTE_SIZE, VOTE_GROWTH)
+    kern.voted_signs(edges(), n, flip, np.arange(n), VOTE_SIZE, VOTE_GROWTH)
     assert np.all(flip[:part] == flip[0]) and np.all(flip[part:] == flip[part])
     assert (flip[0] != flip[part]) == flipped
     plain = np.zeros(n, dtype=np.int8)
-    kern.voted_signs(order, idx, ev, plain, np.arange(n), n + 1, VOTE_GROWTH)  # no part large enough: Kruskal
+    kern.voted_signs(edges(), n, plain, np.arange(n), n + 1, VOTE_GROWTH)  # no part large enough: Kruskal
     assert plain[0] != plain[part]  # the single-edge forest flips either way
 
 
