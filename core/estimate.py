@@ -215,9 +215,10 @@ def _reported(stages):
 
 
 def _result(pts, kept, plan, *, stages, neighbours, repaired) -> CurvatureResult:
-    """The result and its params from the stages' outputs (initial normals, refined fit,
-    k per point, flags); ``repaired``: the counts of the given normals' repair, or None
-    when no normals were given."""
+    """The result and its params from the stages' outputs as :func:`_reported` cut them
+    (initial normals, refined fit with the result's normals, k per point, flags);
+    ``repaired``: the counts of the given normals' repair, or None when no normals were
+    given."""
     init, best, kc, marks = stages
     normals_given = repaired is not None
     fit = best.fit
@@ -231,10 +232,7 @@ def _result(pts, kept, plan, *, stages, neighbours, repaired) -> CurvatureResult
     )
     degree = np.where(kc.on_jet, JET_DEGREE if kc.jet_degree is None else kc.jet_degree, plan.options.get("degree", -1))
     return CurvatureResult(
-        points=pts, normals=fit.normals if best.input_normals is None else np.where(fit.valid[:, None], fit.normals,
-                                                                                  best.input_normals),
-        k1=fit.k1, k2=fit.k2,
-        e1=fit.e1, e2=fit.e2, valid=fit.valid, k_point=kc.k_point, degree_point=degree, outlier_score=marks.outlier_score,
+        points=pts, normals=fit.normals, k1=fit.k1, k2=fit.k2, e1=fit.e1, e2=fit.e2, valid=fit.valid, k_point=kc.k_point, degree_point=degree, outlier_score=marks.outlier_score,
         crease=marks.crease, _border=marks.border, orientation_confidence=marks.orientation_confidence,
         method=plan.method.name, k=plan.k, passes=plan.passes, params=params, neighbours=neighbours,
     )

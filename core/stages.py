@@ -152,8 +152,7 @@ def initial_normals(pts, nb, plan, outlier, report) -> Initial:
         nrm, _ = jet_normals(pts, nrm, ok, idx, dist, progress=report.sub(0.4, 0.43))
     if k_init == plan.k_initial:  # only outliers left out: no wide plane to lie across a fold
         return Initial(nrm, ok, noise, k_init)
-    clean = ~outlier[nb.take(k_init)[0]].any(axis=1) if plan.robust and outlier.any() else None
-    nrm, typical = unfolded(nrm, small, idx, plan.fold_typical, clean)
+    nrm, typical = unfolded(nrm, small, *fold_spreads(small, idx, nb, k_init, outlier, plan), plan.fold_typical)
     return Initial(nrm, ok, noise, k_init, typical)
 
 
@@ -172,30 +171,36 @@ def _small_normals(pts, nrm, ok, idx_p, dist_p, jet, plan):
     return jet if jet is not None else jet_normals(pts, nrm, ok, idx_p, dist_p)[0]
 
 
-def fold_spread(small, idx) -> np.ndarray:
-    """Per point, how well the ``small`` normals of its ``idx`` neighbours agree (the
-    largest eigenvalue of their unsigned scatter, :func:`core.kernels.normal_spread`)."""
+def fold_spreads(small, idx, nb, k_init, outlier, plan) -> tuple[np.ndarray, np.ndarray]:
+    """``(spread, clean)`` per point: how well the ``small`` normals of its ``idx``
+    neighbours agree (the largest eigenvalue of their unsigned scatter,
+    :func:`core.kernels.normal_spread`), and whether it counts towards the typical spread
+    (:func:`typical_spread`): in robust mode, no known outlier among its ``k_init``
+    nearest (its robust row reaches past them, and an outlier spoils the small normals
+    around it); every point otherwise. A tiled run samples the same pair."""
     spread = np.empty(len(idx))
     kernels.normal_spread(small, idx, spread)
-    return spread
+    if plan.robust and outlier.any():
+        return spread, ~outlier[nb.take(k_init)[0]].any(axis=1)
+    return spread, np.ones(len(idx), dtype=bool)
 
 
-def typical_spread(spread, clean=None) -> float:
-    """The median :func:`fold_spread` over the points with no outlier among the rows
-    (``clean``, None: all), or over all points if none is clean (0.0 if none is finite)."""
-    if clean is not None and clean.any():
+def typical_spread(spread, clean) -> float:
+    """The median spread over the ``clean`` points, or over all points if none is clean
+    (0.0 if none is finite)."""
+    if clean.any():
         spread = spread[clean]
     return float(np.nanmedian(spread)) if np.isfinite(spread).any() else 0.0
 
 
-def unfolded(wide, small, idx, typical=None, clean=None):
+def unfolded(wide, small, spread, clean, typical=None):
     """(``wide`` normals, but ``small``'s (the ``plan.k_initial`` neighbours') where the
-    small normals of the ``idx`` neighbours disagree with each other well beyond what the
-    cloud's noise makes them do (:func:`fold_spread` below :data:`core.tuning.FOLD_SPREAD`
-    x ``typical``, by default :func:`typical_spread` of this cloud; a tiled run fixes the
-    whole cloud's): a fold, the rim of a part a few spacings thick, where a wide PCA plane
-    lies across both faces and the side between them; the ``typical`` spread used)."""
-    spread = fold_spread(small, idx)
+    small normals of a point's wide neighbours disagree with each other well beyond what
+    the cloud's noise makes them do (``spread``, :func:`fold_spreads`, below
+    :data:`core.tuning.FOLD_SPREAD` x ``typical``, by default :func:`typical_spread` of
+    this cloud; a tiled run fixes the whole cloud's): a fold, the rim of a part a few
+    spacings thick, where a wide PCA plane lies across both faces and the side between
+    them; the ``typical`` spread used)."""
     if typical is None:
         typical = typical_spread(spread, clean)
     folded = (spread < tuning.FOLD_SPREAD * typical) & np.isfinite(small[:, 0])

@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from ..estimate import _result as result_of, prepare  # the in-memory result's fields and flags
+from ..estimate import _reported, _result as result_of, prepare  # the in-memory result's fields and flags
 from ..planning import EstimatePlan
 from ..passes import PassRule, few_fits, rule_sample, turn_angles
 from .. import drift
@@ -60,8 +60,8 @@ def run_auto_tile(root, tile: int, spec) -> dict:
         best = finish(Refined(fit, nrm, p), front.scale, front.outlier, tplan)
         best, confidence = settle_signs(pts, best, nb, tplan, front.confidence)
         marks = flags(best.fit, front.scores, tplan, front.reference, nb=nb, confidence=confidence)
-        res = result_of(pts, np.ones(len(pts), dtype=bool), tplan, stages=(front.init, best, front.scale, marks),
-                        neighbours=nb, repaired=front.repaired)
+        stages = _reported((front.init, best, front.scale, marks))
+        res = result_of(pts, np.ones(len(pts), dtype=bool), tplan, stages=stages, neighbours=nb, repaired=front.repaired)
         return _outputs(rec, res, nb, own, owner, exact, spec, front.init.normals)
 
     for p, fit, nrm, complete in fit_passes(pts, front.init, front.outlier, nb, front.scale, tplan, Progress(None),

@@ -26,7 +26,7 @@ import numpy as np
 
 from ..normals import pca_normals
 from ..scale import initial_k
-from ..stages import _small_normals, fold_spread, initial_rows, noise_samples, outlier_scores
+from ..stages import _small_normals, fold_spreads, initial_rows, noise_samples, outlier_scores
 from ..tuning import OUTLIER_SCORE
 from .plan import TilePlan
 from .store import TileStore
@@ -72,18 +72,17 @@ def _noise_samples(ctx):
 
 
 def _fold_samples(ctx):
-    """The fold test's spreads (:func:`core.stages.unfolded`) of the tile's own points, at
-    the initial scale the whole cloud's noise chose, apart for those with an outlier among
-    those neighbours (their robust rows reach further than the tile loads: exact only where
-    the cloud has clean points, which the median then takes alone)."""
+    """The fold test's spreads (:func:`core.stages.fold_spreads`) of the tile's own points,
+    at the initial scale the whole cloud's noise chose, apart for those with an outlier
+    among those neighbours (their robust rows reach further than the tile loads: exact only
+    where the cloud has clean points, which the median then takes alone)."""
     pts, nb, plan, own = ctx.pts, ctx.nb, ctx.plan, ctx.own
     idx_p, dist_p = nb.take(plan.k_initial)
     outlier = outlier_scores(pts, idx_p) > OUTLIER_SCORE
     nrm, ok = pca_normals(pts, idx_p, dist_p)
     small = _small_normals(pts, nrm, ok, idx_p, dist_p, None, plan)
     idx, _ = initial_rows(nb, _k_init(plan), outlier, plan)
-    spread = fold_spread(small, idx)
-    clean = ~outlier[nb.take(_k_init(plan))[0]].any(axis=1)
+    spread, clean = fold_spreads(small, idx, nb, _k_init(plan), outlier, plan)
     finite = np.isfinite(spread)
     return ({"clean": spread[own & clean & finite], "other": spread[own & ~clean & finite]},
             {"clean": int(np.count_nonzero(own & clean))})
