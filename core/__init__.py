@@ -5,10 +5,12 @@ method of Cheng & Zhang (2009) and the baselines it is compared with. numpy/scip
 """
 
 from ._numba_cache import configure as _configure_numba_cache
+from ._pages import configure as _configure_pages
 from ._threads import configure as _configure_threads
 
 _configure_numba_cache()  # before any kernel is compiled: a read-only install must still import
 _configure_threads()  # before the first parallel loop loads OpenMP: idle workers sleep, not spin
+_configure_pages()  # numpy's large arrays on 4 KiB pages: fresh huge pages fault on the host of a VM
 
 from . import io, metrics, noise, shapes  # noqa: E402
 from ._progress import Cancelled  # noqa: E402

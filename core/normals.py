@@ -35,6 +35,13 @@ def pca_normals(points, idx, dist, *, progress=None):
     return normals, ok
 
 
+def _run(centres):
+    """A slice for sorted distinct ``centres`` that are one run of indices, else ``centres``."""
+    if len(centres) and centres[-1] - centres[0] == len(centres) - 1:
+        return slice(int(centres[0]), int(centres[-1]) + 1)
+    return centres
+
+
 def jet_normals(points, normals, ok, idx, dist, *, progress=None):
     """Normals of the osculating 2-jet (Cazals & Pouget 2005) fitted in the PCA frames.
 
@@ -52,12 +59,13 @@ def jet_normals(points, normals, ok, idx, dist, *, progress=None):
     rows = np.flatnonzero(ok & (dist[:, -1] > 0))
     for start in range(0, len(rows), _CHUNK):
         centres = rows[start:start + _CHUNK]
-        z = normals[centres]
+        at = _run(centres)  # a run of rows (every point of a clean cloud): views, not copies
+        z = normals[at]
         t1, t2 = tangent_basis(z)
         res = np.empty((len(centres), 3))
         hgt = np.full(len(centres), np.nan)
         good = np.empty(len(centres), dtype=bool)
-        kernels.jet_normals(points, np.ascontiguousarray(idx[centres]), dist[centres, -1], centres,
+        kernels.jet_normals(points, np.ascontiguousarray(idx[at]), np.ascontiguousarray(dist[at, -1]), centres,
                             t1, t2, z, RCOND, res, hgt, good)
         out[centres[good]] = res[good]
         height[centres[good]] = hgt[good]

@@ -26,6 +26,7 @@ import numpy as np
 
 from .kernels import patches
 from .kernels import sign_evidence as kern
+from .kernels.union_find import signed_forest
 from .tuning import FOLD_TRUST, PATCH_COS, PATCH_MAX, PATCH_ROUNDS, PATCH_TILT, PATCH_TRUST, RESETTLE_K, VOTE_GROWTH, VOTE_SIZE
 
 #: neighbours per point in the orientation graph. 10 rather than Hoppe's 8: the chord
@@ -92,7 +93,7 @@ def orient(points, normals, idx, mode="outward", *, ok=None, rank=None, trust=Fa
     Orientation
     """
     pts = np.ascontiguousarray(points, dtype=np.float64)
-    nrm = np.array(normals, dtype=np.float64, order="C", copy=True)
+    nrm = np.ascontiguousarray(normals, dtype=np.float64)  # read only: every result below is a new array
     ok = np.isfinite(nrm).all(axis=1) if ok is None else np.asarray(ok, dtype=bool)
     graph = np.asarray(idx)[:, :ORIENT_K]  # a view in its own int type (as resettle's): no copy of the graph
     if graph.dtype not in (np.int32, np.int64):
@@ -109,7 +110,7 @@ def orient(points, normals, idx, mode="outward", *, ok=None, rank=None, trust=Fa
         rows[rank] = np.arange(n)
         edges = kern.strongest_first(ev, first, SORT_LEVELS, rows, graph)
         flip = np.zeros(n, dtype=np.int8)
-        roots = kern.voted_signs(edges, n, flip, rank, VOTE_SIZE, VOTE_GROWTH)
+        roots = kern.voted_signs(edges, signed_forest(n), flip, rank, VOTE_SIZE, VOTE_GROWTH)
         sign[flip == 1] = -1.0
         labels = np.where(ok, _numbered(roots), -1)
         _global_signs(pts, nrm * sign[:, None], labels, mode, sign, rank)
@@ -167,18 +168,19 @@ def resettle(points, normals, idx, mode, *, ok=None, trust=False):
     pts = np.ascontiguousarray(points, dtype=np.float64)
     nrm = np.ascontiguousarray(normals, dtype=np.float64)
     ok = np.isfinite(nrm).all(axis=1) if ok is None else np.asarray(ok, dtype=bool)
+    if not ok.all():  # one zeroed copy for the evidence and the patches (it was made twice), none if all have a normal
+        nrm = np.where(ok[:, None], nrm, 0.0)
     graph = idx[:, :RESETTLE_K]  # a view in its own int type (an int64 copy: 229 MiB at 1M points)
     n = len(pts)
     flat = np.empty(n)
-    ev, _ = _evidence(pts, np.where(ok[:, None], nrm, 0.0), graph, ok, np.arange(n), want_first=False,
-                      trust=trust, raw_weight=True, flat=flat)
+    ev, _ = _evidence(pts, nrm, graph, ok, np.arange(n), want_first=False, trust=trust, raw_weight=True, flat=flat)
     sign = np.ones(n)
     confidence = np.empty(n)
     kern.agreement(ev, graph, np.zeros(n, dtype=np.int8), ok, confidence)
     if isinstance(mode, str) and mode != "keep":
         _settle(ev, graph, ok, sign, confidence)
         joins = ok & (flat > PATCH_TRUST) if trust else ok
-        _flip_patches(pts, np.where(ok[:, None], nrm, 0.0), graph, (ok, joins), ev, sign, confidence)
+        _flip_patches(pts, nrm, graph, (ok, joins), ev, sign, confidence)
     return sign, confidence
 
 
@@ -252,7 +254,7 @@ def far_facing(rel, normals, rms):
 
 def _evidence(points, normals, graph, ok, rank, *, trust=False, want_first=True, raw_weight=False, flat=None):
     """The signed evidence of every graph edge, and which entries are an edge's first copy
-    (all True without ``want_first``: :func:`resettle` reads only the evidence; each point's
+    (None without ``want_first``: :func:`resettle` reads only the evidence; each point's
     noise gate from its first :data:`ORIENT_K` neighbours, however wide the graph). With
     ``trust`` each edge is scaled by its two points' trust, 1 - :data:`core.tuning.FOLD_TRUST` x
     (the median offset of their neighbours from their plane) / (the distance to the farthest
@@ -260,20 +262,18 @@ def _evidence(points, normals, graph, ok, rank, *, trust=False, want_first=True,
     fold over. ``raw_weight``: as :func:`core.kernels.sign_evidence.sign_evidence`'s; ``flat``: an
     (N,) array that receives each point's trust (1 without ``trust``)."""
     n = len(points)
-    packed = np.zeros((n, 8))  # one cache line per point for the random reads
-    packed[:, :3] = points
-    packed[:, 3:6] = normals
     spread_graph = graph[:, :ORIENT_K]  # a view: the kernels read strided rows as fast
-    kern.offset_spread(points, normals, spread_graph, ok, packed[:, 6])
-    packed[:, 7] = 1.0
+    spread = np.empty(n)
+    kern.offset_spread(points, normals, spread_graph, ok, spread)
+    weight = np.empty(0)  # none: every trust 1
     if trust:
         reach = np.linalg.norm(points[spread_graph[:, -1]] - points, axis=1)
         with np.errstate(invalid="ignore", divide="ignore"):
-            packed[:, 7] = np.clip(1.0 - FOLD_TRUST * packed[:, 6] / reach, TRUST_FLOOR, 1.0)
-        packed[reach == 0.0, 7] = 1.0  # a point whose neighbours all coincide with it: nothing to read a fold from
+            weight = np.clip(1.0 - FOLD_TRUST * spread / reach, TRUST_FLOOR, 1.0)
+        weight[reach == 0.0] = 1.0  # a point whose neighbours all coincide with it: nothing to read a fold from
     ev = np.empty(graph.shape)
-    first = np.empty(graph.shape, dtype=np.bool_)
-    kern.sign_evidence(packed, graph, ok, GATE, ev, first, rank, want_first, raw_weight)
+    first = np.empty(graph.shape if want_first else (0, 0), dtype=np.bool_)
+    kern.sign_evidence(points, normals, spread, weight, graph, ok, GATE, ev, first, rank, raw_weight)
     if flat is not None:
-        flat[:] = packed[:, 7]
-    return ev, first
+        flat[:] = weight if trust else 1.0
+    return ev, first if want_first else None

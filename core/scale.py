@@ -28,7 +28,8 @@ walk ends at the cubic. Only points whose cubic stopped within the richer models
 take part (where the cubic grew wider, noise, not bias, limits it). A richer model whose
 residual variance per degree of freedom exceeds the cubic's on 15 is skipped: its wider
 neighbourhood holds something no polynomial describes (an edge, a fold).
-(:func:`core.kernels.jets.jet_degrees`; ``res.degree_point`` holds the degree.)
+(:mod:`core.kernels.jet_degree`, run inside the cubic's intervals on the same sums;
+``res.degree_point`` holds the degree.)
 
 **The model.** Where the measured noise is below :data:`JET_QUIET` (nearly noise-free) the
 jet itself is the result: it inherits no error of estimated normals (on 7 stand-in
@@ -274,21 +275,14 @@ def choose_jets(points, normals, nb, has_normal, ks, report):
     def frames(rows, c):
         return _jet_frames(points, normals, rows, c, s, t1, t2)
 
-    chosen, coef = _jet_ici(nb, idx_all, usable, ks, frames, sigma2_h, report)
+    deg = _degree_rule(ks, noise <= JET_QUIET)
+    chosen, coef, walked = _jet_ici(nb, idx_all, usable, ks, frames, sigma2_h, deg, report)
     ks_arr = np.asarray(ks, dtype=np.int64)
     fitted = chosen >= 0
     k = np.where(fitted, ks_arr[np.maximum(chosen, 0)], 0)
     degree = np.where(fitted, JET_DEGREE, -1)
-    # nearly noise-free and the cubic stopped by its bias within the richer models' reach: a
-    # higher degree may remove that bias (where the cubic grew wider, noise, not bias, limits it)
-    reach = min(max(kd for _, kd in JET_DEGREES), ks[-1])
-    quiet = np.flatnonzero(fitted & (noise <= JET_QUIET) & (k <= reach))
-    if len(quiet):
-        f = _jet_frames(points, normals, _rows(idx_all, quiet, max(reach, ks[0])), quiet, s, t1, t2)
-        kq, dq, cq = _higher_degrees(f, k[quiet], sigma2_h[quiet])
-        higher = dq != JET_DEGREE
-        k[quiet], degree[quiet] = kq, dq
-        coef[quiet[higher], :6] = cq[higher]
+    higher = np.flatnonzero((walked >= 0) & (walked < len(deg.kd)))  # a richer model than the cubic
+    k[higher], degree[higher] = deg.kd[walked[higher]], deg.degrees[walked[higher]]
     frame = _jet_frames_of(coef, t1, t2, np.where(has_normal[:, None], normals, [0.0, 0.0, 1.0]), s)
     return k, (*frame[:-1], frame[-1] & fitted), noise, degree
 
@@ -308,11 +302,12 @@ def _jet_frames_of(coef, t1, t2, z, s):
     return out
 
 
-def _jet_ici(nb, idx, usable, ks, frames, sigma2_h, report):
-    """(chosen index into ``ks`` (N,), -1 where no fit; coefficients (N, 10)) of
-    :func:`core.kernels.jets.jet_ici` at the ``usable`` centres, on their neighbours
-    ``idx`` (N, w) (the columns ``nb`` holds); ``frames(rows, centres)`` the kernels'
-    record, ``sigma2_h`` (N,) the noise in units of h^2.
+def _jet_ici(nb, idx, usable, ks, frames, sigma2_h, deg, report):
+    """(chosen index into ``ks`` (N,), -1 where no fit; coefficients (N, 10); the degree
+    rule's answer (N,)) of :func:`core.kernels.jets.jet_ici` at the ``usable`` centres, on
+    their neighbours ``idx`` (N, w) (the columns ``nb`` holds); ``frames(rows, centres)``
+    the kernels' record, ``sigma2_h`` (N,) the noise in units of h^2, ``deg`` the degree
+    rule (:func:`_degree_rule`, ``quiet`` for all N points).
 
     With w < ks[-1] the rule runs on the sizes up to w first. It looks one ring ahead
     (at size c it tests the ring ks[c]..ks[c + 1] for a fold) and ends at the last size,
@@ -321,7 +316,7 @@ def _jet_ici(nb, idx, usable, ks, frames, sigma2_h, report):
     (and those without a fit) are run again on their ``ks[-1]`` neighbours (``nb.rows``).
     """
     n = len(idx)
-    chosen = np.full(n, -1, dtype=np.int64)
+    chosen, walked = np.full(n, -1, dtype=np.int64), np.full(n, -1, dtype=np.int64)
     coef = np.full((n, jet_kernels.P3), np.nan)
     rule = _jet_rule()
     m = int(np.searchsorted(ks, idx.shape[1], side="right"))  # sizes held
@@ -330,10 +325,11 @@ def _jet_ici(nb, idx, usable, ks, frames, sigma2_h, report):
     held = ks[:m]
     ks_held = np.asarray(held, dtype=np.int64)
 
-    def run(c, rows, sizes):
-        out_k, out_c = np.empty(len(c), dtype=np.int64), np.empty((len(c), jet_kernels.P3))
-        jet_kernels.jet_ici(frames(rows, c), sizes, sigma2_h[c], rule, out_k, out_c)
-        chosen[c], coef[c] = out_k, out_c
+    def run(c, rows, sizes):  # rows >= ks[2] = 28 wide: the richer models' (20) included
+        out_k, out_c, out_w = np.empty(len(c), dtype=np.int64), np.empty((len(c), jet_kernels.P3)), np.empty_like(c)
+        jet_kernels.jet_ici(frames(rows, c), sizes, sigma2_h[c], rule, deg._replace(quiet=deg.quiet[c]), out_k, out_c,
+                            out_w)
+        chosen[c], coef[c], walked[c] = out_k, out_c, out_w
 
     for start in range(0, len(usable), _CHUNK):
         c = usable[start:start + _CHUNK]
@@ -345,24 +341,20 @@ def _jet_ici(nb, idx, usable, ks, frames, sigma2_h, report):
         for start in range(0, len(again), _CHUNK):
             c = again[start:start + _CHUNK]
             run(c, nb.rows(c, ks[-1])[0], ks_arr)
-    return chosen, coef
+    return chosen, coef, walked
 
 
-def _higher_degrees(f, k3, sigma2):
-    """(k, degree, first 6 coefficients) per centre of ``f`` by the degree rule of
-    :func:`core.kernels.jets.jet_degrees` over :data:`JET_DEGREES` and the cubic on ``k3``."""
-    models = [(d, k) for d, k in JET_DEGREES if k <= f.idx.shape[1]]
-    if not models:
-        return k3, np.full(len(k3), JET_DEGREE), np.full((len(k3), 6), np.nan)
+def _degree_rule(ks, quiet):
+    """The degree rule's :class:`core.kernels.jets.DegreeRule` for the cubic's sizes ``ks``:
+    the models of :data:`JET_DEGREES` within reach of them, tried where ``quiet`` (N,) and
+    the cubic stopped within their reach (where it grew wider, noise, not bias, limits it)."""
+    reach = min(max(kd for _, kd in JET_DEGREES), ks[-1])
+    models = [(d, k) for d, k in JET_DEGREES if k <= max(reach, ks[0])]
     degrees = np.array([d for d, _ in models], dtype=np.int64)
     kd = np.array([k for _, k in models], dtype=np.int64)
-    chosen, coef = np.empty(len(k3), dtype=np.int64), np.empty((len(k3), 6))
-    jet_kernels.jet_degrees(f, degrees, kd, np.ascontiguousarray(k3, dtype=np.int64), sigma2, _jet_rule(), chosen,
-                            coef)
-    cubic = chosen == len(degrees)  # also -1 (no fit: the cubic's own coefficients stay)
-    higher = (chosen >= 0) & ~cubic
-    pick = np.clip(chosen, 0, len(kd) - 1)
-    return np.where(higher, kd[pick], k3), np.where(higher, degrees[pick], JET_DEGREE), coef
+    return jet_kernels.DegreeRule(np.ascontiguousarray(quiet, dtype=np.bool_), degrees, kd,
+                                  np.argsort(kd, kind="stable").astype(np.int64), int(reach),
+                                  int(max([JET_DEGREE, *degrees])), int(max([0, *kd])))
 
 
 def aligned_jets(jets, normals):

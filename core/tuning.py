@@ -44,8 +44,12 @@ SEARCH_REACH = 0.3
 #: 15-28 neighbours at nearly every point of a noise-free cloud (at the next-to-last of
 #: the sizes it is run on, it reruns with the whole list: it looks one ring ahead). A
 #: noisy cloud is searched to k_search at once (core.scale.WIDEN_SHARE). Speed only.
-#: CPU s of the search on a 100k torus: 16 0.14, 56 0.22, 226 0.69.
-SEARCH_WIDTH = 56
+#: CPU s of the search on a 100k torus: 16 0.14, 56 0.22, 226 0.69. 40 is the least that
+#: keeps a cubic stopped at 20 final (sizes 15..40 held; it looks at the ring 28..40): the
+#: 1-2 % of noise-free points at 28 or more are rerun on rows searched wider. Noise-free
+#: torus, in one process, interleaved (loaded machine): 1M 26.4 -> 22.4 CPU s (56 -> 40:
+#: 2.98 -> 2.72x NR k = 15, and 192 MiB less graph); 100k 2.30 -> 2.29 (the same).
+SEARCH_WIDTH = 40
 
 # ----------------------------------------------------------------------------- initial normals
 
@@ -161,7 +165,7 @@ JET_DEGREE = 3
 #: terms on 15; a quartic 15 on 20; a quintic 21 on 28). Noise-free, the cubic's error is
 #: the bias of the terms it lacks, and on the 7 hold-out surfaces (core.bench.holdout) a
 #: quartic on 20 neighbours had 20-50x smaller H, K and e1 errors than the cubic on 15, a
-#: quintic on 28 100-300x; with noise their variance is larger, so core.kernels.jets.jet_degrees
+#: quintic on 28 100-300x; with noise their variance is larger, so core.kernels.jet_degree
 #: takes them only while their confidence intervals say the cubic is biased. The quintic
 #: (5, 28) is left out for time: on a 100k-point torus it doubled the degree step (about
 #: half of NR k=15's time with it, a quarter without), and the quartic alone already beats
@@ -284,3 +288,11 @@ PATCH_TRUST = 0.6
 #: load 10 on 2 cores: wall 2.05 / 2.47 -> 1.51 / 1.90, CPU 1.89 / 2.20 -> 1.40 / 1.65 (two
 #: processes each). The results are the same bits (the policy only decides how threads wait).
 OMP_WAIT_POLICY = "PASSIVE"
+#: numpy's large arrays on 4 KiB pages, not transparent huge pages (core._pages, set at
+#: ``import core`` unless NUMPY_MADVISE_HUGEPAGE is in the environment). On this 2-core KVM
+#: guest with free page reporting a fresh huge page cost 2-4 ms (host faults); NR k = 15 on
+#: the bench's 1M torus, processes alternating with NUMPY_MADVISE_HUGEPAGE=0 (load ~7):
+#: estimate 9.6-10.3 -> 6.4-7.1 CPU s, the bare kNN search in the same processes 7.3-7.5 ->
+#: 6.6-6.8, NR / kNN CPU 1.16-1.22 -> 1.00. On bare metal huge pages are cheap to fault and
+#: 4 KiB pages cost more faults: not measured there. Same bits either way.
+NUMPY_HUGEPAGES = False

@@ -46,8 +46,7 @@ def _data_dependent_types(method) -> int:
     """k="auto" on clouds that take the paths a larger cloud takes where the type of an array
     depends on the data: a plane's jets grow past the columns searched first (rows searched
     wider, ``kdtree.query_rows``, and the jets rerun on them); on a cube the points where a
-    higher degree is tried are not one run of indices (their rows a copy, not a read-only
-    view: ``jets.jet_degrees``). Each plainly, through a StageCache and on the read-only
+    higher degree is tried are not one run of indices (rows copied rather than viewed). Each plainly, through a StageCache and on the read-only
     points of a given graph. Without these the first k="auto" estimate of a 100k torus
     after warm-up compiled for ~8 s. Returns the count of runs."""
     for cloud in (shapes.plane(400, seed=0), shapes.cube(600, seed=0)):

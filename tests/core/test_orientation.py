@@ -131,6 +131,7 @@ def test_large_parts_are_joined_by_their_whole_seam(part, flipped):
     (+1.1: agree), not by its one strongest edge (-0.9), which Kruskal follows; parts
     smaller than VOTE_SIZE still hang by their strongest edge."""
     from core.kernels import sign_evidence as kern
+    from core.kernels.union_find import signed_forest
     from core.tuning import VOTE_GROWTH, VOTE_SIZE
 
     assert 5 < VOTE_SIZE <= 20
@@ -140,11 +141,11 @@ def test_large_parts_are_joined_by_their_whole_seam(part, flipped):
         return kern.strongest_first(ev, np.ones(ev.shape, dtype=np.bool_), 4096, np.arange(n), idx)
 
     flip = np.zeros(n, dtype=np.int8)
-    kern.voted_signs(edges(), n, flip, np.arange(n), VOTE_SIZE, VOTE_GROWTH)
+    kern.voted_signs(edges(), signed_forest(n), flip, np.arange(n), VOTE_SIZE, VOTE_GROWTH)
     assert np.all(flip[:part] == flip[0]) and np.all(flip[part:] == flip[part])
     assert (flip[0] != flip[part]) == flipped
     plain = np.zeros(n, dtype=np.int8)
-    kern.voted_signs(edges(), n, plain, np.arange(n), n + 1, VOTE_GROWTH)  # no part large enough: Kruskal
+    kern.voted_signs(edges(), signed_forest(n), plain, np.arange(n), n + 1, VOTE_GROWTH)  # no part large enough: Kruskal
     assert plain[0] != plain[part]  # the single-edge forest flips either way
 
 

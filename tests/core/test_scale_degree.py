@@ -7,7 +7,7 @@ import numpy as np
 
 import core
 from core import kernels, metrics, noise, shapes, tuning
-from core.kernels import jets
+from core.kernels import jet_degree as jets
 from core.linalg import tangent_basis
 from core.neighbours import build_neighbours
 
@@ -69,3 +69,53 @@ def test_default_noise_free_beats_the_cubic_jet_by_far_and_keeps_it_with_noise()
         assert metrics.summary(r, s)[key] < 0.3 * metrics.summary(cubic, s)[key], key
     noisy = core.estimate(noise.add_noise(s.points, 0.02, seed=4))  # quiet enough for the jet, not for degree 5
     assert (noisy.degree_point[noisy.valid] > 3).mean() < 0.05
+
+
+def _frames_and_rules(n=2500, seed=5):
+    """The quartic graph with noise on a third of it and a few points without a normal (known
+    outliers), searched to 56, as core.scale hands it to the kernels."""
+    pts, x, y = _quartic_graph(n, seed)
+    rng = np.random.default_rng(seed)
+    pts[: n // 3, 2] += rng.normal(size=n // 3) * 0.01
+    normals = np.tile([0.0, 0.0, 1.0], (n, 1))
+    normals[rng.choice(n, 20, replace=False)] = np.nan
+    idx, dist = build_neighbours(pts, 56).take(56)
+    t1, t2 = tangent_basis(np.nan_to_num(normals, nan=1.0))
+    h = dist[:, 14].copy()
+    f = kernels.Frames(pts, normals, np.ascontiguousarray(idx), np.zeros(n, dtype=np.int64), h, np.arange(n),
+                       t1, t2, np.nan_to_num(normals, nan=1.0))
+    sigma2 = np.where(np.arange(n) < n // 3, (0.01 / h) ** 2, 1e-12)
+    rule = kernels.ScaleRule(3, tuning.JET_GAMMA, tuning.RCOND, 0.2, 0.34, 3.0, 3)
+    return f, sigma2, rule
+
+
+def test_the_intervals_run_the_degree_rule_on_their_own_sums_bit_for_bit():
+    """jets.jet_ici with the degree rule inside equals the cubic's intervals alone, then
+    jets.jet_degrees on the cubic's chosen sizes, to the last bit (quiet or not per point)."""
+    from core import scale
+    from core.kernels import jets as ici
+    f, sigma2, rule = _frames_and_rules()
+    n, ks = len(f.centres), np.array([15, 20, 28, 40, 56])
+    quiet = np.random.default_rng(0).random(n) < 0.7
+    out = {}
+    for name, q in (("fused", quiet), ("cubic", np.zeros(n, dtype=bool))):
+        deg = scale._degree_rule(tuple(ks), q)
+        chosen, coef, walked = np.empty(n, dtype=np.int64), np.empty((n, 10)), np.empty(n, dtype=np.int64)
+        ici.jet_ici(f, ks, sigma2, rule, deg, chosen, coef, walked)
+        out[name] = chosen, coef, walked
+    chosen, coef, walked = out["fused"]
+    np.testing.assert_array_equal(chosen, out["cubic"][0])
+    assert (out["cubic"][2] == -1).all()
+    ran = quiet & (chosen >= 0) & (ks[np.maximum(chosen, 0)] <= deg.reach)
+    assert (walked[~ran] == -1).all() and ran.sum() > n // 3
+    sub = np.flatnonzero(ran)
+    g = kernels.Frames(f.points, f.normals, f.idx[sub, :20].copy(), f.kc[sub], f.h[sub], f.centres[sub], f.t1[sub],
+                       f.t2[sub], f.z[sub])
+    two, coef6 = np.empty(len(sub), dtype=np.int64), np.empty((len(sub), 6))
+    jets.jet_degrees(g, deg.degrees, deg.kd, ks[chosen[sub]], sigma2[sub], rule, two, coef6)
+    np.testing.assert_array_equal(walked[sub], two)
+    higher = two < len(deg.kd)
+    assert higher.any() and (~higher).any()
+    np.testing.assert_array_equal(coef[sub[higher], :6], coef6[higher])
+    keep = np.setdiff1d(np.arange(n), sub[higher])
+    np.testing.assert_array_equal(coef[keep], out["cubic"][1][keep])
