@@ -93,6 +93,13 @@ def test_info_json(clouds, capsys):
     assert [r["n_points"] for r in records] == [300, 300] and records[1]["format"] == "xyz"
 
 
+def _sigint_default():
+    """In the child: Ctrl-C's default action, which Python turns into KeyboardInterrupt. A
+    shell starts background jobs (``pytest &``, ``nohup``) with SIGINT ignored, the child
+    inherits that, and Python then leaves it ignored: the test would fail for the shell."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 @pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
 def test_ctrl_c_exits_130_without_traceback(tmp_path):
     # noisy, so the estimate runs for seconds after its bar is up (a clean 30k cloud had
@@ -101,7 +108,8 @@ def test_ctrl_c_exits_130_without_traceback(tmp_path):
     np.savetxt(tmp_path / "big.xyz", big, fmt="%.6f")
     env = {**os.environ, "PYTHONPATH": os.getcwd()}
     proc = subprocess.Popen([sys.executable, "-m", "core", "estimate", str(tmp_path / "big.xyz"), "-o",
-                             str(tmp_path / "o.ply"), "--progress"], stderr=subprocess.PIPE, env=env)
+                             str(tmp_path / "o.ply"), "--progress"], stderr=subprocess.PIPE, env=env,
+                            preexec_fn=_sigint_default)
     try:
         seen = b""
         while b"%" not in seen:  # the progress bar is up: the estimate is running
