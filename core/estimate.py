@@ -165,14 +165,16 @@ def prepare(pts, normals, plan, neighbours, report, *, cache=None) -> Prepared:
     nb, order = run.neighbours(lambda k: spatial_neighbours(pts, plan, neighbours, report.sub(0.0, 0.3), k=k),
                                neighbours)
     pts, normals = nb.points, order.to_sorted(normals)  # the stages run in spatial order
-    idx_p, _ = nb.take(plan.k_initial)
-    scores = run("scores", lambda: outlier_scores(pts, idx_p))
+    # the initial graph is taken afresh at each use: a view held across the stages would keep
+    # the narrow search alive after a noisy cloud widens it (+480 MB at 1M points)
+    scores = run("scores", lambda: outlier_scores(pts, nb.take(plan.k_initial)[0]))
     outlier = scores > OUTLIER_SCORE
     if normals is None:
         init, repaired = run("initial", lambda: initial_normals(pts, nb, plan, outlier, report)), None
     else:
         init, repaired = run("initial", lambda: given_normals(pts, normals, nb, plan))
-    init, confidence = run("orientation", lambda: orient_signs(pts, init, idx_p, plan, rank=order.order))
+    init, confidence = run("orientation", lambda: orient_signs(pts, init, nb.take(plan.k_initial)[0], plan,
+                                                                rank=order.order))
     report(0.45, "orientation")
 
     reference = None

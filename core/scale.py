@@ -258,12 +258,7 @@ def choose_jets(points, normals, nb, has_normal, ks, report):
     s = dist_all[:, ks[0] - 1].copy()
     usable = np.flatnonzero(has_normal & (s > 0))
     t1, t2 = tangent_basis(np.where(has_normal[:, None], normals, [0.0, 0.0, 1.0]))
-    rss = np.full((n, 2), np.nan)
-    out = np.empty((len(usable), 2))
-    f = _jet_frames(points, normals, _rows(idx_all, usable, NOISE_KS[1]), usable, s, t1, t2)
-    jet_kernels.jet_residuals(f, np.asarray(NOISE_KS, dtype=np.int64), RCOND, out)
-    rss[usable] = out
-    sigma2, plain = noise_variance(rss[:, 0], rss[:, 1], s, idx_all)
+    sigma2, plain = _measured_noise(points, normals, idx_all, usable, s, t1, t2)
     with np.errstate(invalid="ignore", divide="ignore"):
         noise = np.where(s > 0, np.maximum(np.sqrt(sigma2), 0.5 * np.sqrt(plain)) / s, np.inf)
     if nb.width < ks[-1] and np.count_nonzero(noise[usable] > JET_QUIET) > WIDEN_SHARE * len(usable):
@@ -285,6 +280,17 @@ def choose_jets(points, normals, nb, has_normal, ks, report):
     k[higher], degree[higher] = deg.kd[walked[higher]], deg.degrees[walked[higher]]
     frame = _jet_frames_of(coef, t1, t2, np.where(has_normal[:, None], normals, [0.0, 0.0, 1.0]), s)
     return k, (*frame[:-1], frame[-1] & fitted), noise, degree
+
+
+def _measured_noise(points, normals, idx, usable, s, t1, t2):
+    """:func:`noise_variance` from the cubic jets at :data:`NOISE_KS` of the ``usable``
+    centres on their neighbours ``idx`` (N, w); returns (sigma^2, a) (N,)."""
+    rss = np.full((len(points), 2), np.nan)
+    out = np.empty((len(usable), 2))
+    f = _jet_frames(points, normals, _rows(idx, usable, NOISE_KS[1]), usable, s, t1, t2)
+    jet_kernels.jet_residuals(f, np.asarray(NOISE_KS, dtype=np.int64), RCOND, out)
+    rss[usable] = out
+    return noise_variance(rss[:, 0], rss[:, 1], s, idx)
 
 
 def _jet_frames_of(coef, t1, t2, z, s):

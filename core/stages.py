@@ -142,7 +142,9 @@ def initial_normals(pts, nb, plan, outlier, report) -> Initial:
         noise = scale.noise_ratio(np.where(clean, ratio, np.nan) if clean.any() else ratio, 1.0)
     k_init = scale.initial_k(noise, plan.k_initial, plan.k_search)
     if k_init > nb.width:  # noise this large grows most jets to k_search too: search them all once
+        del idx_p, dist_p  # views of the narrow graph would keep it alive beside the wide one
         nb.widen(plan.k_search)
+        idx_p, dist_p = nb.take(plan.k_initial)
     small = _small_normals(pts, nrm, ok, idx_p, dist_p, jet, plan)
     if k_init == plan.k_initial and not (plan.robust and outlier.any()):
         return Initial(small, ok, noise, k_init)
