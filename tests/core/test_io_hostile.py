@@ -184,3 +184,27 @@ def test_vtk_with_non_utf8_bytes_is_a_clear_error(tmp_path):
     path = tmp_path / "bad.vtk"
     path.write_bytes(b"\x80# vtk DataFile Version 5.1\nvtk output\nASCII\nDATASET POLYDATA\nPOINTS 1 double\n0 0 0\n")
     _error(path, "VTK cannot read it")
+
+
+def _pcd(path, size, typ, rows, data="ascii"):
+    path.write_bytes(f"VERSION 0.7\nFIELDS x y z\nSIZE {size}\nTYPE {typ}\nCOUNT 1 1 1\nWIDTH 3\nHEIGHT 1\n"
+                     f"POINTS 3\nDATA {data}\n".encode() + rows)
+    return path
+
+
+@pytest.mark.parametrize("size", ["4,", ",", "16", "3"])
+@pytest.mark.parametrize("data", ["ascii", "binary"])
+def test_pcd_size_not_1_2_4_8_refused(tmp_path, size, data):
+    """numpy reads the type "<f4," as a structured dtype: column_stack then failed with a DTypePromotionError."""
+    path = _pcd(tmp_path / "size.pcd", f"{size} 4 4", "F F F", b"0 0 0\n1 0 0\n0 1 0\n" if data == "ascii" else b"\0" * 48,
+                data)
+    _error(path, "field 'x' SIZE", repr(size), "allowed: 1, 2, 4, 8")
+
+
+def test_ascii_pcd_integers_out_of_range_refused(tmp_path):
+    """A 1-byte I field holding 1000 was cast to -24 without a word."""
+    _error(_pcd(tmp_path / "int.pcd", "1 1 1", "I I I", b"0 0 0\n1 0 0\n0 1 1000\n"),
+           "point 2", "field 'z' (TYPE I SIZE 1)", "1000", "[-128, 127]")
+    _error(_pcd(tmp_path / "frac.pcd", "4 4 2", "F F U", b"0 0 0\n1 0 1.5\n0 1 0\n"), "point 1", "1.5", "[0, 65535]")
+    cloud = core.io.read_cloud(_pcd(tmp_path / "ok.pcd", "4 4 1", "F F U", b"0 0 0\n1 0 255\n0 1 0\n"))
+    assert cloud.points[1, 2] == 255
