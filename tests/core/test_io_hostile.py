@@ -208,3 +208,54 @@ def test_ascii_pcd_integers_out_of_range_refused(tmp_path):
     _error(_pcd(tmp_path / "frac.pcd", "4 4 2", "F F U", b"0 0 0\n1 0 1.5\n0 1 0\n"), "point 1", "1.5", "[0, 65535]")
     cloud = core.io.read_cloud(_pcd(tmp_path / "ok.pcd", "4 4 1", "F F U", b"0 0 0\n1 0 255\n0 1 0\n"))
     assert cloud.points[1, 2] == 255
+
+
+def _las14(path):
+    laspy = pytest.importorskip("laspy")
+    header = laspy.LasHeader(point_format=6, version="1.4")
+    header.add_extra_dims([laspy.ExtraBytesParams(name="nx", type=np.float32)])
+    las = laspy.LasData(header)
+    las.x, las.y, las.z, las.nx = np.arange(30.0), np.ones(30), np.zeros(30), np.ones(30)
+    las.write(path)
+    return bytearray(path.read_bytes())
+
+
+def _las_and_stream_error(path, *parts):
+    from core.io.las_stream import open_las
+
+    _error(path, *parts)
+    with pytest.raises(CloudFileError, match=parts[0]):
+        open_las(path)
+
+
+def test_las_zero_size_extra_bytes_refused(tmp_path):
+    """Data type 0 with a size of 0 made laspy divide by zero (a ZeroDivisionError traceback)."""
+    data = _las14(tmp_path / "a.las")
+    eb = data.find(b"LASF_Spec") - 2 + 54  # the extra-bytes VLR's first 192-byte descriptor
+    data[eb + 2 : eb + 4] = b"\0\0"
+    (tmp_path / "eb.las").write_bytes(bytes(data))
+    _las_and_stream_error(tmp_path / "eb.las", "dimension 'nx' has a size of 0 bytes")
+
+
+@pytest.mark.parametrize("where, part", [
+    ("offset", "point data starts at byte 4294967295"),
+    ("evlrs", "extended variable-length records"),
+    ("laz_count", "hold at most"),
+])
+def test_las_offsets_and_counts_past_the_file_refused(tmp_path, where, part):
+    """laspy allocated what these ask for: 4 GB for the offset, a record length read from the
+    file's first bytes, and a bytearray of 4 billion LAZ points (a MemoryError, or a
+    machine's whole memory for a few hundred million)."""
+    name = "a.laz" if where == "laz_count" else "a.las"
+    if where == "laz_count":
+        pytest.importorskip("lazrs")
+    data = _las14(tmp_path / name)
+    if where == "offset":
+        struct.pack_into("<I", data, 96, 0xFFFFFFFF)
+    elif where == "evlrs":
+        struct.pack_into("<QI", data, 235, 0, 5)  # 5 extended VLRs from byte 0
+    else:
+        struct.pack_into("<Q", data, 247, 4_000_000_000)  # the LAS 1.4 point count
+    path = tmp_path / f"bad_{name}"
+    path.write_bytes(bytes(data))
+    _las_and_stream_error(path, part)
