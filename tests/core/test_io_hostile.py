@@ -259,3 +259,33 @@ def test_las_offsets_and_counts_past_the_file_refused(tmp_path, where, part):
     path = tmp_path / f"bad_{name}"
     path.write_bytes(bytes(data))
     _las_and_stream_error(path, part)
+
+
+_VTK42 = "# vtk DataFile Version 4.2\nx\n{mode}\nDATASET {kind}\nPOINTS 3 float\n"
+
+
+@pytest.mark.parametrize("mode, kind, cells, part", [
+    ("ASCII", "POLYDATA", b"VERTICES 1 2\n1000000 0\n", "VERTICES section: cell 0 declares 1000000 point ids"),
+    ("ASCII", "UNSTRUCTURED_GRID", b"CELLS 1 2\n1000000 0\nCELL_TYPES 1\n1\n", "CELLS section: cell 0"),
+    ("BINARY", "POLYDATA", b"LINES 2 3\n" + struct.pack(">3i", 1, 0, 5_000_000) + b"\n", "cell 1 declares 5000000"),
+    ("BINARY", "POLYDATA", b"VERTICES 1000000000 1000000000\n" + struct.pack(">2i", 1, 0), "truncated: 'VERTICES"),
+])
+def test_legacy_vtk_cell_counts_past_their_array_refused(tmp_path, mode, kind, cells, part):
+    """VTK walked these counts past the cell array and the process died of a segmentation fault."""
+    pytest.importorskip("vtkmodules")
+    xyz = b"0 0 0 1 0 0 0 1 0\n" if mode == "ASCII" else struct.pack(">9f", 0, 0, 0, 1, 0, 0, 0, 1, 0) + b"\n"
+    path = tmp_path / "cells.vtk"
+    path.write_bytes(_VTK42.format(mode=mode, kind=kind).encode() + xyz + cells)
+    _error(path, part)
+    path.write_bytes(_VTK42.format(mode=mode, kind=kind).encode() + xyz)  # the points alone read
+    assert len(core.io.read_cloud(path)) == 3
+
+
+def test_vtk_image_data_of_more_points_than_memory_refused(tmp_path):
+    """Image data stores no points: 10**15 of them from a 100-byte header ended in numpy's
+    MemoryError (and a few hundred million in the machine's whole memory)."""
+    pytest.importorskip("vtkmodules")
+    path = tmp_path / "grid.vtk"
+    path.write_text("# vtk DataFile Version 4.2\nx\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 100000 100000 100000\n"
+                    "SPACING 1 1 1\nORIGIN 0 0 0\n")
+    _error(path, "vtkStructuredPoints of 1000000000000000 points", "GB of memory available")
