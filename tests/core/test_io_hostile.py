@@ -289,3 +289,10 @@ def test_vtk_image_data_of_more_points_than_memory_refused(tmp_path):
     path.write_text("# vtk DataFile Version 4.2\nx\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 100000 100000 100000\n"
                     "SPACING 1 1 1\nORIGIN 0 0 0\n")
     _error(path, "vtkStructuredPoints of 1000000000000000 points", "GB of memory available")
+
+
+def test_obj_with_utf8_bom_keeps_its_first_vertex(tmp_path):
+    """Read as latin-1, the BOM made the first line's key 'ï»¿v' and the first vertex was dropped silently."""
+    path = tmp_path / "bom.obj"
+    path.write_bytes(b"\xef\xbb\xbfv 5 6 7\nv 1 0 0\nv 0 1 0\n")
+    np.testing.assert_array_equal(core.io.read_cloud(path).points[0], [5, 6, 7])
