@@ -33,6 +33,7 @@ def read_vtp(path) -> RawCloud:
     """An XML PolyData ``.vtp`` file."""
     from vtkmodules.vtkIOXML import vtkXMLPolyDataReader
 
+    check_xml_sizes(path)
     return _read(vtkXMLPolyDataReader(), path)
 
 
@@ -170,3 +171,24 @@ def _cell_runs_problem(ids, n_cells: int, size: int) -> str | None:
                     "entries remain")
         i += 1 + count
     return None
+
+
+_XML_COUNT = re.compile(rb'\bNumberOf(Points|Verts|Lines|Strips|Polys|Cells|Tuples|Components)="\s*(\d+)\s*"')
+
+
+def check_xml_sizes(path) -> None:
+    """VTK allocates what an XML file's NumberOf... attributes declare before reading any
+    data, and a failed allocation aborts the process (std::bad_alloc, not an exception);
+    NumberOfComponents="1000000000000" made it run for minutes. Counts whose arrays would
+    not fit in memory are refused first (from the XML before any appended data)."""
+    with open(path, "rb") as f:
+        head = f.read(1 << 20).split(b"<AppendedData", 1)[0]
+    counts = [(name.decode(), int(value)) for name, value in _XML_COUNT.findall(head)]
+    components = max([value for name, value in counts if name == "Components"] + [3])
+    name, value = max([(name, value) for name, value in counts if name != "Components"] + [("Points", 0)],
+                      key=lambda item: item[1])
+    need = 8 * value * components
+    available = _available_memory()
+    if need > available:
+        raise CloudFileError(path, f"declares NumberOf{name}=\"{value}\" with arrays of up to {components} components: "
+                                   f"about {need / 1e9:.3g} GB, more than the {available / 1e9:.3g} GB of memory available")

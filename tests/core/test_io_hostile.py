@@ -296,3 +296,20 @@ def test_obj_with_utf8_bom_keeps_its_first_vertex(tmp_path):
     path = tmp_path / "bom.obj"
     path.write_bytes(b"\xef\xbb\xbfv 5 6 7\nv 1 0 0\nv 0 1 0\n")
     np.testing.assert_array_equal(core.io.read_cloud(path).points[0], [5, 6, 7])
+
+
+@pytest.mark.parametrize("old, new, part", [
+    ('NumberOfLines="0"', 'NumberOfLines="1000000000000"', 'NumberOfLines="1000000000000"'),
+    ('NumberOfPoints="3"', 'NumberOfPoints="3000000000000"', 'NumberOfPoints="3000000000000"'),
+    ('NumberOfComponents="3"', 'NumberOfComponents="1000000000000"', "1000000000000 components"),
+])
+def test_vtp_counts_beyond_memory_refused(tmp_path, old, new, part):
+    """VTK allocated these before reading any data: std::bad_alloc aborted the process (and a
+    huge NumberOfComponents kept it busy for minutes)."""
+    pv = pytest.importorskip("pyvista")
+    path = tmp_path / "a.vtp"
+    pv.PolyData(np.eye(3)).save(path, binary=False)
+    text = path.read_text()
+    assert old in text
+    path.write_text(text.replace(old, new, 1))
+    _error(path, part, "GB of memory available")
