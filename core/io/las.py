@@ -110,7 +110,7 @@ def _check_evlrs(path, f, start: int, count: int, offset: int, size: int) -> Non
         return
     if start < offset or start + count * _EVLR_HEADER > size:
         raise CloudFileError(path, f"corrupt header: it declares {count} extended variable-length records "
-                                   f"from byte {start}, outside the point data end and the {size} bytes of the file")
+                                   f"from byte {start}: they must follow the point data (from byte {offset}) and fit in the {size}-byte file")
     pos = start
     for i in range(count):
         f.seek(pos + 20)
