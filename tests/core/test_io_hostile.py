@@ -313,3 +313,17 @@ def test_vtp_counts_beyond_memory_refused(tmp_path, old, new, part):
     assert old in text
     path.write_text(text.replace(old, new, 1))
     _error(path, part, "GB of memory available")
+
+
+def test_huge_coordinates_through_files_give_an_invalid_result_that_writes(tmp_path):
+    """estimate refused to fit coordinates of 1e300 (valid=False), but writing the result
+    computed the anisotropy with a kd-tree search that overflowed: the CLI said only
+    "Encountering floating point overflow. The value of p too large" and wrote nothing."""
+    t = np.random.default_rng(0).random((60, 2))
+    path = tmp_path / "huge.ply"
+    core.io.write_cloud(path, np.column_stack([t, (t ** 2).sum(axis=1)]) * 1e300)
+    cloud = core.io.read_cloud(path)
+    res = core.estimate(cloud.points, k=15)
+    assert not res.valid.any() and "overflow" in res.params["degenerate"]
+    core.io.write_result(tmp_path / "out.ply", res)
+    assert np.isnan(core.io.read_cloud(tmp_path / "out.ply").fields["anisotropy"]).all()
