@@ -136,9 +136,9 @@ def check_legacy_cells(path) -> None:
     count crashes the process (a segmentation fault). The runs are checked here first."""
     with open(path, "rb") as f, mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as data:
         lines = data[:512].split(b"\n", 3)
-        version = re.match(rb"# vtk DataFile Version (\d+)", lines[0])
-        if (version and int(version.group(1)) >= 5) or len(lines) < 4:
-            return  # offsets and connectivity, which VTK checks
+        version = re.match(rb"# vtk DataFile Version (\d{1,3})\b", lines[0])
+        if (version and 5 <= int(version.group(1)) <= 99) or len(lines) < 4:
+            return  # offsets and connectivity, which VTK checks (a garbled version is read as legacy)
         binary = lines[2].strip().upper() == b"BINARY"
         for match in _CELLS.finditer(data):
             size, start = int(match.group(3)), match.end() + 1

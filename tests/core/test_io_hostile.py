@@ -327,3 +327,15 @@ def test_huge_coordinates_through_files_give_an_invalid_result_that_writes(tmp_p
     assert not res.valid.any() and "overflow" in res.params["degenerate"]
     core.io.write_result(tmp_path / "out.ply", res)
     assert np.isnan(core.io.read_cloud(tmp_path / "out.ply").fields["anisotropy"]).all()
+
+
+def test_vtk_with_a_garbled_version_is_checked_as_legacy(tmp_path):
+    """A version of 1000000000000 was taken as >= 5 and not checked, but VTK read the file's
+    OFFSETS line as legacy cell counts and died of a segmentation fault."""
+    pv = pytest.importorskip("pyvista")
+    path = tmp_path / "v.vtk"
+    pv.PolyData(np.eye(3)).save(path, binary=True)
+    data = path.read_bytes()
+    assert data.startswith(b"# vtk DataFile Version 5.1")
+    path.write_bytes(data.replace(b"Version 5.1", b"Version 1000000000000", 1))
+    _error(path, "corrupt VERTICES section")
