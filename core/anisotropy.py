@@ -81,7 +81,7 @@ def anisotropy_of(points, normals, nb):
     """:func:`anisotropy` with :data:`ANISO_K` neighbours from ``nb`` (a
     :class:`core.Neighbours`), or from a search of their own when it holds fewer (or is None)."""
     k = min(ANISO_K, len(points))
-    if k < NEAREST + 1:
-        return np.full(len(points), np.nan)
+    if k < NEAREST + 1 or not np.isfinite(normals).any():  # no normal (a degenerate cloud): all NaN, and
+        return np.full(len(points), np.nan)  # no search (coordinates of 1e300 overflow the kd-tree)
     idx = nb.take(k)[0] if nb is not None and nb.k_max >= k else build_neighbours(points, k).take(k)[0]
     return anisotropy(points, normals, idx)

@@ -33,7 +33,7 @@ def _read_las_data(path):
     """The ``laspy.LasData``, every problem a :class:`CloudFileError`."""
     import laspy
 
-    _check_record_counts(path)
+    check_record_counts(path)
     try:
         with laspy.open(path) as reader:
             _check_header(reader.header, path, laspy)
@@ -80,67 +80,102 @@ def _check_scales(header, path) -> None:
 _VLR_HEADER, _EVLR_HEADER = 54, 60
 
 
-def _check_record_counts(path) -> None:
-    """Refuse record counts the file cannot hold: laspy would loop over a corrupt count of
-    4 billion variable-length records, reading nothing at the end of the file."""
+def check_record_counts(path) -> None:
+    """Refuse record counts and sizes the file cannot hold: laspy would loop over a corrupt
+    count of 4 billion variable-length records, reading nothing at the end of the file, or
+    allocate what a corrupt offset, record length or point count asks for."""
     size = os.path.getsize(path)
     with open(path, "rb") as f:
-        head = f.read(247)
-    if len(head) < 111 or not head.startswith(b"LASF"):
-        return  # not a LAS header: laspy says what is wrong
-    header_size, _, n_vlrs = struct.unpack_from("<HII", head, 94)
-    if header_size + n_vlrs * _VLR_HEADER > size:
-        raise CloudFileError(path, f"corrupt header: it declares {n_vlrs} variable-length records, more than "
-                                   f"the {size} bytes of the file can hold")
-    if head[24:26] >= bytes([1, 4]) and len(head) >= 247:
-        start, n_evlrs = struct.unpack_from("<QI", head, 235)
-        if n_evlrs and start + n_evlrs * _EVLR_HEADER > size:
-            raise CloudFileError(path, f"corrupt header: it declares {n_evlrs} extended variable-length records "
-                                       f"from byte {start}, more than the {size} bytes of the file can hold")
-    _check_laz_sizes(path, head, size)
+        head = f.read(255)
+        if len(head) < 111 or not head.startswith(b"LASF"):
+            return  # not a LAS header: laspy says what is wrong
+        header_size, offset, n_vlrs = struct.unpack_from("<HII", head, 94)
+        if header_size + n_vlrs * _VLR_HEADER > size:
+            raise CloudFileError(path, f"corrupt header: it declares {n_vlrs} variable-length records, more than "
+                                       f"the {size} bytes of the file can hold")
+        if offset > size:
+            raise CloudFileError(path, f"corrupt header: its point data starts at byte {offset}, past the end of "
+                                       f"the {size}-byte file")
+        if head[24:26] >= bytes([1, 4]) and len(head) >= 247:
+            _check_evlrs(path, f, *struct.unpack_from("<QI", head, 235), offset, size)
+        vlrs = _read_vlrs(f, header_size, n_vlrs)
+        _check_extra_bytes(path, vlrs.get(_EXTRA_BYTES, b""))
+        _check_laz_sizes(path, f, head, size, vlrs.get(_LASZIP))
 
 
-#: user id and record id of the LASzip VLR, and the chunk size meaning "variable chunks"
-_LASZIP = (b"laszip encoded", 22204)
+def _check_evlrs(path, f, start: int, count: int, offset: int, size: int) -> None:
+    """Extended VLRs (LAS 1.4) after the point data, each within the file: laspy reads a
+    record's declared length (8 bytes, up to 2**64) in one allocation."""
+    if not count:
+        return
+    if start < offset or start + count * _EVLR_HEADER > size:
+        raise CloudFileError(path, f"corrupt header: it declares {count} extended variable-length records "
+                                   f"from byte {start}: they must follow the point data (from byte {offset}) and fit in the {size}-byte file")
+    pos = start
+    for i in range(count):
+        f.seek(pos + 20)
+        length = struct.unpack("<Q", f.read(8))[0]
+        pos += _EVLR_HEADER + length
+        if pos > size:
+            raise CloudFileError(path, f"corrupt header: extended variable-length record {i} declares {length} "
+                                       f"bytes, past the end of the {size}-byte file")
+
+
+#: (user id, record id) of the extra-bytes VLR and of the LASzip VLR
+_EXTRA_BYTES, _LASZIP = (b"LASF_Spec", 4), (b"laszip encoded", 22204)
+#: the chunk size meaning "variable chunks"
 _VARIABLE_CHUNKS = 0xFFFFFFFF
 #: a chunk buffer above this is refused when it is also larger than the file's points
 _MAX_CHUNK_BYTES = 1 << 30
 
 
-def _check_laz_sizes(path, head: bytes, size: int) -> None:
+def _read_vlrs(f, header_size: int, n_vlrs: int) -> dict:
+    """(user id, record id) -> data of the variable-length records (their count checked)."""
+    f.seek(header_size)
+    vlrs = {}
+    for _ in range(n_vlrs):
+        vlr = f.read(_VLR_HEADER)
+        if len(vlr) < _VLR_HEADER:
+            break
+        user_id, record_id, length = vlr[2:18].split(b"\0")[0], *struct.unpack_from("<HH", vlr, 18)
+        vlrs.setdefault((user_id, record_id), f.read(length))
+    return vlrs
+
+
+def _check_extra_bytes(path, data: bytes) -> None:
+    """An extra-bytes dimension of data type 0 ("undocumented bytes") takes its size from
+    the options byte: 0 bytes made laspy divide by zero."""
+    for start in range(0, len(data) - 191, 192):
+        if data[start + 2] == 0 and data[start + 3] == 0:
+            name = data[start + 4 : start + 36].split(b"\0")[0].decode("latin-1")
+            raise CloudFileError(path, f"corrupt extra-bytes record: dimension {name!r} has a size of 0 bytes "
+                                       "(data type 0 needs a size of 1 to 255 bytes in its options byte)")
+
+
+def _check_laz_sizes(path, f, head: bytes, size: int, laszip) -> None:
     """lazrs aborts the process (not an exception) when it cannot allocate what a corrupt
     LASzip record asks for: a chunk of 4 billion points, or a chunk table of 4 billion
-    entries. Such sizes are refused here first."""
-    header_size, offset, n_vlrs = struct.unpack_from("<HII", head, 94)
+    entries; laspy allocates the declared point count at once. Such sizes are refused here
+    first: fixed-size chunks hold at most chunk size x chunk count points."""
+    if laszip is None or len(laszip) < 16:
+        return  # not LASzip-compressed
+    offset = struct.unpack_from("<I", head, 96)[0]
     record_length = struct.unpack_from("<H", head, 105)[0]
     n_points = struct.unpack_from("<I", head, 107)[0]
     if head[24:26] >= bytes([1, 4]) and len(head) >= 255:
         n_points = max(n_points, struct.unpack_from("<Q", head, 247)[0])
-    with open(path, "rb") as f:
-        chunk_size = _laszip_chunk_size(f, header_size, n_vlrs)
-        if chunk_size is None:
-            return  # not LASzip-compressed
-        if chunk_size != _VARIABLE_CHUNKS and chunk_size > n_points and chunk_size * record_length > _MAX_CHUNK_BYTES:
-            raise CloudFileError(path, f"corrupt LAZ header: chunks of {chunk_size} points for a file of {n_points}")
-        f.seek(offset)
-        table = struct.unpack("<q", f.read(8))[0] if offset + 8 <= size else -1
-        if 0 <= table <= size - 8:
-            f.seek(table)
-            _, n_chunks = struct.unpack("<II", f.read(8))
-            if n_chunks > min(size, n_points + 1):
-                raise CloudFileError(path, f"corrupt LAZ data: a chunk table of {n_chunks} chunks for {n_points} "
-                                           f"points in {size} bytes")
-
-
-def _laszip_chunk_size(f, header_size: int, n_vlrs: int):
-    """The chunk size of the LASzip VLR, or None without one."""
-    f.seek(header_size)
-    for _ in range(n_vlrs):
-        vlr = f.read(_VLR_HEADER)
-        if len(vlr) < _VLR_HEADER:
-            return None
-        user_id, record_id, length = vlr[2:18].split(b"\0")[0], *struct.unpack_from("<HH", vlr, 18)
-        data = f.read(length)
-        if (user_id, record_id) == _LASZIP:
-            return struct.unpack_from("<I", data, 12)[0] if len(data) >= 16 else None
-    return None
+    chunk_size = struct.unpack_from("<I", laszip, 12)[0]
+    if chunk_size != _VARIABLE_CHUNKS and chunk_size > n_points and chunk_size * record_length > _MAX_CHUNK_BYTES:
+        raise CloudFileError(path, f"corrupt LAZ header: chunks of {chunk_size} points for a file of {n_points}")
+    f.seek(offset)
+    table = struct.unpack("<q", f.read(8))[0] if offset + 8 <= size else -1
+    if not 0 <= table <= size - 8:
+        return
+    f.seek(table)
+    _, n_chunks = struct.unpack("<II", f.read(8))
+    if n_chunks > min(size, n_points + 1):
+        raise CloudFileError(path, f"corrupt LAZ data: a chunk table of {n_chunks} chunks for {n_points} "
+                                   f"points in {size} bytes")
+    if chunk_size != _VARIABLE_CHUNKS and n_points > n_chunks * chunk_size:
+        raise CloudFileError(path, f"corrupt LAZ header: it declares {n_points} points but its {n_chunks} chunks "
+                                   f"of {chunk_size} points hold at most {n_chunks * chunk_size}")

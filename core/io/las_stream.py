@@ -13,11 +13,13 @@ CloudCompare.
 from __future__ import annotations
 
 import os
+import struct
 from dataclasses import dataclass
 
 import numpy as np
 
 from .cloud import CloudFileError, find_normals
+from .las import check_record_counts
 from .write import RESULT_FLAGS
 
 #: points per chunk read or written (about 30 MB of float64 coordinates)
@@ -52,6 +54,7 @@ def open_las(path) -> LasInfo:
     """Read and check the header of a LAS/LAZ file (nothing else is read)."""
     import laspy
 
+    check_record_counts(path)
     try:
         with laspy.open(path) as reader:
             h = reader.header
@@ -71,7 +74,7 @@ def open_las(path) -> LasInfo:
                            tuple(names), bool(h.are_points_compressed and h.point_format.id >= 6))
     except CloudFileError:
         raise
-    except (laspy.errors.LaspyException, ValueError, EOFError, OSError) as exc:
+    except (laspy.errors.LaspyException, ValueError, EOFError, OSError, struct.error) as exc:
         raise CloudFileError(path, f"not a readable LAS/LAZ file: {exc}") from None
 
 
@@ -107,7 +110,7 @@ def iter_records(path, *, chunk: int = CHUNK, info: LasInfo | None = None, coord
                 start += len(pts)
     except CloudFileError:
         raise
-    except (laspy.errors.LaspyException, ValueError, EOFError, OSError, RuntimeError) as exc:
+    except (laspy.errors.LaspyException, ValueError, EOFError, OSError, RuntimeError, struct.error) as exc:
         raise CloudFileError(path, f"unreadable after point {start} of {info.count} (truncated or corrupt "
                                    f"LAS/LAZ): {exc}") from None
     if start != info.count:

@@ -21,7 +21,7 @@ def read_obj(path) -> RawCloud:
     """``v`` lines are the points. Normals come from faces' ``v//vn`` (or ``v/vt/vn``)
     indices; without those, ``vn`` lines are used in order when there is one per vertex."""
     with open(path, encoding="latin-1") as f:
-        lines = f.read().splitlines()
+        lines = f.read().removeprefix("\xef\xbb\xbf").splitlines()  # a UTF-8 BOM hid the first 'v'
     v_lines, vn_lines, f_lines = [], [], []  # f_lines: (line index, #v so far, #vn so far)
     for i, line in enumerate(lines):
         parts = line.split(None, 1)

@@ -17,6 +17,7 @@ from .text import diagnose_lines
 
 _MAX_HEADER_LINES = 100
 _TYPES = {"F": "f", "I": "i", "U": "u"}
+_SIZES = ("1", "2", "4", "8")
 
 
 def read_pcd(path) -> RawCloud:
@@ -62,6 +63,9 @@ def _layout(header, path):
     if not len(names) == len(sizes) == len(types) == len(counts):
         raise CloudFileError(path, f"the PCD header lists {len(names)} FIELDS but {len(sizes)} SIZE, "
                                    f"{len(types)} TYPE and {len(counts)} COUNT entries")
+    bad = next(((name, size) for name, size in zip(names, sizes) if size not in _SIZES), None)
+    if bad is not None:  # numpy would take "4," as a structured dtype
+        raise CloudFileError(path, f"the PCD header gives field {bad[0]!r} SIZE {bad[1]!r}; allowed: {', '.join(_SIZES)}")
     fields = []
     try:
         for i, (name, size, kind, count) in enumerate(zip(names, sizes, types, counts)):
@@ -95,10 +99,26 @@ def _read_ascii(path, fields, n, n_header_lines):
         raise CloudFileError(path, f"{problem}the header declares {n} points but {len(table)} data lines follow")
     props, col = {}, 0
     for name, dtype, count in fields:
-        block = table[:, col : col + count].astype(dtype)
+        block = _ascii_block(path, table[:, col : col + count], name, np.dtype(dtype))
         props[name] = block[:, 0] if count == 1 else block
         col += count
     return props
+
+
+def _ascii_block(path, values, name, dtype):
+    """ASCII values in the declared type; integers out of range or with a fraction are refused
+    (a cast would wrap 1000 to -24 in a 1-byte I)."""
+    if dtype.kind in "iu":
+        info = np.iinfo(dtype)
+        bad = (values < info.min) | (values > info.max) | (values != np.round(values))
+        if bad.any():
+            row = int(np.flatnonzero(bad.any(axis=1))[0])
+            value = values[row][bad[row]][0]
+            raise CloudFileError(
+                path, f"point {row}: field {name!r} (TYPE {dtype.kind.upper()} SIZE {dtype.itemsize}) has the value "
+                f"{value:g}, not an integer in [{info.min}, {info.max}]",
+            )
+    return values.astype(dtype)
 
 
 def _read_binary(f, path, fields, n):

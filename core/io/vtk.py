@@ -9,6 +9,8 @@ becomes a :class:`CloudFileError` instead of a message on stderr.
 
 from __future__ import annotations
 
+import mmap
+import os
 import re
 
 import numpy as np
@@ -20,6 +22,7 @@ def read_vtk(path) -> RawCloud:
     """A legacy ``.vtk`` file (ascii or binary)."""
     from vtkmodules.vtkIOLegacy import vtkGenericDataObjectReader
 
+    check_legacy_cells(path)
     reader = vtkGenericDataObjectReader()
     for option in ("ReadAllScalarsOn", "ReadAllVectorsOn", "ReadAllNormalsOn", "ReadAllFieldsOn"):
         getattr(reader, option)()
@@ -30,6 +33,7 @@ def read_vtp(path) -> RawCloud:
     """An XML PolyData ``.vtp`` file."""
     from vtkmodules.vtkIOXML import vtkXMLPolyDataReader
 
+    check_xml_sizes(path)
     return _read(vtkXMLPolyDataReader(), path)
 
 
@@ -39,6 +43,7 @@ def _read(reader, path) -> RawCloud:
     if data is None or not hasattr(data, "GetPoints"):
         kind = "nothing" if data is None else data.GetClassName()
         raise CloudFileError(path, f"contains {kind}, not a point set")
+    _check_implicit_points(data, path)
     if data.GetPoints() is None or data.GetNumberOfPoints() == 0:
         return RawCloud(np.empty((0, 3)), None, {})
     from vtkmodules.util.numpy_support import vtk_to_numpy
@@ -98,3 +103,92 @@ def _first_message(text: str) -> str:
             continue
         return re.sub(r"^vtk\w+ \(0x[0-9a-fA-F]+\): ", "", line)
     return "unknown VTK error"
+
+
+def _check_implicit_points(data, path) -> None:
+    """Image data and rectilinear grids do not store their points: a 100-byte header can
+    declare 10**15, and building their coordinates would take the machine's memory."""
+    if data.IsA("vtkPointSet"):
+        return
+    n = data.GetNumberOfPoints()
+    need = n * 3 * 8 * 4  # float64 coordinates and numpy's temporaries while building them
+    available = _available_memory()
+    if need > available:
+        raise CloudFileError(path, f"a {data.GetClassName()} of {n} points: building their coordinates needs about "
+                                   f"{need / 1e9:.3g} GB, more than the {available / 1e9:.3g} GB of memory available")
+
+
+def _available_memory() -> int:
+    try:
+        import psutil
+
+        return int(psutil.virtual_memory().available)
+    except ImportError:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+
+
+_CELLS = re.compile(rb"^(VERTICES|LINES|POLYGONS|TRIANGLE_STRIPS|CELLS)[ \t]+(\d+)[ \t]+(\d+)[ \t\r]*$", re.M)
+
+
+def check_legacy_cells(path) -> None:
+    """A legacy file before version 5.0 stores each cell array as runs of (count, ids...);
+    VTK walks the counts without checking them against the array's size, and a corrupt
+    count crashes the process (a segmentation fault). The runs are checked here first."""
+    with open(path, "rb") as f, mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as data:
+        lines = data[:512].split(b"\n", 3)
+        version = re.match(rb"# vtk DataFile Version (\d{1,3})\b", lines[0])
+        if (version and 5 <= int(version.group(1)) <= 99) or len(lines) < 4:
+            return  # offsets and connectivity, which VTK checks (a garbled version is read as legacy)
+        binary = lines[2].strip().upper() == b"BINARY"
+        for match in _CELLS.finditer(data):
+            size, start = int(match.group(3)), match.end() + 1
+            if binary:
+                if start + 4 * size > len(data):
+                    raise CloudFileError(path, f"truncated: {match.group(0).decode().strip()!r} declares {size} "
+                                               "cell entries but the file ends first")
+                ids = np.frombuffer(data, ">i4", count=size, offset=start).astype(np.int64)
+            else:
+                try:
+                    ids = np.array(bytes(data[start : start + 32 * size + 64]).split(maxsplit=size)[:size], np.int64)
+                except (ValueError, OverflowError):
+                    return  # VTK names the bad entry
+            problem = _cell_runs_problem(ids, int(match.group(2)), size)
+            if problem:
+                raise CloudFileError(path, f"corrupt {match.group(1).decode()} section: {problem}")
+
+
+def _cell_runs_problem(ids, n_cells: int, size: int) -> str | None:
+    """What is wrong with ``n_cells`` runs of (count, ids...) in ``ids``, or None."""
+    step = int(ids[0]) + 1 if len(ids) else 0
+    if step > 0 and len(ids) == n_cells * step and (ids[::step] == step - 1).all():
+        return None  # cells of one size (all vertices, all triangles...): no walk needed
+    ids = ids.tolist()
+    i = 0
+    for cell in range(n_cells):
+        count = ids[i] if i < len(ids) else None
+        if count is None or count < 0 or i + 1 + count > len(ids):
+            return (f"cell {cell} declares {count} point ids where {max(len(ids) - i - 1, 0)} of the {size} "
+                    "entries remain")
+        i += 1 + count
+    return None
+
+
+_XML_COUNT = re.compile(rb'\bNumberOf(Points|Verts|Lines|Strips|Polys|Cells|Tuples|Components)="\s*(\d+)\s*"')
+
+
+def check_xml_sizes(path) -> None:
+    """VTK allocates what an XML file's NumberOf... attributes declare before reading any
+    data, and a failed allocation aborts the process (std::bad_alloc, not an exception);
+    NumberOfComponents="1000000000000" made it run for minutes. Counts whose arrays would
+    not fit in memory are refused first (from the XML before any appended data)."""
+    with open(path, "rb") as f:
+        head = f.read(1 << 20).split(b"<AppendedData", 1)[0]
+    counts = [(name.decode(), int(value)) for name, value in _XML_COUNT.findall(head)]
+    components = max([value for name, value in counts if name == "Components"] + [3])
+    name, value = max([(name, value) for name, value in counts if name != "Components"] + [("Points", 0)],
+                      key=lambda item: item[1])
+    need = 8 * value * components
+    available = _available_memory()
+    if need > available:
+        raise CloudFileError(path, f"declares NumberOf{name}=\"{value}\" with arrays of up to {components} components: "
+                                   f"about {need / 1e9:.3g} GB, more than the {available / 1e9:.3g} GB of memory available")

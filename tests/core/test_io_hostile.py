@@ -184,3 +184,158 @@ def test_vtk_with_non_utf8_bytes_is_a_clear_error(tmp_path):
     path = tmp_path / "bad.vtk"
     path.write_bytes(b"\x80# vtk DataFile Version 5.1\nvtk output\nASCII\nDATASET POLYDATA\nPOINTS 1 double\n0 0 0\n")
     _error(path, "VTK cannot read it")
+
+
+def _pcd(path, size, typ, rows, data="ascii"):
+    path.write_bytes(f"VERSION 0.7\nFIELDS x y z\nSIZE {size}\nTYPE {typ}\nCOUNT 1 1 1\nWIDTH 3\nHEIGHT 1\n"
+                     f"POINTS 3\nDATA {data}\n".encode() + rows)
+    return path
+
+
+@pytest.mark.parametrize("size", ["4,", ",", "16", "3"])
+@pytest.mark.parametrize("data", ["ascii", "binary"])
+def test_pcd_size_not_1_2_4_8_refused(tmp_path, size, data):
+    """numpy reads the type "<f4," as a structured dtype: column_stack then failed with a DTypePromotionError."""
+    path = _pcd(tmp_path / "size.pcd", f"{size} 4 4", "F F F", b"0 0 0\n1 0 0\n0 1 0\n" if data == "ascii" else b"\0" * 48,
+                data)
+    _error(path, "field 'x' SIZE", repr(size), "allowed: 1, 2, 4, 8")
+
+
+def test_ascii_pcd_integers_out_of_range_refused(tmp_path):
+    """A 1-byte I field holding 1000 was cast to -24 without a word."""
+    _error(_pcd(tmp_path / "int.pcd", "1 1 1", "I I I", b"0 0 0\n1 0 0\n0 1 1000\n"),
+           "point 2", "field 'z' (TYPE I SIZE 1)", "1000", "[-128, 127]")
+    _error(_pcd(tmp_path / "frac.pcd", "4 4 2", "F F U", b"0 0 0\n1 0 1.5\n0 1 0\n"), "point 1", "1.5", "[0, 65535]")
+    cloud = core.io.read_cloud(_pcd(tmp_path / "ok.pcd", "4 4 1", "F F U", b"0 0 0\n1 0 255\n0 1 0\n"))
+    assert cloud.points[1, 2] == 255
+
+
+def _las14(path):
+    laspy = pytest.importorskip("laspy")
+    header = laspy.LasHeader(point_format=6, version="1.4")
+    header.add_extra_dims([laspy.ExtraBytesParams(name="nx", type=np.float32)])
+    las = laspy.LasData(header)
+    las.x, las.y, las.z, las.nx = np.arange(30.0), np.ones(30), np.zeros(30), np.ones(30)
+    las.write(path)
+    return bytearray(path.read_bytes())
+
+
+def _las_and_stream_error(path, *parts):
+    from core.io.las_stream import open_las
+
+    _error(path, *parts)
+    with pytest.raises(CloudFileError, match=parts[0]):
+        open_las(path)
+
+
+def test_las_zero_size_extra_bytes_refused(tmp_path):
+    """Data type 0 with a size of 0 made laspy divide by zero (a ZeroDivisionError traceback)."""
+    data = _las14(tmp_path / "a.las")
+    eb = data.find(b"LASF_Spec") - 2 + 54  # the extra-bytes VLR's first 192-byte descriptor
+    data[eb + 2 : eb + 4] = b"\0\0"
+    (tmp_path / "eb.las").write_bytes(bytes(data))
+    _las_and_stream_error(tmp_path / "eb.las", "dimension 'nx' has a size of 0 bytes")
+
+
+@pytest.mark.parametrize("where, part", [
+    ("offset", "point data starts at byte 4294967295"),
+    ("evlrs", "extended variable-length records"),
+    ("laz_count", "hold at most"),
+])
+def test_las_offsets_and_counts_past_the_file_refused(tmp_path, where, part):
+    """laspy allocated what these ask for: 4 GB for the offset, a record length read from the
+    file's first bytes, and a bytearray of 4 billion LAZ points (a MemoryError, or a
+    machine's whole memory for a few hundred million)."""
+    name = "a.laz" if where == "laz_count" else "a.las"
+    if where == "laz_count":
+        pytest.importorskip("lazrs")
+    data = _las14(tmp_path / name)
+    if where == "offset":
+        struct.pack_into("<I", data, 96, 0xFFFFFFFF)
+    elif where == "evlrs":
+        struct.pack_into("<QI", data, 235, 0, 5)  # 5 extended VLRs from byte 0
+    else:
+        struct.pack_into("<Q", data, 247, 4_000_000_000)  # the LAS 1.4 point count
+    path = tmp_path / f"bad_{name}"
+    path.write_bytes(bytes(data))
+    _las_and_stream_error(path, part)
+
+
+_VTK42 = "# vtk DataFile Version 4.2\nx\n{mode}\nDATASET {kind}\nPOINTS 3 float\n"
+
+
+@pytest.mark.parametrize("mode, kind, cells, part", [
+    ("ASCII", "POLYDATA", b"VERTICES 1 2\n1000000 0\n", "VERTICES section: cell 0 declares 1000000 point ids"),
+    ("ASCII", "UNSTRUCTURED_GRID", b"CELLS 1 2\n1000000 0\nCELL_TYPES 1\n1\n", "CELLS section: cell 0"),
+    ("BINARY", "POLYDATA", b"LINES 2 3\n" + struct.pack(">3i", 1, 0, 5_000_000) + b"\n", "cell 1 declares 5000000"),
+    ("BINARY", "POLYDATA", b"VERTICES 1000000000 1000000000\n" + struct.pack(">2i", 1, 0), "truncated: 'VERTICES"),
+])
+def test_legacy_vtk_cell_counts_past_their_array_refused(tmp_path, mode, kind, cells, part):
+    """VTK walked these counts past the cell array and the process died of a segmentation fault."""
+    pytest.importorskip("vtkmodules")
+    xyz = b"0 0 0 1 0 0 0 1 0\n" if mode == "ASCII" else struct.pack(">9f", 0, 0, 0, 1, 0, 0, 0, 1, 0) + b"\n"
+    path = tmp_path / "cells.vtk"
+    path.write_bytes(_VTK42.format(mode=mode, kind=kind).encode() + xyz + cells)
+    _error(path, part)
+    path.write_bytes(_VTK42.format(mode=mode, kind=kind).encode() + xyz)  # the points alone read
+    assert len(core.io.read_cloud(path)) == 3
+
+
+def test_vtk_image_data_of_more_points_than_memory_refused(tmp_path):
+    """Image data stores no points: 10**15 of them from a 100-byte header ended in numpy's
+    MemoryError (and a few hundred million in the machine's whole memory)."""
+    pytest.importorskip("vtkmodules")
+    path = tmp_path / "grid.vtk"
+    path.write_text("# vtk DataFile Version 4.2\nx\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 100000 100000 100000\n"
+                    "SPACING 1 1 1\nORIGIN 0 0 0\n")
+    _error(path, "vtkStructuredPoints of 1000000000000000 points", "GB of memory available")
+
+
+def test_obj_with_utf8_bom_keeps_its_first_vertex(tmp_path):
+    """Read as latin-1, the BOM made the first line's key 'ï»¿v' and the first vertex was dropped silently."""
+    path = tmp_path / "bom.obj"
+    path.write_bytes(b"\xef\xbb\xbfv 5 6 7\nv 1 0 0\nv 0 1 0\n")
+    np.testing.assert_array_equal(core.io.read_cloud(path).points[0], [5, 6, 7])
+
+
+@pytest.mark.parametrize("old, new, part", [
+    ('NumberOfLines="0"', 'NumberOfLines="1000000000000"', 'NumberOfLines="1000000000000"'),
+    ('NumberOfPoints="3"', 'NumberOfPoints="3000000000000"', 'NumberOfPoints="3000000000000"'),
+    ('NumberOfComponents="3"', 'NumberOfComponents="1000000000000"', "1000000000000 components"),
+])
+def test_vtp_counts_beyond_memory_refused(tmp_path, old, new, part):
+    """VTK allocated these before reading any data: std::bad_alloc aborted the process (and a
+    huge NumberOfComponents kept it busy for minutes)."""
+    pv = pytest.importorskip("pyvista")
+    path = tmp_path / "a.vtp"
+    pv.PolyData(np.eye(3)).save(path, binary=False)
+    text = path.read_text()
+    assert old in text
+    path.write_text(text.replace(old, new, 1))
+    _error(path, part, "GB of memory available")
+
+
+def test_huge_coordinates_through_files_give_an_invalid_result_that_writes(tmp_path):
+    """estimate refused to fit coordinates of 1e300 (valid=False), but writing the result
+    computed the anisotropy with a kd-tree search that overflowed: the CLI said only
+    "Encountering floating point overflow. The value of p too large" and wrote nothing."""
+    t = np.random.default_rng(0).random((60, 2))
+    path = tmp_path / "huge.ply"
+    core.io.write_cloud(path, np.column_stack([t, (t ** 2).sum(axis=1)]) * 1e300)
+    cloud = core.io.read_cloud(path)
+    res = core.estimate(cloud.points, k=15)
+    assert not res.valid.any() and "overflow" in res.params["degenerate"]
+    core.io.write_result(tmp_path / "out.ply", res)
+    assert np.isnan(core.io.read_cloud(tmp_path / "out.ply").fields["anisotropy"]).all()
+
+
+def test_vtk_with_a_garbled_version_is_checked_as_legacy(tmp_path):
+    """A version of 1000000000000 was taken as >= 5 and not checked, but VTK read the file's
+    OFFSETS line as legacy cell counts and died of a segmentation fault."""
+    pv = pytest.importorskip("pyvista")
+    path = tmp_path / "v.vtk"
+    pv.PolyData(np.eye(3)).save(path, binary=True)
+    data = path.read_bytes()
+    assert data.startswith(b"# vtk DataFile Version 5.1")
+    path.write_bytes(data.replace(b"Version 5.1", b"Version 1000000000000", 1))
+    _error(path, "corrupt VERTICES section")
