@@ -7,6 +7,8 @@ that the same thresholds read a sphere of radius 1 mm and of 1 km alike.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 #: type codes, in the order of :data:`TYPE_NAMES`; -1 marks invalid points
@@ -34,7 +36,7 @@ def curvature_scale(res) -> float:
     1 / (the cloud's bounding-box diagonal), so that a plane's noise is not its scale."""
     ok = res.valid & np.isfinite(res.k1) & np.isfinite(res.k2)
     extent = np.ptp(res.points, axis=0)
-    floor = 1.0 / max(float(np.linalg.norm(extent)), np.finfo(float).tiny)
+    floor = 1.0 / max(math.hypot(*extent), np.finfo(float).tiny)  # hypot: no overflow at 1e300
     if not ok.any():
         return floor
     return max(float(np.median(res.curvedness[ok])), floor)
