@@ -16,6 +16,7 @@ import re
 import numpy as np
 
 from .cloud import CloudFileError, RawCloud, split_components
+from .vtp_blocks import check_binary_headers
 
 
 def read_vtk(path) -> RawCloud:
@@ -34,6 +35,7 @@ def read_vtp(path) -> RawCloud:
     from vtkmodules.vtkIOXML import vtkXMLPolyDataReader
 
     check_xml_sizes(path)
+    check_binary_headers(path, _available_memory())
     return _read(vtkXMLPolyDataReader(), path)
 
 

@@ -432,7 +432,8 @@ def test_vtk_errors(tmp_path, capfd):
         writer.Write()
         data = (tmp_path / name).read_bytes()
         (tmp_path / f"trunc_{name}").write_bytes(data[: len(data) * 2 // 3])
-        assert_error(tmp_path / f"trunc_{name}", "VTK cannot read it")
+        # a .vtp's first compressed array then runs past the end: refused before VTK reads it
+        assert_error(tmp_path / f"trunc_{name}", "VTK cannot read it" if name == "t.vtk" else "past the end of the data")
     (tmp_path / "junk.vtk").write_text("hello world\n")
     assert_error(tmp_path / "junk.vtk", "VTK cannot read it")
     (tmp_path / "junk.vtp").write_text("hello world\n")
