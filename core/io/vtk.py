@@ -2,7 +2,8 @@
 
 The points of any point set (polydata, unstructured grid, ...) are read; the point data's
 normals array (or a 3-component array called normals) gives the normals; other point data
-arrays become fields (3 components give name_x/_y/_z). Cells are ignored. VTK reports
+arrays become fields (3 components give name_x/_y/_z). Cells are ignored (a .vtp's are
+removed before VTK reads it: see :mod:`.vtp_points`). VTK reports
 problems through its output window, which is captured while reading so that a failure
 becomes a :class:`CloudFileError` instead of a message on stderr.
 """
@@ -17,6 +18,7 @@ import numpy as np
 
 from .cloud import CloudFileError, RawCloud, split_components
 from .vtp_blocks import check_binary_headers
+from .vtp_points import points_only
 
 
 def read_vtk(path) -> RawCloud:
@@ -34,9 +36,15 @@ def read_vtp(path) -> RawCloud:
     """An XML PolyData ``.vtp`` file."""
     from vtkmodules.vtkIOXML import vtkXMLPolyDataReader
 
-    check_xml_sizes(path)
-    check_binary_headers(path, _available_memory())
-    return _read(vtkXMLPolyDataReader(), path)
+    with points_only(path) as copy:  # VTK never reads the cells: damaged ones aborted it
+        try:
+            check_xml_sizes(copy)
+            check_binary_headers(copy, _available_memory())
+            return _read(vtkXMLPolyDataReader(), copy)
+        except CloudFileError as error:
+            if copy is path:
+                raise
+            raise CloudFileError(path, error.problem.replace(str(copy), str(path))) from None
 
 
 def _read(reader, path) -> RawCloud:
