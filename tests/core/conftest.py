@@ -7,7 +7,11 @@ as fixtures (there is no ``__init__.py``, so test modules cannot import this fil
 
 from __future__ import annotations
 
+import json
 import os
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -110,6 +114,36 @@ def check_result_invariants(r, *, atol=1e-9):
             assert np.abs(np.einsum("ij,ij->i", a, b)).max() < atol
 
 
+_CHILD_READ = """
+import json, resource, sys
+import core
+def vmsize():
+    return next(int(l.split()[1]) * 1024 for l in open('/proc/self/status') if l.startswith('VmSize'))
+limit = vmsize() + (1 << 30)  # as a small machine: a bad allocation is std::bad_alloc
+resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+for path in sys.argv[1:]:
+    print(json.dumps(path), flush=True)
+    try:
+        print(json.dumps(core.io.read_cloud(path).points.tolist()), flush=True)
+    except ValueError as error:
+        print(json.dumps(str(error)), flush=True)
+"""
+
+
+def read_in_child(paths):
+    """{path: points (a list) or the error message}, each file read by ``core.io.read_cloud``
+    in one subprocess whose address space is limited (as on a small machine), so that a file
+    that aborts the process (std::bad_alloc, a segmentation fault) fails the caller's test
+    instead of ending the test run; a path missing its answer is the one that killed it."""
+    run = subprocess.run([sys.executable, "-c", _CHILD_READ, *map(str, paths)], capture_output=True, text=True,
+                         timeout=300, cwd=Path(core.__file__).resolve().parents[1])
+    lines = [json.loads(line) for line in run.stdout.splitlines()]
+    answers = dict(zip(lines[::2], lines[1::2]))
+    died = [p for p in map(str, paths) if p not in answers]
+    assert not died, f"reading {died[0]} ended the process (code {run.returncode}): {run.stderr[-2000:]}"
+    return answers
+
+
 # ----------------------------------------------------------------------------- fixtures
 
 
@@ -120,7 +154,7 @@ def helpers():
     class H:
         pass
 
-    for f in (graph_truth, hyperbolic_paraboloid, random_orthogonal, abs_cos, check_result_invariants):
+    for f in (graph_truth, hyperbolic_paraboloid, random_orthogonal, abs_cos, check_result_invariants, read_in_child):
         setattr(H, f.__name__, staticmethod(f))
     return H
 

@@ -6,12 +6,8 @@ them: VTK allocated what they declared and a failed allocation aborted the proce
 from __future__ import annotations
 
 import base64
-import json
 import re
 import struct
-import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -109,35 +105,6 @@ def _decode(data, start, encoded, nbytes):
     return base64.b64decode(bytes(data[start : start + -(-nbytes // 3) * 4]))[:nbytes]
 
 
-CHILD = """
-import json, resource, sys
-import core
-def vmsize():
-    return next(int(l.split()[1]) * 1024 for l in open('/proc/self/status') if l.startswith('VmSize'))
-limit = vmsize() + (1 << 30)  # as a small machine: a bad allocation is std::bad_alloc
-resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
-for path in sys.argv[1:]:
-    print(json.dumps(path), flush=True)
-    try:
-        core.io.read_cloud(path)
-        print(json.dumps("read"), flush=True)
-    except ValueError as error:
-        print(json.dumps(str(error)), flush=True)
-"""
-
-
-def _read_in_child(paths):
-    """Read each file in one subprocess: {path: message or "read"}; a path missing its answer
-    is the one that killed the process (asserted by the caller)."""
-    run = subprocess.run([sys.executable, "-c", CHILD, *map(str, paths)], capture_output=True, text=True,
-                         timeout=300, cwd=Path(core.__file__).resolve().parents[1])
-    lines = [json.loads(line) for line in run.stdout.splitlines()]
-    answers = dict(zip(lines[::2], lines[1::2]))
-    died = [p for p in map(str, paths) if p not in answers]
-    assert not died, f"reading {died[0]} ended the process (code {run.returncode}): {run.stderr[-2000:]}"
-    return answers
-
-
 HOSTILE = [  # (compressor, mode, header type), header words to set, what the message says
     (("ZLib", "Binary", "UInt32"), {3: 0xFFFFFFF0}, ["compressed to 4294967280 bytes", "past the end of the data"]),
     (("LZ4", "AppendedRaw", "UInt64"), {3: 2 ** 62}, [f"compressed to {2 ** 62} bytes", "past the end of the data"]),
@@ -157,7 +124,7 @@ HOSTILE = [  # (compressor, mode, header type), header words to set, what the me
 ]
 
 
-def test_vtp_damaged_block_headers_refused_before_vtk_reads_them(tmp_path):
+def test_vtp_damaged_block_headers_refused_before_vtk_reads_them(tmp_path, helpers):
     """Each file is a valid one with header words changed; all are read in one subprocess (with
     its address space limited, as on a small machine) so that a regression, which aborts the
     process, fails this test instead of ending the test run."""
@@ -171,7 +138,7 @@ def test_vtp_damaged_block_headers_refused_before_vtk_reads_them(tmp_path):
     start = _first_array(data)[0]
     garbled.write_bytes(data[:start] + b"!!!!" + data[start + 4 :])
     cases[garbled] = ["compression header (12 bytes) cannot be decoded"]
-    answers = _read_in_child(cases)
+    answers = helpers.read_in_child(cases)
     for path, parts in cases.items():
         for part in (path.name, "array 'Normals' in PointData of piece 0", *parts):
             assert part in answers[str(path)], answers[str(path)]

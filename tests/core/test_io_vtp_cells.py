@@ -8,11 +8,8 @@ this test instead of ending the test run."""
 from __future__ import annotations
 
 import base64
-import json
 import re
 import struct
-import subprocess
-import sys
 import tempfile
 import zlib
 from pathlib import Path
@@ -109,34 +106,6 @@ def _damage(path, section: str, name: str, index: int, value: int):
     return path
 
 
-CHILD = """
-import json, resource, sys
-import core
-def vmsize():
-    return next(int(l.split()[1]) * 1024 for l in open('/proc/self/status') if l.startswith('VmSize'))
-limit = vmsize() + (1 << 30)  # as a small machine: a bad allocation is std::bad_alloc
-resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
-for path in sys.argv[1:]:
-    print(json.dumps(path), flush=True)
-    try:
-        print(json.dumps(core.io.read_cloud(path).points.tolist()), flush=True)
-    except ValueError as error:
-        print(json.dumps(str(error)), flush=True)
-"""
-
-
-def _read_in_child(paths):
-    """{path: points (a list) or the error message}, read in one memory-limited subprocess; a
-    path missing its answer is the one that killed the process."""
-    run = subprocess.run([sys.executable, "-c", CHILD, *map(str, paths)], capture_output=True, text=True,
-                         timeout=300, cwd=Path(core.__file__).resolve().parents[1])
-    lines = [json.loads(line) for line in run.stdout.splitlines()]
-    answers = dict(zip(lines[::2], lines[1::2]))
-    died = [p for p in map(str, paths) if p not in answers]
-    assert not died, f"reading {died[0]} ended the process (code {run.returncode}): {run.stderr[-2000:]}"
-    return answers
-
-
 DAMAGES = [  # (mode, compressor), (section, array, index, value)
     (("ascii", "None"), ("Verts", "offsets", -1, 10 ** 12)),
     (("ascii", "None"), ("Verts", "offsets", -1, 4 * 10 ** 9)),
@@ -156,12 +125,12 @@ DAMAGES = [  # (mode, compressor), (section, array, index, value)
 ]
 
 
-def test_vtp_damaged_cells_leave_the_points_readable(tmp_path):
+def test_vtp_damaged_cells_leave_the_points_readable(tmp_path, helpers):
     poly, paths = _polydata(), []
     for i, ((mode, compressor), damage) in enumerate(DAMAGES):
         paths.append(_damage(_write(tmp_path / f"d{i}_{mode}.vtp", poly, mode, compressor), *damage))
     before = {path: path.read_bytes() for path in paths}
-    answers = _read_in_child(paths)
+    answers = helpers.read_in_child(paths)
     for path in paths:
         assert answers[str(path)] == poly.points.tolist(), (path.name, answers[str(path)])
         assert path.read_bytes() == before[path]  # the input is never modified
