@@ -11,11 +11,11 @@ becomes a :class:`CloudFileError` instead of a message on stderr.
 from __future__ import annotations
 
 import mmap
-import os
 import re
 
 import numpy as np
 
+from .._memory import available_memory
 from .cloud import CloudFileError, RawCloud, split_components
 from .vtp_blocks import check_binary_headers
 from .vtp_points import points_only
@@ -39,7 +39,7 @@ def read_vtp(path) -> RawCloud:
     with points_only(path) as copy:  # VTK never reads the cells: damaged ones aborted it
         try:
             check_xml_sizes(copy)
-            check_binary_headers(copy, _available_memory())
+            check_binary_headers(copy, available_memory())
             return _read(vtkXMLPolyDataReader(), copy)
         except CloudFileError as error:
             if copy is path:
@@ -122,19 +122,10 @@ def _check_implicit_points(data, path) -> None:
         return
     n = data.GetNumberOfPoints()
     need = n * 3 * 8 * 4  # float64 coordinates and numpy's temporaries while building them
-    available = _available_memory()
+    available = available_memory()
     if need > available:
         raise CloudFileError(path, f"a {data.GetClassName()} of {n} points: building their coordinates needs about "
                                    f"{need / 1e9:.3g} GB, more than the {available / 1e9:.3g} GB of memory available")
-
-
-def _available_memory() -> int:
-    try:
-        import psutil
-
-        return int(psutil.virtual_memory().available)
-    except ImportError:
-        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
 
 
 _CELLS = re.compile(rb"^(VERTICES|LINES|POLYGONS|TRIANGLE_STRIPS|CELLS)[ \t]+(\d+)[ \t]+(\d+)[ \t\r]*$", re.M)
@@ -198,7 +189,7 @@ def check_xml_sizes(path) -> None:
     name, value = max([(name, value) for name, value in counts if name != "Components"] + [("Points", 0)],
                       key=lambda item: item[1])
     need = 8 * value * components
-    available = _available_memory()
+    available = available_memory()
     if need > available:
         raise CloudFileError(path, f"declares NumberOf{name}=\"{value}\" with arrays of up to {components} components: "
                                    f"about {need / 1e9:.3g} GB, more than the {available / 1e9:.3g} GB of memory available")

@@ -8,9 +8,9 @@ when the output is LAS/LAZ (written in chunks, with extra-bytes dimensions).
 
 from __future__ import annotations
 
-import os
 import sys
 
+from .._memory import available_memory
 from ..io.las_stream import open_las
 from .run import bytes_per_point, estimate_tiled, parse_memory
 
@@ -56,13 +56,7 @@ def _bytes(k) -> int:
 def _in_memory_budget(memory) -> int:
     if memory is not None:
         return parse_memory(memory)
-    try:
-        import psutil  # comes with dask.distributed (the [big] extra)
-
-        available = psutil.virtual_memory().available
-    except ImportError:
-        available = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-    return available // 2
+    return available_memory() // 2
 
 
 def run(args) -> int:
