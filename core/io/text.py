@@ -80,6 +80,12 @@ def _is_number(token: str) -> bool:
     return True
 
 
+def _empty_column(lineno: int, tokens: list[str]) -> str:
+    """The message for a data line with an empty field (a missing value is not a zero)."""
+    column = tokens.index("") + 1
+    return f"line {lineno}: column {column} of {len(tokens)} is empty; every data line needs a number in each column"
+
+
 def _header_line(path, lineno: int, text: str) -> tuple[bool, str]:
     """A non-numeric line before the data, as a header entry; numbers with decimal commas
     are not a header but a number style the reader does not take: refused by name."""
@@ -109,6 +115,8 @@ def _scan_head(path, encoding) -> dict:
             delimiter = _guess_delimiter(text)
             tokens = _split(text, delimiter)
             if not all(_is_number(t) for t in tokens):
+                if all(_is_number(t) or not t for t in tokens) and any(tokens):  # data with a hole, not a header
+                    raise CloudFileError(path, _empty_column(lineno, tokens))
                 header.append(_header_line(path, lineno, text))
                 continue
             if len(tokens) == 1 and count is None and tokens[0].isdigit() and all(c for c, _ in header):
@@ -167,6 +175,8 @@ def diagnose_lines(path, encoding, head, exc) -> CloudFileError:
                     path, f"line {lineno}: found {len(tokens)} columns but line {head['first']} has {ncols}"
                 )
             bad = next((t for t in tokens if not _is_number(t)), None)
+            if bad == "":
+                return CloudFileError(path, _empty_column(lineno, tokens))
             if bad is not None:
                 return CloudFileError(path, f"line {lineno}: cannot parse {bad!r} as a number")
     return CloudFileError(path, f"cannot parse the data lines: {exc}")

@@ -197,6 +197,17 @@ def test_semicolons_trailing_commas_commented_count(tmp_path, content):
     assert cloud.fields == {}
 
 
+@pytest.mark.parametrize("content, where", [("0,,0\n1,2,3\n4,5,6\n", "line 1: column 2"),
+                                            ("1,2,3\n0,,0\n4,5,6\n", "line 2: column 2"),
+                                            ("x,y,z\n,2,3\n4,5,6\n", "line 2: column 1"),
+                                            ("x;y;z\n1;2;3\n4;;6\n", "line 3: column 2")])
+def test_an_empty_field_is_refused_not_taken_for_a_header(tmp_path, content, where):
+    """A data row with a hole ("0,,0") was silently skipped as a header when it came first."""
+    path = tmp_path / "holes.csv"
+    path.write_text(content)
+    assert_error(path, f"{where} of 3 is empty")
+
+
 def test_text_errors(tmp_path):
     path = tmp_path / "bad.xyz"
     path.write_text("1 2 3\n4 5 6\n7 oops 9\n")
