@@ -12,6 +12,7 @@ import struct
 
 import numpy as np
 
+from .._memory import available_memory
 from .cloud import CloudFileError, RawCloud, find_normals, split_components
 
 
@@ -57,12 +58,26 @@ def _check_header(header, path, laspy) -> None:
             "(or `pip install 'darboux[las]'`)"
         )
     _check_scales(header, path)
+    if compressed:
+        _check_memory(path, header.point_count, header.point_format.size)
     need = header.offset_to_point_data + header.point_count * header.point_format.size
     if not compressed and os.path.getsize(path) < need:
         raise CloudFileError(
             path, f"truncated: the header declares {header.point_count} points ({need} bytes) but the file "
             f"has {os.path.getsize(path)} bytes"
         )
+
+
+def _check_memory(path, n_points: int, record_length: int) -> None:
+    """A LAZ file's point count cannot be checked against its size (chunks of any size
+    compress to any length): refuse a count whose records, and the float64 coordinates built
+    from them, would not fit in the memory available (laspy allocates all of them at once)."""
+    need = n_points * (record_length + 3 * 8 * 2)  # the records, the coordinates and one temporary
+    available = available_memory()
+    if need > available:
+        raise CloudFileError(path, f"declares {n_points} points: reading them needs about {need / 1e9:.3g} GB, more "
+                                   f"than the {available / 1e9:.3g} GB of memory available (a damaged header, or a "
+                                   "file to estimate in tiles: `darboux-cli estimate --tile-points ...`)")
 
 
 def _check_scales(header, path) -> None:

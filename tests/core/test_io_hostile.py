@@ -180,6 +180,30 @@ def test_laz_sizes_that_would_abort_lazrs_refused(tmp_path, where, part):
     _error(path, part)
 
 
+def test_laz_variable_chunks_point_count_beyond_memory_refused(tmp_path):
+    """Variable-size chunks keep their point counts compressed, so a LAZ file's count cannot be
+    checked against its size: a count of 4 billion was given one 146 GB allocation (overcommitted)
+    before lazrs ran out of data ("failed to fill whole buffer"); below the machine's memory the
+    allocation is real."""
+    pytest.importorskip("lazrs")
+    data = bytearray(_las(tmp_path / "a.laz").read_bytes())
+    header_size = struct.unpack_from("<H", data, 94)[0]
+    struct.pack_into("<I", data, header_size + 54 + 12, 0xFFFFFFFF)  # LASzip VLR: variable chunks
+    struct.pack_into("<I", data, 107, 0xFFFFFFF0)  # number of points
+    path = tmp_path / "count.laz"
+    path.write_bytes(bytes(data))
+    _error(path, "declares 4294967280 points", "GB of memory available")
+
+
+def test_laz_point_count_judged_against_the_memory_available(tmp_path, monkeypatch):
+    """The same check on an undamaged file: refused only when its points would not fit."""
+    pytest.importorskip("lazrs")
+    path = _las(tmp_path / "ok.laz")
+    assert len(core.io.read_cloud(path).points) == 30
+    monkeypatch.setattr("core.io.las.available_memory", lambda: 30 * 60)
+    _error(path, "declares 30 points")
+
+
 def test_vtk_with_non_utf8_bytes_is_a_clear_error(tmp_path):
     path = tmp_path / "bad.vtk"
     path.write_bytes(b"\x80# vtk DataFile Version 5.1\nvtk output\nASCII\nDATASET POLYDATA\nPOINTS 1 double\n0 0 0\n")
