@@ -86,9 +86,12 @@ def _empty_column(lineno: int, tokens: list[str]) -> str:
     return f"line {lineno}: column {column} of {len(tokens)} is empty; every data line needs a number in each column"
 
 
-def _header_line(path, lineno: int, text: str) -> tuple[bool, str]:
+def _header_line(path, lineno: int, text: str, tokens: list[str]) -> tuple[bool, str]:
     """A non-numeric line before the data, as a header entry; numbers with decimal commas
-    are not a header but a number style the reader does not take: refused by name."""
+    are not a header but a number style the reader does not take, and numbers with an empty
+    field a data line with a hole: both refused by name."""
+    if any(tokens) and all(_is_number(t) or not t for t in tokens):
+        raise CloudFileError(path, _empty_column(lineno, tokens))
     if _decimal_comma(text):
         raise CloudFileError(
             path, f"line {lineno}: {text[:40]!r} uses decimal commas; write numbers with a decimal "
@@ -115,9 +118,7 @@ def _scan_head(path, encoding) -> dict:
             delimiter = _guess_delimiter(text)
             tokens = _split(text, delimiter)
             if not all(_is_number(t) for t in tokens):
-                if all(_is_number(t) or not t for t in tokens) and any(tokens):  # data with a hole, not a header
-                    raise CloudFileError(path, _empty_column(lineno, tokens))
-                header.append(_header_line(path, lineno, text))
+                header.append(_header_line(path, lineno, text, tokens))
                 continue
             if len(tokens) == 1 and count is None and tokens[0].isdigit() and all(c for c, _ in header):
                 count, count_line = int(tokens[0]), lineno
