@@ -159,6 +159,8 @@ def _summary(res, name, elapsed, dst, out) -> None:
     print(f"{name}: {len(res)} points, method {res.method}, k {res.k}, passes {res.passes}, {elapsed:.2f} s",
           file=out)
     print(f"invalid points: {res.n_invalid}", file=out)
+    if res.params.get("duplicates"):
+        print(f"duplicate points: {res.params['duplicates']} (each estimated at its place, once)", file=out)
     if "degenerate" in res.params:
         print(f"  no estimate: {res.params['degenerate']}", file=out)
     v = res.valid

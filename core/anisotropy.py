@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .duplicates import find_duplicates
 from .kernels import anisotropy as kern
 from .neighbours import build_neighbours
 
@@ -83,5 +84,9 @@ def anisotropy_of(points, normals, nb):
     k = min(ANISO_K, len(points))
     if k < NEAREST + 1 or not np.isfinite(normals).any():  # no normal (a degenerate cloud): all NaN, and
         return np.full(len(points), np.nan)  # no search (coordinates of 1e300 overflow the kd-tree)
-    idx = nb.take(k)[0] if nb is not None and nb.k_max >= k else build_neighbours(points, k).take(k)[0]
-    return anisotropy(points, normals, idx)
+    if nb is not None and nb.k_max >= k:
+        return anisotropy(points, normals, nb.take(k)[0])
+    merged = find_duplicates(np.ascontiguousarray(points, dtype=np.float64))
+    if merged is not None:  # copies are one place (core.duplicates), sampled once
+        return anisotropy_of(merged.points, np.asarray(normals)[merged.first], None)[merged.inverse]
+    return anisotropy(points, normals, build_neighbours(points, k).take(k)[0])

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .duplicates import find_duplicates
 from .kernels import border as kern
 from ._validate import as_points
 from .neighbours import search_in_spatial_order
@@ -77,6 +78,9 @@ def border_of(points, normals, nb):
     # order (the same rows as build_neighbours, 5x faster at 100k points); each point's test
     # reads only its own row, so the flags are the same
     pts, _ = as_points(points)
+    merged = find_duplicates(pts)
+    if merged is not None:  # copies are one place (core.duplicates): judged there, on its distinct neighbours
+        return border_of(merged.points, np.asarray(normals)[merged.first], None)[merged.inverse]
     own, order = search_in_spatial_order(pts, k)
     if order is None:  # large groups of identical points: searched in the caller's order
         return border_flags(pts, normals, own.take(k)[0])[0]

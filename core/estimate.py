@@ -10,9 +10,12 @@ from typing import NamedTuple
 
 import numpy as np
 
+from dataclasses import replace
+
 from . import degenerate, interop, stage_cache
 from ._progress import Progress
 from ._validate import as_normals, as_points
+from .duplicates import CopiesNeighbours, Merged, expand, find_duplicates
 from .planning import EstimatePlan
 from .result import CurvatureResult
 from .spatial_order import SpatialOrder
@@ -116,12 +119,13 @@ def estimate(
     invalid = degenerate.invalid_if_degenerate(pts, kept, normals, asked, plan)  # harden: valid=False, no crash
     if invalid is not None:
         return invalid
+    merged = find_duplicates(pts, cache=cache)  # harden: copies of a point are estimated once, at their position
+    if merged is not None:
+        return _on_distinct(merged, pts, kept, normals, asked, plan=plan, neighbours=neighbours, progress=progress,
+                            cache=cache)
     plan = _plan(plan, len(pts), asked, normals is not None)
     if normals is not None:
-        shape = np.shape(normals)
-        if shape != (len(kept), 3):
-            raise ValueError(f"normals must have shape ({len(kept)}, 3) to match points, got shape {shape}")
-        normals = as_normals(np.asarray(normals)[kept], len(pts), repair=True)
+        normals = as_normals(_given_rows(normals, kept), len(pts), repair=True)
     report = Progress(progress)
 
     front = prepare(pts, normals, plan, neighbours, report, cache=cache)
@@ -134,6 +138,39 @@ def estimate(
     nb = stage_cache.caller_neighbours(cache, front.order, front.nb, pts)  # a cache keeps the sorted graph
     report(1.0, "done")
     return _result(pts, kept, plan, stages=stages, neighbours=nb, repaired=front.repaired)
+
+
+def _given_rows(normals, kept) -> np.ndarray:
+    """The given normals' rows of the points kept (their shape checked against the caller's points)."""
+    shape = np.shape(normals)
+    if shape != (len(kept), 3):
+        raise ValueError(f"normals must have shape ({len(kept)}, 3) to match points, got shape {shape}")
+    return np.asarray(normals)[kept]
+
+
+def _on_distinct(merged: Merged, pts, kept, normals, asked, *, plan, neighbours, progress, cache) -> CurvatureResult:
+    """:func:`estimate` of a cloud with duplicate points: its distinct positions estimated,
+    every copy given its position's answer (:mod:`core.duplicates`), planned for the caller's
+    count of points as the tiles of :mod:`core.tiled` are (the candidates with k="auto"),
+    unless fewer places than the largest candidate leave only theirs. A graph passed back
+    from such a result serves again; any other given graph was searched on the copies and
+    is not used."""
+    m, extra = len(merged.first), {"duplicates": merged.copies, "dropped": int(np.count_nonzero(~kept))}
+    # m >= 3: one or two places are caught before, as identical or collinear points
+    given = None if normals is None else _given_rows(normals, kept)[merged.first]
+    if isinstance(asked["k"], int) and asked["k"] > m:
+        raise ValueError(f"k={asked['k']} exceeds the {m} distinct positions of the cloud ({merged.copies} of its "
+                         f"{len(pts)} points are copies of others)")
+    given_plan, plan = plan, _plan(plan, len(pts), asked, normals is not None)  # the caller's count's candidates, as tiles
+    if plan.k_search > m and given_plan is None:  # a small cloud: the candidates its places allow
+        plan = _plan(None, m, asked, normals is not None)
+    if plan.k_search > m:
+        raise ValueError(f"plan searches {plan.k_search} neighbours but the cloud has only {m} distinct positions "
+                         f"({merged.copies} of its {len(pts)} points are copies); make a plan for {m} points")
+    reuse = neighbours._nb if isinstance(neighbours, CopiesNeighbours) and neighbours.matches(pts) else None
+    res = estimate(merged.points, given, plan=replace(plan, n_points=m), neighbours=reuse, progress=progress,
+                   cache=cache)
+    return expand(res, merged, pts, extra)
 
 
 class Prepared(NamedTuple):

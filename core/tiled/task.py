@@ -10,6 +10,7 @@ import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
+from ..duplicates import CopiesNeighbours, find_duplicates
 from ..estimate import estimate
 from ..kernels.sign_evidence import knn_components
 from ..neighbours import build_neighbours
@@ -103,27 +104,42 @@ def run_tile(root, tile: int, spec: TileSpec) -> dict:
 
 
 def _load_with_halo(store, plan, tile, spec):
-    return load_with_halo(store, plan, tile, spec.k, ((chain_rings(spec.passes), spec.k),))
+    return load_with_halo(store, plan, tile, spec.k, ((chain_rings(spec.passes), spec.k),), distinct=True)
 
 
-def load_with_halo(store, plan, tile, k_max, chain):
+def load_with_halo(store, plan, tile, k_max, chain, *, distinct=False):
     """The tile and a halo grown until every point of the dependency ``chain`` (see
     :func:`core.tiled.halo.shortfall`) has its true neighbours; returns the records, their
-    owner tiles, their ``k_max`` neighbours and the points whose lists are exact."""
+    owner tiles, their ``k_max`` neighbours and the points whose lists are exact.
+    ``distinct``: copies of a point are one place (:mod:`core.duplicates`, as
+    :func:`core.estimate` merges them), so the halo must hold the distinct positions'
+    neighbours, which reach farther than the copies'."""
     own_xyz = np.asarray(store.read_bin(tile)["xyz"])
     margin = first_margin(own_xyz, k_max, max(rings for rings, _ in chain))
     scale = float(np.abs(plan.bounds).max())
     for _ in range(MAX_GROWTHS):
         rec, owner, lo, hi = gather(store, plan, tile, margin)
-        if len(rec) < k_max:
-            raise ValueError(f"tile {tile}: only {len(rec)} points within reach, fewer than k={k_max}")
-        nb = build_neighbours(rec["xyz"], k_max)
-        short, needed = shortfall(nb, owner == tile, chain, lo, hi)
+        nb, short, needed = _tile_graph(np.ascontiguousarray(rec["xyz"]), owner == tile, k_max, chain, lo, hi,
+                                        distinct, tile)
         if short < 0:
             return rec, owner, nb, needed
         margin = grown(margin, short, scale)
     raise ValueError(f"tile {tile}: the halo did not cover the neighbourhoods after {MAX_GROWTHS} growths "
                      f"(margin {margin:.4g})")
+
+
+def _tile_graph(xyz, own, k_max, chain, lo, hi, distinct, tile):
+    """(graph, :func:`shortfall`, exact points) of a tile and its halo; with ``distinct`` and
+    copies, the graph of the distinct positions as neighbours of every copy."""
+    merged = find_duplicates(xyz) if distinct else None
+    places = xyz if merged is None else merged.points
+    if len(places) < k_max:
+        raise ValueError(f"tile {tile}: only {len(places)} points within reach, fewer than k={k_max}")
+    nb = build_neighbours(places, k_max)
+    if merged is None:
+        return (nb, *shortfall(nb, own, chain, lo, hi))
+    short, needed = shortfall(nb, own[merged.first], chain, lo, hi)  # a place's copies share its tile
+    return CopiesNeighbours(nb, merged, xyz), short, needed[merged.inverse]
 
 
 def _components(idx, ok, exact) -> np.ndarray:

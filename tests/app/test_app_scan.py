@@ -47,3 +47,19 @@ def test_a_cloud_with_no_surface_says_why_in_the_status_bar(make_window, tmp_pat
     w = make_window(load_file(path))
     text = w.status_label.text()
     assert "400 invalid" in text and "no estimate: all points lie on one straight line" in text
+
+
+def test_duplicate_points_are_counted_and_coloured_like_their_place(make_window, tmp_path):
+    """A merged scan with every point written twice: estimated once per place (core.duplicates),
+    no point grey, and the status bar says how many copies there were."""
+    from core import shapes
+
+    s = shapes.sphere(2000, seed=3)
+    path = tmp_path / "twice.xyz"
+    np.savetxt(path, np.concatenate([s.points, s.points]))
+    w = make_window(load_file(path))
+    text = w.status_label.text()
+    assert "2,000 duplicate points estimated at their place" in text and "all valid" in text
+    res = w.output.result
+    np.testing.assert_array_equal(res.mean[2000:], res.mean[:2000])
+    assert abs(np.median(res.mean) - 1.0) < 0.02

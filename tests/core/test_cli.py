@@ -40,3 +40,15 @@ def test_bad_value_is_one_line_and_exit_2(cloud_file, tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.startswith("darboux-cli: error: ") and err.count("\n") == 1
     assert not (tmp_path / "o.ply").exists()
+
+
+def test_estimate_counts_duplicate_points(tmp_path, capsys):
+    from core import shapes
+
+    pts = shapes.sphere(800, radius=2.0, seed=2).points
+    src, out = tmp_path / "twice.xyz", tmp_path / "out.csv"
+    np.savetxt(src, np.concatenate([pts, pts[:100]]))
+    assert main(["estimate", str(src), "-o", str(out), "--k", "15"]) == 0
+    assert "duplicate points: 100 (each estimated at its place, once)" in capsys.readouterr().out
+    table = np.genfromtxt(out, delimiter=",", names=True)
+    assert len(table) == 900 and np.isfinite(table["mean"]).all()

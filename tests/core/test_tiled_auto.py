@@ -169,3 +169,18 @@ def test_a_work_directory_of_other_auto_rules_is_not_resumed(monkeypatch):
     monkeypatch.setattr(scale, "NEIGHBOUR_BUDGET", 240_000)
     assert run._auto_rules(spec) != before
     assert run._auto_rules(task.TileSpec(k=15, method="nr", passes=1, orientation="propagate")) is None
+
+
+@pytest.mark.parametrize("share", [1.0, 0.25])
+def test_copies_in_tiles_are_the_in_memory_estimates_places(tmp_path, small_candidates, share):
+    """core.estimate estimates copies of a point once, at their place (core.duplicates); the
+    tiles' halos hold the distinct places' neighbours, which reach farther than the copies'."""
+    base = _noisy_torus(4000)
+    rng = np.random.default_rng(7)
+    pts = np.concatenate([base, base[rng.random(len(base)) < share]])
+    pts = pts[rng.permutation(len(pts))]
+    mem = core.estimate(pts)
+    assert mem.params["duplicates"] > 900
+    run = estimate_tiled(pts, tmp_path / "out.ply", tile_points=400, workers=0)
+    assert run.n_tiles >= 8
+    _same(tmp_path / "out.ply", mem)
