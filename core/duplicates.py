@@ -20,11 +20,21 @@ import numpy as np
 
 from .kernels.repeats import any_repeated
 from .neighbours import Neighbours
+from .tuning import NEAR_COPY, NEAR_COPY_SHARE
 
-__all__ = ["Merged", "find_duplicates", "expand", "CopiesNeighbours"]
+__all__ = ["Merged", "NearCopies", "find_duplicates", "near_copies", "expand", "CopiesNeighbours"]
 
 #: odd 64-bit multipliers mixing the three coordinates' bits into one hash
 _MIX = np.array([0x9E3779B97F4A7C15, 0xC2B2AE3D27D4EB4F, 0x165667B19E3779F9], dtype=np.uint64)
+
+
+class NearCopies(Exception):
+    """Raised by :func:`core.estimate.prepare` (when asked) on finding :func:`near_copies`:
+    :func:`core.estimate` then estimates their places."""
+
+    def __init__(self, merged: "Merged"):
+        super().__init__(f"{merged.copies} points lie on top of others")
+        self.merged = merged
 
 
 class Merged(NamedTuple):
@@ -50,6 +60,9 @@ def _hashes(pts: np.ndarray) -> np.ndarray:
 def find_duplicates(pts: np.ndarray, *, cache=None) -> Merged | None:
     """The distinct positions of ``pts`` (N, 3) finite float64, or None when all differ;
     with a :class:`core.stage_cache.StageCache` the last cloud's are kept."""
+    known = None if cache is None else cache.known_merge(pts)  # a viewer's cloud seen before
+    if known is not None:
+        return known
     if len(pts) < 2 or not any_repeated(_hashes(pts)):
         return None
     return _merge(pts) if cache is None else cache.merged(pts, _merge)
@@ -72,6 +85,34 @@ def _merge(pts: np.ndarray) -> Merged | None:
     inverse[order] = position[group]
     first = first_of_group[rank]
     return Merged(pts[first], first, inverse)
+
+
+def near_copies(idx: np.ndarray, dist: np.ndarray, points: np.ndarray, rank=None) -> Merged | None:
+    """Places of points nearer each other than :data:`core.tuning.NEAR_COPY` of their
+    neighbourhood radius (the last column of ``dist``), from a kNN graph ``idx`` (N, k) of
+    ``points`` (its point first), or None when fewer than :data:`core.tuning.NEAR_COPY_SHARE`
+    of the points have such a twin. Such points are connected
+    into places; a place is its first point's (lowest ``rank``, the caller's index of each
+    row, default the row) coordinates. ``first`` and ``inverse`` are in rows of ``points``."""
+    if idx.shape[1] < 2 or np.count_nonzero(dist[:, 1] < NEAR_COPY * dist[:, -1]) < NEAR_COPY_SHARE * len(idx):
+        return None  # distances ascend: the nearest tells
+    close = dist[:, 1:] < NEAR_COPY * dist[:, -1:]
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    n = len(points)
+    rows, cols = np.nonzero(close)
+    pairs = coo_matrix((np.ones(len(rows), dtype=np.int8), (rows, idx[rows, cols + 1])), shape=(n, n))
+    _, label = connected_components(pairs, directed=False)
+    rank = np.arange(n) if rank is None else np.asarray(rank)
+    by_rank = np.argsort(rank, kind="stable")
+    _, at = np.unique(label[by_rank], return_index=True)  # each place's first point, places by label
+    lead_rows = by_rank[at]
+    places = np.argsort(rank[lead_rows], kind="stable")  # the places in the order of their first point
+    place_of_label = np.empty(len(places), dtype=np.int64)
+    place_of_label[places] = np.arange(len(places))
+    first = lead_rows[places]
+    return Merged(points[first], first, place_of_label[label])
 
 
 def expand(res, merged: Merged, points: np.ndarray, params: dict):

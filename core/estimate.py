@@ -15,7 +15,7 @@ from dataclasses import replace
 from . import degenerate, interop, stage_cache
 from ._progress import Progress
 from ._validate import as_normals, as_points
-from .duplicates import CopiesNeighbours, Merged, expand, find_duplicates
+from .duplicates import CopiesNeighbours, Merged, NearCopies, expand, find_duplicates, near_copies
 from .planning import EstimatePlan
 from .result import CurvatureResult
 from .spatial_order import SpatialOrder
@@ -119,16 +119,20 @@ def estimate(
     invalid = degenerate.invalid_if_degenerate(pts, kept, normals, asked, plan)  # harden: valid=False, no crash
     if invalid is not None:
         return invalid
-    merged = find_duplicates(pts, cache=cache)  # harden: copies of a point are estimated once, at their position
+    merged = find_duplicates(pts, cache=stage_cache.checked(cache))  # harden: copies of a point are estimated once, at their position
+    args = dict(plan=plan, neighbours=neighbours, progress=progress, cache=cache)
     if merged is not None:
-        return _on_distinct(merged, pts, kept, normals, asked, plan=plan, neighbours=neighbours, progress=progress,
-                            cache=cache)
+        return _on_distinct(merged, pts, kept, normals, asked, **args)
     plan = _plan(plan, len(pts), asked, normals is not None)
-    if normals is not None:
-        normals = as_normals(_given_rows(normals, kept), len(pts), repair=True)
+    given = None if normals is None else as_normals(_given_rows(normals, kept), len(pts), repair=True)
     report = Progress(progress)
 
-    front = prepare(pts, normals, plan, neighbours, report, cache=cache)
+    try:
+        front = prepare(pts, given, plan, neighbours, report, cache=cache, near=True)
+    except NearCopies as found:  # points on top of others (float rounding of one point written twice)
+        if cache is not None:
+            cache.remember(pts, found.merged)
+        return _on_distinct(found.merged, pts, kept, normals, asked, **args)
     best = refine(front.pts, front.init, front.outlier, front.nb, front.scale, plan,
                   report.sub(0.7 if plan.auto else 0.45, 1.0))
     front = front._replace(scale=front.scale._replace(jets=None))  # merged into best: 86 MiB less at 1M points
@@ -192,7 +196,7 @@ class Prepared(NamedTuple):
     order: SpatialOrder
 
 
-def prepare(pts, normals, plan, neighbours, report, *, cache=None) -> Prepared:
+def prepare(pts, normals, plan, neighbours, report, *, cache=None, near=False) -> Prepared:
     """The stages before the fits: neighbours -> outlier scores -> initial normals ->
     orientation -> scale choice (shared by :func:`estimate` and the tiles of
     :mod:`core.tiled`, which run the fits' passes themselves). They run on the points in
@@ -201,6 +205,8 @@ def prepare(pts, normals, plan, neighbours, report, *, cache=None) -> Prepared:
     run = stage_cache.memo(cache, pts, normals, plan)  # each stage: run, or re-used from the cache
     nb, order = run.neighbours(lambda k: spatial_neighbours(pts, plan, neighbours, report.sub(0.0, 0.3), k=k),
                                neighbours)
+    if near:  # places of points on top of others, for estimate() to merge (core.duplicates.near_copies)
+        _near_copies(pts, nb, order, plan)
     pts, normals = nb.points, order.to_sorted(normals)  # the stages run in spatial order
     # the initial graph is taken afresh at each use: a view held across the stages would keep
     # the narrow search alive after a noisy cloud widens it (+480 MB at 1M points)
@@ -222,6 +228,20 @@ def prepare(pts, normals, plan, neighbours, report, *, cache=None) -> Prepared:
     kc = run("scale", lambda: choose_scale(pts, init.normals, nb, inliers, plan, report.sub(0.47, 0.7), scores=scores,
                                            k_initial=init.k))
     return Prepared(pts, nb, scores, outlier, init, repaired, confidence, reference, kc, order)
+
+
+def _near_copies(pts, nb, order: SpatialOrder, plan) -> None:
+    """Raise :class:`core.duplicates.NearCopies` (places in the caller's rows of ``pts``)
+    if the graph ``nb`` (on the points in ``order``) shows points on top of others."""
+    idx, dist = nb.take(plan.k_initial)
+    found = near_copies(idx, dist, nb.points, rank=order.order)
+    if found is None:
+        return
+    if order.order is not None:  # rows of the sorted points -> the caller's
+        inverse = np.empty_like(found.inverse)
+        inverse[order.order] = found.inverse
+        found = Merged(pts[order.order[found.first]], order.order[found.first], inverse)
+    raise NearCopies(found)
 
 
 def _plan(plan, n, asked, normals_given) -> EstimatePlan:

@@ -102,6 +102,19 @@ class StageCache:
             self.reused["merged"] += 1
         return self._merged[1]
 
+    def known_merge(self, points: np.ndarray):
+        """The places kept for ``points`` (:meth:`merged`, :meth:`remember`), or None; a
+        cloud without copies costs nothing here once none are kept."""
+        if self._merged is None or self._merged[0] != _digest(points):
+            return None
+        self.reused["merged"] += 1
+        return self._merged[1]
+
+    def remember(self, points: np.ndarray, merged) -> None:
+        """Keep the places found on ``points`` after their search (near copies)."""
+        self._merged = (_digest(points), merged)
+        self.computed["merged"] += 1
+
     def bind(self, points: np.ndarray, normals: np.ndarray | None, plan) -> "_Memo":
         """The memo of one :func:`core.estimate` call on ``points`` (validated) with ``plan``."""
         inputs = (_digest(points), None if normals is None else _digest(normals))
@@ -177,9 +190,14 @@ def memo(cache: StageCache | None, points, normals, plan) -> _Memo:
     """The memo :func:`core.estimate` runs its stages through (a pass-through without a cache)."""
     if cache is None:
         return _Memo(None, (), plan)
-    if not isinstance(cache, StageCache):
+    return checked(cache).bind(points, normals, plan)
+
+
+def checked(cache):
+    """``cache`` if it is a :class:`StageCache` or None, else a ValueError naming it."""
+    if cache is not None and not isinstance(cache, StageCache):
         raise ValueError(f"cache must be a core.stage_cache.StageCache or None, got {type(cache).__name__}")
-    return cache.bind(points, normals, plan)
+    return cache
 
 
 def caller_neighbours(cache: StageCache | None, order, nb, points):

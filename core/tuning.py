@@ -55,6 +55,17 @@ SEARCH_WIDTH = 40
 
 #: k of the initial PCA normals when k is chosen automatically: the paper's k
 PCA_K = 15
+#: two points closer than this share of the distance to the k_initial-th neighbour are one
+#: place (:func:`core.duplicates.near_copies`): a point written twice with float32 rounding
+#: lies ~1e-5 of a spacing from itself, and its pair fills two of 15 neighbours with one
+#: place (20k torus, every point twice 1e-6 apart: H error 0.08 instead of 1e-4); real
+#: sampling, even 100:1 in density, keeps points orders of magnitude farther apart
+NEAR_COPY = 1e-3
+#: ... and they are merged only when at least this share of the points has such a twin: a
+#: few twins among their neighbours' places cost nothing, while random (Poisson) sampling
+#: leaves ~1.5e-5 of a surface's points that close to another (15 at 1M points), whose
+#: merge would redo the whole search
+NEAR_COPY_SHARE = 0.01
 #: h of eq. 14 in units of the k-th neighbour distance, so no neighbour gets weight 0
 THETA_REACH = 1.1
 #: a neighbourhood is treated as collinear (no normal) when its middle eigenvalue is

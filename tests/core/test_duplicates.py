@@ -98,3 +98,53 @@ def test_a_viewers_cache_merges_once_and_serves_the_copies_stages():
     assert cache.reused["initial"] == 1  # the distinct cloud's stages are kept between the calls
     np.testing.assert_array_equal(a.normals.shape, b.normals.shape)
     np.testing.assert_array_equal(estimate(cloud, k=15, passes=3).k1, b.k1)
+
+
+def _twins(points, gap, seed=0):
+    """Every point twice, the second ``gap`` away in a random direction; shuffled."""
+    rng = np.random.default_rng(seed)
+    step = rng.normal(size=points.shape)
+    twins = points + gap * step / np.linalg.norm(step, axis=1, keepdims=True)
+    order = rng.permutation(2 * len(points))
+    return np.concatenate([points, twins])[order], order
+
+
+def test_near_copies_are_one_place():
+    """A point written twice with float32 rounding lies ~1e-5 of a spacing from itself: the
+    default's H error on a torus went 1e-4 -> 0.08 with every point so doubled."""
+    s = shapes.torus(6000, seed=1)
+    alone = estimate(s.points)
+    cloud, order = _twins(s.points, 1e-6)
+    res = estimate(cloud)
+    assert res.params["duplicates"] == 6000 and res.valid.all()
+    truth = np.concatenate([s.mean, s.mean])[order]
+    err, err_alone = np.mean(np.abs(res.mean - truth)), np.mean(np.abs(alone.mean - s.mean))
+    assert err < 1.5 * err_alone < 1e-3
+    np.testing.assert_array_equal(res.points, cloud)
+
+
+def test_near_copies_with_a_cache_are_found_once():
+    from core.stage_cache import StageCache
+
+    cloud, _ = _twins(shapes.sphere(2000, seed=6).points, 1e-7)
+    cache = StageCache()
+    a = estimate(cloud, k=15, passes=1, cache=cache)
+    b = estimate(cloud, k=15, passes=2, cache=cache)
+    assert a.params["duplicates"] == b.params["duplicates"] == 2000
+    assert cache.computed["merged"] == 1 and cache.reused["merged"] == 1 and cache.reused["initial"] == 1
+
+
+@pytest.mark.parametrize("shape", ["graded", "range_scan"])
+def test_dense_sampling_is_not_taken_for_copies(shape):
+    pts = getattr(shapes, shape)(6000, seed=0).points
+    assert "duplicates" not in estimate(pts, k=15).params
+
+
+def test_a_few_near_twins_are_left_alone():
+    """Below 1 % of the points (random sampling leaves ~1e-5 that close) nothing is redone."""
+    s = shapes.sphere(4000, seed=2)
+    cloud = np.concatenate([s.points, s.points[:15] + 1e-7])  # 30 of 4015 points have a twin
+    res = estimate(cloud, k=15)
+    assert "duplicates" not in res.params and res.valid.all()
+    clean = estimate(s.points, k=15)
+    assert abs(np.median(res.mean) - np.median(clean.mean)) < 1e-3
