@@ -1,4 +1,5 @@
-"""Whether any two of a set of 64-bit hashes are equal (:mod:`core.duplicates`' screen)."""
+"""64-bit hashes of coordinates, and whether any two are equal (:mod:`core.duplicates`' screen;
+:mod:`core.neighbours` sizes its groups of identical points by the same hashes)."""
 
 from __future__ import annotations
 
@@ -6,6 +7,16 @@ import numpy as np
 from numba import njit
 
 from ._base import OPTS
+
+
+#: odd 64-bit multipliers mixing the three coordinates' bits into one hash
+_MIX = np.array([0x9E3779B97F4A7C15, 0xC2B2AE3D27D4EB4F, 0x165667B19E3779F9], dtype=np.uint64)
+
+
+def coordinate_hashes(pts: np.ndarray) -> np.ndarray:
+    """(N,) uint64: equal points, equal hashes (-0.0 and 0.0 are the same coordinate)."""
+    bits = (pts + 0.0).view(np.uint64)
+    return bits[:, 0] * _MIX[0] ^ bits[:, 1] * _MIX[1] ^ bits[:, 2] * _MIX[2]
 
 
 @njit(**OPTS)
