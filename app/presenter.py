@@ -205,7 +205,7 @@ def status_line(out) -> str:
     fixed = repaired.get("unusable", 0) + repaired.get("renormalised", 0)
     text += f"  ·  {fixed:,} file normals repaired" if fixed else ""
     copies = (getattr(res, "params", None) or {}).get("duplicates", 0)
-    text += f"  ·  {copies:,} duplicate points estimated at their place" if copies else ""
+    text += f"  ·  {copies:,} duplicates merged" if copies else ""
     text += f"  ·  {out.elapsed:.2f} s" + _reused_text(out)
     return text
 

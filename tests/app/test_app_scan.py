@@ -59,7 +59,7 @@ def test_duplicate_points_are_counted_and_coloured_like_their_place(make_window,
     np.savetxt(path, np.concatenate([s.points, s.points]))
     w = make_window(load_file(path))
     text = w.status_label.text()
-    assert "2,000 duplicate points estimated at their place" in text and "all valid" in text
+    assert "2,000 duplicates merged" in text and "all valid" in text
     res = w.output.result
     np.testing.assert_array_equal(res.mean[2000:], res.mean[:2000])
     assert abs(np.median(res.mean) - 1.0) < 0.02
