@@ -43,7 +43,7 @@ def run_auto_tile(root, tile: int, spec) -> dict:
         _save(store, tile, [_empty()] * (whole.passes + 1), np.zeros((whole.passes + 2, 2)), {})
         return {"tile": tile, "skipped": False, "points": 0, "loaded": 0}
     chain = auto_chain(whole.passes, whole.k_search, whole.k_initial)
-    rec, owner, nb, exact = load_with_halo(store, plan, tile, whole.k_search, chain, distinct=True)
+    rec, owner, nb, exact = load_with_halo(store, plan, tile, whole.k_search, chain)
     pts = np.ascontiguousarray(rec["xyz"])
     normals = np.ascontiguousarray(rec["n"]) if spec.normals_given else None
     tplan = dataclasses.replace(whole, n_points=len(pts))

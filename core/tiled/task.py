@@ -104,23 +104,21 @@ def run_tile(root, tile: int, spec: TileSpec) -> dict:
 
 
 def _load_with_halo(store, plan, tile, spec):
-    return load_with_halo(store, plan, tile, spec.k, ((chain_rings(spec.passes), spec.k),), distinct=True)
+    return load_with_halo(store, plan, tile, spec.k, ((chain_rings(spec.passes), spec.k),))
 
 
-def load_with_halo(store, plan, tile, k_max, chain, *, distinct=False):
+def load_with_halo(store, plan, tile, k_max, chain):
     """The tile and a halo grown until every point of the dependency ``chain`` (see
     :func:`core.tiled.halo.shortfall`) has its true neighbours; returns the records, their
-    owner tiles, their ``k_max`` neighbours and the points whose lists are exact.
-    ``distinct``: copies of a point are one place (:mod:`core.duplicates`, as
-    :func:`core.estimate` merges them), so the halo must hold the distinct positions'
-    neighbours, which reach farther than the copies'."""
+    owner tiles, their ``k_max`` neighbours and the points whose lists are exact. Copies of
+    a point are one place (:mod:`core.duplicates`, as :func:`core.estimate` merges them), so
+    the halo must hold the distinct places' neighbours, which reach farther than the copies'."""
     own_xyz = np.asarray(store.read_bin(tile)["xyz"])
     margin = first_margin(own_xyz, k_max, max(rings for rings, _ in chain))
     scale = float(np.abs(plan.bounds).max())
     for _ in range(MAX_GROWTHS):
         rec, owner, lo, hi = gather(store, plan, tile, margin)
-        nb, short, needed = _tile_graph(np.ascontiguousarray(rec["xyz"]), owner == tile, k_max, chain, lo, hi,
-                                        distinct, tile)
+        nb, short, needed = _tile_graph(np.ascontiguousarray(rec["xyz"]), owner == tile, k_max, chain, lo, hi, tile)
         if short < 0:
             return rec, owner, nb, needed
         margin = grown(margin, short, scale)
@@ -128,10 +126,10 @@ def load_with_halo(store, plan, tile, k_max, chain, *, distinct=False):
                      f"(margin {margin:.4g})")
 
 
-def _tile_graph(xyz, own, k_max, chain, lo, hi, distinct, tile):
-    """(graph, :func:`shortfall`, exact points) of a tile and its halo; with ``distinct`` and
-    copies, the graph of the distinct positions as neighbours of every copy."""
-    merged = find_duplicates(xyz) if distinct else None
+def _tile_graph(xyz, own, k_max, chain, lo, hi, tile):
+    """(graph, :func:`shortfall`, exact points) of a tile and its halo; with copies, the
+    graph of the distinct places as neighbours of every copy."""
+    merged = find_duplicates(xyz)
     places = xyz if merged is None else merged.points
     if len(places) < k_max:
         raise ValueError(f"tile {tile}: only {len(places)} points within reach, fewer than k={k_max}")

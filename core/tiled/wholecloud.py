@@ -144,7 +144,7 @@ def _run_prepass(root, tile: int, spec, when: str) -> dict:
     samples = {}
     if n_own and quantities:
         k_max, chain = _LOADS[when](plan)
-        rec, owner, nb, _ = load_with_halo(store, TilePlan.load(store.plan_path), tile, k_max, chain, distinct=True)
+        rec, owner, nb, _ = load_with_halo(store, TilePlan.load(store.plan_path), tile, k_max, chain)
         pts = nb.points
         ctx = _Context(pts, nb, dataclasses.replace(plan, n_points=len(pts)), owner == tile, None)
         samples = {q.field: q.samples(ctx) for q in quantities}
