@@ -18,6 +18,8 @@ from dataclasses import replace
 from typing import NamedTuple
 
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
 
 from .kernels.repeats import any_repeated, coordinate_hashes
 from .neighbours import Neighbours
@@ -57,7 +59,10 @@ def find_duplicates(pts: np.ndarray, *, cache=None) -> Merged | None:
         return known
     if len(pts) < 2 or not any_repeated(coordinate_hashes(pts)):
         return None
-    return _merge(pts) if cache is None else cache.merged(pts, _merge)
+    merged = _merge(pts)
+    if cache is not None and merged is not None:
+        cache.remember(pts, merged)
+    return merged
 
 
 def _merge(pts: np.ndarray) -> Merged | None:
@@ -89,9 +94,6 @@ def near_copies(idx: np.ndarray, dist: np.ndarray, points: np.ndarray, rank=None
     if idx.shape[1] < 2 or np.count_nonzero(dist[:, 1] < NEAR_COPY * dist[:, -1]) < NEAR_COPY_SHARE * len(idx):
         return None  # distances ascend: the nearest tells
     close = dist[:, 1:] < NEAR_COPY * dist[:, -1:]
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
     n = len(points)
     rows, cols = np.nonzero(close)
     pairs = coo_matrix((np.ones(len(rows), dtype=np.int8), (rows, idx[rows, cols + 1])), shape=(n, n))

@@ -6,11 +6,10 @@ is a function of :mod:`core.stages`.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import NamedTuple
 
 import numpy as np
-
-from dataclasses import replace
 
 from . import degenerate, interop, stage_cache
 from ._progress import Progress

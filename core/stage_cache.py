@@ -81,7 +81,7 @@ class StageCache:
         self._caller = None  # (nb, the same graph in the caller's order)
         self._nb = None
         self._nb_token = 0
-        self._merged = None  # (digest, core.duplicates.Merged) of the last cloud with copies
+        self._merged = None  # (digest, core.duplicates.Merged) of the last cloud with copies (remember)
         self.computed: Counter = Counter()
         self.reused: Counter = Counter()
 
@@ -90,28 +90,18 @@ class StageCache:
         self._entries.clear()
         self._graph = self._caller = self._nb = self._merged = None
 
-    def merged(self, points: np.ndarray, merge):
-        """``merge(points)``, the distinct positions of a cloud with copies
-        (:mod:`core.duplicates`), kept for the last such cloud: a viewer's re-estimate does
-        not sort a 1M-point cloud again (0.8 s)."""
-        key = _digest(points)
-        if self._merged is None or self._merged[0] != key:
-            self._merged = (key, merge(points))
-            self.computed["merged"] += 1
-        else:
-            self.reused["merged"] += 1
-        return self._merged[1]
-
     def known_merge(self, points: np.ndarray):
-        """The places kept for ``points`` (:meth:`merged`, :meth:`remember`), or None; a
-        cloud without copies costs nothing here once none are kept."""
+        """The places kept for ``points`` (:meth:`remember`), or None; nothing to compare (no
+        digest of the points) while no merge is kept. A merge of another cloud stays kept: the
+        estimate of the places themselves asks here too."""
         if self._merged is None or self._merged[0] != _digest(points):
             return None
         self.reused["merged"] += 1
         return self._merged[1]
 
     def remember(self, points: np.ndarray, merged) -> None:
-        """Keep the places found on ``points`` after their search (near copies)."""
+        """Keep the places found on ``points`` (:mod:`core.duplicates`): a viewer's re-estimate
+        does not sort a 1M-point cloud again (0.8 s), nor search it twice for near copies."""
         self._merged = (_digest(points), merged)
         self.computed["merged"] += 1
 
