@@ -10,6 +10,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .._memory import available_memory
+
 
 class CloudFileError(ValueError):
     """A point-cloud file cannot be read or written; the message names the file and the problem.
@@ -29,6 +31,15 @@ class CloudFileError(ValueError):
 
     def __reduce__(self):
         return type(self), (self.path, self.problem)
+
+
+def check_memory(path, need: int, what: str, hint: str = "") -> None:
+    """Refuse a file whose declared sizes need ``need`` bytes, more than the memory available:
+    "{path}: {what} about X GB, more than the Y GB of memory available{hint}"."""
+    available = available_memory()
+    if need > available:
+        raise CloudFileError(path, f"{what} about {need / 1e9:.3g} GB, more than the {available / 1e9:.3g} GB of "
+                                   f"memory available{hint}")
 
 
 @dataclass(frozen=True, eq=False)

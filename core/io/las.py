@@ -12,8 +12,7 @@ import struct
 
 import numpy as np
 
-from .._memory import available_memory
-from .cloud import CloudFileError, RawCloud, find_normals, split_components
+from .cloud import CloudFileError, RawCloud, check_memory, find_normals, split_components
 
 
 def read_las(path) -> RawCloud:
@@ -73,11 +72,8 @@ def _check_memory(path, n_points: int, record_length: int) -> None:
     compress to any length): refuse a count whose records, and the float64 coordinates built
     from them, would not fit in the memory available (laspy allocates all of them at once)."""
     need = n_points * (record_length + 3 * 8 * 2)  # the records, the coordinates and one temporary
-    available = available_memory()
-    if need > available:
-        raise CloudFileError(path, f"declares {n_points} points: reading them needs about {need / 1e9:.3g} GB, more "
-                                   f"than the {available / 1e9:.3g} GB of memory available (a damaged header, or a "
-                                   "file to estimate in tiles: `darboux-cli estimate --tile-points ...`)")
+    check_memory(path, need, f"declares {n_points} points: reading them needs",
+                 " (a damaged header, or a file to estimate in tiles: `darboux-cli estimate --tile-points ...`)")
 
 
 def _check_scales(header, path) -> None:

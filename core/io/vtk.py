@@ -16,7 +16,7 @@ import re
 import numpy as np
 
 from .._memory import available_memory
-from .cloud import CloudFileError, RawCloud, split_components
+from .cloud import CloudFileError, RawCloud, check_memory, split_components
 from .vtp_blocks import check_binary_headers
 from .vtp_points import points_only
 
@@ -122,10 +122,7 @@ def _check_implicit_points(data, path) -> None:
         return
     n = data.GetNumberOfPoints()
     need = n * 3 * 8 * 4  # float64 coordinates and numpy's temporaries while building them
-    available = available_memory()
-    if need > available:
-        raise CloudFileError(path, f"a {data.GetClassName()} of {n} points: building their coordinates needs about "
-                                   f"{need / 1e9:.3g} GB, more than the {available / 1e9:.3g} GB of memory available")
+    check_memory(path, need, f"a {data.GetClassName()} of {n} points: building their coordinates needs")
 
 
 _CELLS = re.compile(rb"^(VERTICES|LINES|POLYGONS|TRIANGLE_STRIPS|CELLS)[ \t]+(\d+)[ \t]+(\d+)[ \t\r]*$", re.M)
@@ -188,8 +185,5 @@ def check_xml_sizes(path) -> None:
     components = max([value for name, value in counts if name == "Components"] + [3])
     name, value = max([(name, value) for name, value in counts if name != "Components"] + [("Points", 0)],
                       key=lambda item: item[1])
-    need = 8 * value * components
-    available = available_memory()
-    if need > available:
-        raise CloudFileError(path, f"declares NumberOf{name}=\"{value}\" with arrays of up to {components} components: "
-                                   f"about {need / 1e9:.3g} GB, more than the {available / 1e9:.3g} GB of memory available")
+    check_memory(path, 8 * value * components,
+                 f"declares NumberOf{name}=\"{value}\" with arrays of up to {components} components:")

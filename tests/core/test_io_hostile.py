@@ -200,7 +200,7 @@ def test_laz_point_count_judged_against_the_memory_available(tmp_path, monkeypat
     pytest.importorskip("lazrs")
     path = _las(tmp_path / "ok.laz")
     assert len(core.io.read_cloud(path).points) == 30
-    monkeypatch.setattr("core.io.las.available_memory", lambda: 30 * 60)
+    monkeypatch.setattr("core.io.cloud.available_memory", lambda: 30 * 60)
     _error(path, "declares 30 points")
 
 
