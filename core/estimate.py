@@ -127,7 +127,7 @@ def estimate(
     report = Progress(progress)
 
     try:
-        front = prepare(pts, given, plan, neighbours, report, cache=cache, near=True)
+        front = prepare(pts, given, plan, neighbours, report, cache=cache, near=True, sort_given=True)
     except NearCopies as found:  # points on top of others (float rounding of one point written twice)
         if cache is not None:
             cache.remember(pts, found.merged)
@@ -138,7 +138,7 @@ def estimate(
     best, confidence = settle_signs(front.pts, best, front.nb, plan, front.confidence)
     marks = flags(best.fit, front.scores, plan, front.reference, nb=front.nb, confidence=confidence)
     stages = front.order.to_caller(_reported((front.init, best, front.scale, marks)))
-    nb = stage_cache.caller_neighbours(cache, front.order, front.nb, pts)  # a cache keeps the sorted graph
+    nb = neighbours if neighbours is not None else stage_cache.caller_neighbours(cache, front.order, front.nb, pts)
     report(1.0, "done")
     return _result(pts, kept, plan, stages=stages, neighbours=nb, repaired=front.repaired)
 
@@ -195,15 +195,15 @@ class Prepared(NamedTuple):
     order: SpatialOrder
 
 
-def prepare(pts, normals, plan, neighbours, report, *, cache=None, near=False) -> Prepared:
+def prepare(pts, normals, plan, neighbours, report, *, cache=None, near=False, sort_given=False) -> Prepared:
     """The stages before the fits: neighbours -> outlier scores -> initial normals ->
     orientation -> scale choice (shared by :func:`estimate` and the tiles of
     :mod:`core.tiled`, which run the fits' passes themselves). They run on the points in
-    spatial order (:mod:`core.spatial_order`; given ``neighbours``: in the caller's), each
-    one run or re-used through ``cache`` (:mod:`core.stage_cache`)."""
+    spatial order (:mod:`core.spatial_order`; given ``neighbours``: in the caller's unless
+    ``sort_given``), each one run or re-used through ``cache`` (:mod:`core.stage_cache`)."""
     run = stage_cache.memo(cache, pts, normals, plan)  # each stage: run, or re-used from the cache
-    nb, order = run.neighbours(lambda k: spatial_neighbours(pts, plan, neighbours, report.sub(0.0, 0.3), k=k),
-                               neighbours)
+    nb, order = run.neighbours(lambda k: spatial_neighbours(pts, plan, neighbours, report.sub(0.0, 0.3), k=k,
+                                                            sort_given=sort_given), neighbours)
     if near:  # places of points on top of others, for estimate() to merge (core.duplicates.near_copies)
         _near_copies(pts, nb, order, plan)
     pts, normals = nb.points, order.to_sorted(normals)  # the stages run in spatial order

@@ -79,6 +79,7 @@ class StageCache:
         self._entries: dict[str, list[tuple[tuple, object]]] = {}
         self._graph = None  # (inputs, (nb, order)) of the last search
         self._caller = None  # (nb, the same graph in the caller's order)
+        self._given = None  # (a caller's graph, its points' inputs, (that graph as the stages read it, its order))
         self._nb = None
         self._nb_token = 0
         self._merged = None  # (digest, core.duplicates.Merged) of the last cloud with copies (remember)
@@ -88,7 +89,7 @@ class StageCache:
     def clear(self) -> None:
         """Forget every kept output (the counters stay)."""
         self._entries.clear()
-        self._graph = self._caller = self._nb = self._merged = None
+        self._graph = self._caller = self._nb = self._merged = self._given = None
 
     def known_merge(self, points: np.ndarray):
         """The places kept for ``points`` (:meth:`remember`), or None; nothing to compare (no
@@ -142,6 +143,15 @@ class StageCache:
         self.computed["neighbours"] += 1
         return found
 
+    def _given_graph(self, given, inputs: tuple, compute):
+        """``compute()``'s ``(nb, order)`` for the caller's graph ``given`` on the points of
+        ``inputs``, kept while the same graph is passed for them (its copy in spatial order is
+        then the same graph to the stages)."""
+        if self._given is None or self._given[0] is not given or self._given[1] != inputs:
+            self._given = None
+            self._given = (given, inputs, compute())
+        return self._given[2]
+
     def caller_neighbours(self, order, nb, points):
         """``order.neighbours_to_caller(nb, points)`` kept with ``nb``: the results of one
         graph share one copy in the caller's order."""
@@ -161,8 +171,10 @@ class _Memo:
         """The neighbour graph and its spatial order, ``compute(k)``'s ``(nb, order)`` for
         ``k`` neighbours: from ``given`` (the caller's graph) as is, else a kept search with
         head room (:attr:`StageCache.k_max`); later stages are keyed by the graph ``nb`` itself."""
-        if given is not None or self.cache is None:
+        if self.cache is None:
             nb, order = compute(self.plan.k_search)
+        elif given is not None:
+            nb, order = self.cache._given_graph(given, self.inputs, lambda: compute(self.plan.k_search))
         else:
             nb, order = self.cache._search(self.inputs[0], self.plan.k_search, self.plan.n_points, compute)
         self.graph = None if self.cache is None else self.cache._token(nb)

@@ -18,7 +18,7 @@ from .normal_repair import repair_normals
 from .normals import jet_normals, pca_normals
 from .orientation import orient
 from .patch import Chunk
-from .spatial_order import SpatialOrder
+from .spatial_order import SpatialOrder, given_in_spatial_order
 from .wide_neighbours import search_in_spatial_order
 from .tuning import CREASE_NOISE, CREASE_RATIO, CREASE_SPREAD, JET_SCORE, OUTLIER_FLOOR, SEARCH_WIDTH
 
@@ -84,12 +84,14 @@ def find_neighbours(pts, plan, neighbours, report) -> Neighbours:
     return neighbours
 
 
-def spatial_neighbours(pts, plan, neighbours, report, *, k=None) -> tuple[Neighbours, SpatialOrder]:
+def spatial_neighbours(pts, plan, neighbours, report, *, k=None, sort_given=False) -> tuple[Neighbours, SpatialOrder]:
     """:func:`find_neighbours`, searched on the points in spatial order (the stages then run
-    on ``nb.points``, :mod:`core.spatial_order`); given neighbours are used as they are.
+    on ``nb.points``, :mod:`core.spatial_order`); given neighbours are used as they are,
+    or put in spatial order too if ``sort_given`` (:func:`core.spatial_order.given_in_spatial_order`).
     ``k``: search that many (>= ``plan.k_search``, a cache's head room) instead."""
     if neighbours is not None:
-        return find_neighbours(pts, plan, neighbours, report), SpatialOrder(None)
+        given = find_neighbours(pts, plan, neighbours, report)
+        return given_in_spatial_order(pts, given) if sort_given else (given, SpatialOrder(None))
     nb, order = search_in_spatial_order(pts, plan.k_search if k is None else k, progress=report,
                                         width=search_width(plan))
     return nb, SpatialOrder(order)

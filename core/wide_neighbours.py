@@ -151,6 +151,11 @@ class LazyNeighbours(Neighbours):
     def __repr__(self) -> str:
         return f"LazyNeighbours(n={len(self._points)}, k_max={self._k_max}, made={self._made is not None})"
 
+    def spatial(self):
+        """``(source, order)`` while the graph is still held in spatial order, else None."""
+        with self._lock:
+            return None if self._source is None else (self._source, self._order)
+
     def _graph(self) -> Neighbours:
         with self._lock:
             if self._made is None:

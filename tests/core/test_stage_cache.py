@@ -59,6 +59,13 @@ def test_given_neighbours_and_normals_are_part_of_the_key(torus):
     assert cache.computed["initial"] == 2 and "neighbours" not in cache.computed  # the caller's graph, not searched
     estimate(s.points, s.normals, k=15, neighbours=build_neighbours(s.points, 32), cache=cache)  # a new graph
     assert cache.computed["initial"] == 3
+    _same(estimate(s.points, s.normals, k=15, passes=3, neighbours=nb, cache=cache),
+          estimate(s.points, s.normals, k=15, passes=3, neighbours=nb))
+    assert cache.computed["initial"] == 4 and cache.reused["initial"] == 0
+    estimate(s.points, s.normals, k=15, neighbours=nb, cache=cache)  # the same graph again: its stages kept
+    assert cache.computed["initial"] == 4 and cache.reused["initial"] == 1
+    with pytest.raises(ValueError, match="different points"):  # a kept graph is not taken for other points
+        estimate(s.points + 1.0, k=15, neighbours=nb, cache=cache)
 
 
 @pytest.mark.parametrize("given", [False, True])
