@@ -77,7 +77,7 @@ def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n
     for p in range(n_fits):
         sub = report.sub(p / n_fits, (p + 1) / n_fits)
         fit = _empty_fit(len(pts))
-        centres = has_normal & ~sc.on_jet if fitted is None else has_normal & ~sc.on_jet & fitted[p]
+        centres = has_normal & ~sc.on_jet & sc.spans if fitted is None else has_normal & ~sc.on_jet & sc.spans & fitted[p]
         fitter.into(fit, nrm, centres if first is None else centres & first, sub.sub(0.0, share))
         complete = _Rest(fitter, fit, nrm, None if first is None else centres & ~first, sub.sub(share, 1.0), held)
         yield p, fit, nrm, complete

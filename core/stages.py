@@ -9,7 +9,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import kernels, scale, tuning
+from . import kernels, plane_spread, scale, tuning
 from .frame import darboux_frame
 from .kernels.permute import put_rows
 from .border import border_of_valid, served_by
@@ -251,7 +251,9 @@ class Scale(NamedTuple):
     ``k_point`` (N,) the size reported (the jet's where the jet is kept), ``on_jet`` (N,)
     where the cubic position jet is the result, ``quiet`` (N,) where the measured noise is
     nil (NF rule or jet), ``jets`` the jets' frames (None without k="auto") and
-    ``jet_degree`` (N,) their polynomial degree where kept (-1 elsewhere)."""
+    ``jet_degree`` (N,) their polynomial degree where kept (-1 elsewhere); ``spans`` (N,)
+    False where NR's neighbours do not span the tangent plane (:mod:`core.plane_spread`:
+    not fitted, invalid)."""
 
     k: np.ndarray
     k_point: np.ndarray
@@ -259,6 +261,7 @@ class Scale(NamedTuple):
     quiet: np.ndarray
     jets: tuple | None = None
     jet_degree: np.ndarray | None = None
+    spans: np.ndarray | None = None
 
 
 def choose_scale(pts, nrm, nb, inliers, plan, report, *, scores=None, k_initial=None) -> Scale:
@@ -268,11 +271,14 @@ def choose_scale(pts, nrm, nb, inliers, plan, report, *, scores=None, k_initial=
     NR's own fits are at least ``plan.candidates[0]`` wide, and with noise at least the
     candidate >= ``k_initial``: a jet stopped early by a noise tail or an outlier is no
     reason to fit fewer points; a fold is (:func:`core.scale.fold_capped`: the far side
-    of a thin part)."""
+    of a thin part). Where NR's neighbours do not span the tangent plane, k="auto" takes
+    the smallest candidate whose neighbours do (:mod:`core.plane_spread`; the jets judge
+    their own lever arms, through the variance of their Hessian); ``Scale.spans`` tells
+    where none does."""
     n = len(pts)
     if not plan.auto:
         kc, none = np.full(n, plan.k, dtype=np.int64), np.zeros(n, dtype=bool)
-        return Scale(kc, kc, none, none)
+        return Scale(kc, kc, none, none, spans=plane_spread.spans_plane(pts, nrm, nb, kc))
     ks = plan.candidates
     suspect = scores > JET_SCORE if plan.robust and scores is not None else np.zeros(n, dtype=bool)
     steady = inliers & ~suspect  # the jets are least squares: suspects sit out the choice of k
@@ -283,7 +289,10 @@ def choose_scale(pts, nrm, nb, inliers, plan, report, *, scores=None, k_initial=
     if len(lifted):  # but not across a fold (the far side of a thin part)
         floor[lifted] = scale.fold_capped(pts, masked, nb, lifted, ks, floor[0])
     fit_k = np.maximum(kc, np.where(quiet, ks[0], floor))
-    return Scale(fit_k, np.where(on_jet, kc, fit_k), on_jet, quiet, jets, np.where(on_jet, degree, -1))
+    wide = plane_spread.widened(pts, nrm, nb, fit_k, ks)
+    fit_k = np.where(wide > 0, wide, fit_k)
+    return Scale(fit_k, np.where(on_jet, kc, fit_k), on_jet, quiet, jets, np.where(on_jet, degree, -1),
+                 spans=on_jet | (wide > 0))
 
 
 def fit_all(pts, nrm, idx, kc, h, has_normal, *, method, options, report) -> Fit:

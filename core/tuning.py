@@ -121,6 +121,16 @@ FOLD_MIN_BAD = 3
 
 # ----------------------------------------------------------------------------- the fit and its passes
 
+#: a point whose fitted neighbours spread less than this across their main direction in the
+#: tangent plane (sqrt(lambda_min / lambda_max) of their offsets, core.plane_spread) is not
+#: fitted: its neighbours lie along one line, so its curvature across that line is noise over
+#: their tiny lever arms. Measured (tests/core/test_plane_spread.py has the classes): k = 15
+#: on random samplings of a torus: >= 0.31 (0.21 at k = 10, 0.10 at k = 8); scan lines up to 6x wider
+#: apart than the along-line spacing: >= 0.5; 7x: 8 % of points 0.005-0.05 (H error 8-9 against
+#: 0.02); 8x and 12x: median 0.013 (H error 54-77 against |H| 0.18, every point valid);
+#: a circle with 1e-6 jitter: 0.006
+THIN_SPREAD = 0.1
+
 #: reweighting iterations of the robust fits (each one re-solves the least squares)
 IRLS_ITERATIONS = 2
 #: most NR refinement passes a user may ask for

@@ -1,0 +1,43 @@
+"""Whether a neighbourhood spans the tangent plane (numba, ``nogil``, all cores)."""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit, prange
+
+from ._base import OPTS
+
+
+@njit(**OPTS, parallel=True)
+def plane_spread(points, normals, centres, idx, kc, out):
+    """out[r] = sqrt(lambda_min / lambda_max) of the second moments about centre
+    ``centres[r]`` of its first ``kc[r]`` neighbours (row r of ``idx``), projected on the
+    plane normal to its normal: 1 for neighbours all around, 0 for neighbours on a line
+    through it. NaN where the normal is not finite or every neighbour sits on the centre.
+
+    The projected moment matrix M has the eigenvalue 0 along the normal, so its other two
+    are the roots of x^2 - tr(M) x + e2(M) (e2: the sum of its principal 2x2 minors)."""
+    for r in prange(len(centres)):
+        i = centres[r]
+        nx, ny, nz = normals[i, 0], normals[i, 1], normals[i, 2]
+        if not (math.isfinite(nx) and math.isfinite(ny) and math.isfinite(nz)):
+            out[r] = math.nan
+            continue
+        m00 = m01 = m02 = m11 = m12 = m22 = 0.0
+        for j in range(kc[r]):
+            q = idx[r, j]
+            dx, dy, dz = points[q, 0] - points[i, 0], points[q, 1] - points[i, 1], points[q, 2] - points[i, 2]
+            s = dx * nx + dy * ny + dz * nz
+            dx, dy, dz = dx - s * nx, dy - s * ny, dz - s * nz
+            m00 += dx * dx
+            m01 += dx * dy
+            m02 += dx * dz
+            m11 += dy * dy
+            m12 += dy * dz
+            m22 += dz * dz
+        tr = m00 + m11 + m22
+        e2 = m00 * m11 - m01 * m01 + m00 * m22 - m02 * m02 + m11 * m22 - m12 * m12
+        half = 0.5 * tr
+        top = half + math.sqrt(max(half * half - e2, 0.0))
+        out[r] = math.sqrt(max(e2, 0.0) / (top * top)) if top > 0.0 else math.nan  # lambda_min = e2 / lambda_max

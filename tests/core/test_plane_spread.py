@@ -1,0 +1,100 @@
+"""Neighbourhoods that do not span the tangent plane (core.plane_spread): points whose
+neighbours lie along one line are not fitted (valid False, NaN) instead of reporting the
+noise over their tiny lever arms as curvature; k="auto" widens NR's neighbourhood there."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import core
+from core import plane_spread, shapes, shapes_thin
+from core.tuning import THIN_SPREAD
+
+
+def _spreads(pts, k):
+    res = core.estimate(pts, k=15)
+    return plane_spread.spreads(pts, res.normals, core.build_neighbours(pts, k), k)
+
+
+def test_spread_is_one_all_around_and_zero_on_a_line():
+    t = np.linspace(0, 2 * np.pi, 8, endpoint=False)
+    ring = np.c_[np.cos(t), np.sin(t), 0 * t]
+    pts = np.vstack([[0.0, 0.0, 0.0], ring, 2 * ring])
+    nrm = np.tile([0.0, 0.0, 1.0], (len(pts), 1))
+    nb = core.build_neighbours(pts, 9)
+    assert plane_spread.spreads(pts, nrm, nb, 9, [0])[0] == pytest.approx(1.0)
+    line = np.c_[np.linspace(-1, 1, 17), np.zeros(17), np.zeros(17)]
+    line[9, 1] = 1e-3  # a neighbour a hair off the line
+    nrm = np.tile([0.0, 0.0, 1.0], (17, 1))
+    s = plane_spread.spreads(line, nrm, core.build_neighbours(line, 9), 9, [8])[0]
+    assert 0 < s < 2e-3
+    tilted = np.tile([0.0, 0.6, 0.8], (len(pts), 1))  # the moments are taken in the plane normal to the normal
+    assert plane_spread.spreads(pts, tilted, nb, 9, [0])[0] == pytest.approx(0.8, rel=1e-12)
+    assert np.isnan(plane_spread.spreads(pts, np.full_like(nrm[:1].repeat(len(pts), 0), np.nan), nb, 9, [0])[0])
+
+
+@pytest.mark.parametrize("k", [10, 15])
+def test_random_samplings_span_their_plane(k):
+    t = shapes.torus(8000, seed=1)
+    assert _spreads(t.points, k).min() > 1.5 * THIN_SPREAD  # measured: >= 0.31 at k = 15, 0.2 at 10
+    res = core.estimate(t.points, k=k)
+    assert res.valid.all()
+
+
+def test_scan_lines_too_far_apart_for_k_are_not_fitted():
+    """Lines 8 spacings apart: the 15 nearest of a point all lie on its own line."""
+    s = shapes_thin.stripe_scan(6000, ratio=8.0, seed=0)
+    assert np.median(_spreads(s.points, 15)) < THIN_SPREAD / 5
+    for method in ("nr", "nf", "ct", "qp", "cf"):
+        res = core.estimate(s.points, k=15, method=method)
+        assert res.valid.mean() < 0.1, method  # before: every point valid, median |H error| 77 (|H| 0.18)
+        assert np.isnan(res.mean[~res.valid]).all()
+        err = np.abs(res.mean - s.mean)[res.valid & s.interior]
+        assert len(err) == 0 or np.median(err) < 0.05, method
+    near = core.estimate(s.points, k=15, method="nr")
+    wide = core.estimate(shapes_thin.stripe_scan(6000, ratio=3.0, seed=0).points, k=15)
+    assert wide.valid.all() and not near.valid.all()  # lines 3 apart: the 15 nearest reach the next lines
+
+
+def test_a_helix_is_not_given_curvatures():
+    t = np.linspace(0, 2 * np.pi, 3000, endpoint=False)
+    helix = np.c_[np.cos(3 * t), np.sin(3 * t), 0.3 * t]
+    for method in ("nr", "ct", "qp"):
+        res = core.estimate(helix, k=15, method=method)
+        assert not res.valid.any(), method  # before: every point valid, k1 made up
+
+
+def test_auto_widens_nr_where_its_neighbours_do_not_span(monkeypatch):
+    """With noise k="auto" fits NR; where its chosen neighbours lie on one scan line it
+    takes the next candidate that reaches the neighbouring lines, never a thin one."""
+    s = shapes_thin.stripe_scan(6000, ratio=8.0, seed=0)
+    noisy = core.noise.add_noise(s.points, 0.2, seed=3)
+    res = core.estimate(noisy)
+    assert res.valid.mean() > 0.99
+    assert np.all(_spreads_at(noisy, res) >= THIN_SPREAD)
+    err = np.abs(res.mean - s.mean)[res.valid & s.interior]
+    assert np.median(err) < 0.1
+
+
+def _spreads_at(pts, res):
+    nb = core.build_neighbours(pts, int(res.k_point.max()))
+    fitted = res.valid & (res.degree_point == 3)  # NR's own fits (the jets judge their lever arms themselves)
+    return plane_spread.spreads(pts, res.normals, nb, res.k_point[fitted], np.flatnonzero(fitted))
+
+
+def test_widened_takes_the_smallest_spanning_candidate_or_none():
+    s = shapes_thin.stripe_scan(6000, ratio=8.0, seed=0)
+    res = core.estimate(s.points, k=15)
+    nb = core.build_neighbours(s.points, 113)
+    k = np.full(len(s.points), 15)
+    wide = plane_spread.widened(s.points, s.normals, nb, k, (20, 28, 40, 56, 113))
+    assert set(np.unique(wide)) <= {15, 20, 28, 40, 56, 113} and (wide == 20).mean() > 0.9  # 20 reach the next lines
+    thin = plane_spread.spreads(s.points, s.normals, nb, 15) < THIN_SPREAD
+    assert thin.mean() > 0.9 and (wide[~thin] == 15).all()
+    for cand in (20, 28, 40):
+        at = np.flatnonzero(wide == cand)
+        assert (plane_spread.spreads(s.points, s.normals, nb, cand, at) >= THIN_SPREAD).all()
+    line = np.c_[np.linspace(0, 1, 400), np.random.default_rng(0).normal(scale=1e-6, size=(400, 2))]
+    nrm = np.tile([0.0, 0.0, 1.0], (400, 1))
+    assert (plane_spread.widened(line, nrm, core.build_neighbours(line, 40), np.full(400, 15), (20, 28)) == 0).all()
