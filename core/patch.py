@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 
 import numpy as np
 
 from .kernels import Frames
-from .kernels.frame import local_frames
+from .kernels.frame import intrinsic_frames, local_frames
 
 
 @dataclass(frozen=True, eq=False)
@@ -48,6 +48,15 @@ class Chunk:
         if rows is not None:
             rows = np.asarray(rows, dtype=np.int64)
         return cls(points, normals, np.ascontiguousarray(idx), h, centres, t1, t2, z, kc, rows)
+
+    def turning(self, k0: int) -> "Chunk":
+        """This chunk in tangent frames that turn with the cloud, t1 along its first ``k0``
+        neighbours' offsets (:func:`core.kernels.frame.intrinsic_frames`): for rules that
+        compare fitted entries one by one, which in frames fixed to the world's axes give
+        a rotated cloud other answers."""
+        t1, t2 = self.t1.copy(), self.t2.copy()
+        intrinsic_frames(self.points, self.centres, self.z, np.ascontiguousarray(self.row_idx[:, :k0]), t1, t2)
+        return replace(self, t1=t1, t2=t2)
 
     @property
     def row_idx(self) -> np.ndarray:

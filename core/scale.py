@@ -87,8 +87,8 @@ import numpy as np
 
 from . import kernels
 from .frame import darboux_frame, height_field_derivatives, turned_over
-from .kernels import jets as jet_kernels
-from .kernels import pool as pool_kernels
+from .kernels import jets as jet_kernels, pool as pool_kernels
+from .kernels.frame import intrinsic_frames
 from .linalg import tangent_basis
 from .patch import Chunk
 from .tuning import (AUTO_DEGREE, AUTO_KS, FOLD_COS, FOLD_FRACTION, FOLD_MIN_BAD, FOLD_NOISE, GAMMA,
@@ -137,12 +137,12 @@ def _per_centre(kernel, points, normals, nb, centres, ks, rule, report=None, *, 
         h = dist[:, -1]
         out = np.empty(len(c), dtype=np.int64)
         if flat is None:
-            kernel(Chunk.build(points, normals, idx, h, c).frames(), ks_arr, rule, out)
+            kernel(Chunk.build(points, normals, idx, h, c).turning(ks[0]).frames(), ks_arr, rule, out)
         else:
             far = np.flatnonzero(h > 0)
             out[:] = flat
             part = np.empty(len(far), dtype=np.int64)
-            kernel(Chunk.build(points, normals, idx[far], h[far], c[far]).frames(), ks_arr, rule, part)
+            kernel(Chunk.build(points, normals, idx[far], h[far], c[far]).turning(ks[0]).frames(), ks_arr, rule, part)
             out[far] = part
         result[start:start + _CHUNK] = out
         if report is not None:
@@ -257,7 +257,9 @@ def choose_jets(points, normals, nb, has_normal, ks, report):
     idx_all, dist_all = nb.take(min(nb.width, ks[-1]))  # the columns held: the rows that need more are searched
     s = dist_all[:, ks[0] - 1].copy()
     usable = np.flatnonzero(has_normal & (s > 0))
-    t1, t2 = tangent_basis(np.where(has_normal[:, None], normals, [0.0, 0.0, 1.0]))
+    base = np.where(has_normal[:, None], normals, [0.0, 0.0, 1.0])
+    t1, t2 = tangent_basis(base)  # turned with the cloud: the rules compare the Hessian entry by entry
+    intrinsic_frames(points, np.arange(n), base, np.ascontiguousarray(idx_all[:, :ks[0]]), t1, t2)
     sigma2, plain = _measured_noise(points, normals, idx_all, usable, s, t1, t2)
     with np.errstate(invalid="ignore", divide="ignore"):
         noise = np.where(s > 0, np.maximum(np.sqrt(sigma2), 0.5 * np.sqrt(plain)) / s, np.inf)

@@ -107,3 +107,31 @@ def local_frames(normals, centres, z, t1, t2):
         t2[m, 0] = b
         t2[m, 1] = sign + (n1 * n1) * a
         t2[m, 2] = -n1
+
+
+@njit(**OPTS, parallel=True)
+def intrinsic_frames(points, centres, z, idx, t1, t2):
+    """Turn row r's (t1, t2) about its normal z[r] so that t1 points along the sum of the
+    offsets from point ``centres[r]`` to its neighbours (row r of ``idx``, the point first)
+    projected on its tangent plane, t2 = z x t1: a frame that turns with the cloud, where
+    :func:`local_frames` is fixed to the world's axes. Rows whose projected sum vanishes
+    against the offsets' own length (a symmetric neighbourhood) keep the frame given."""
+    for r in prange(len(centres)):
+        i = centres[r]
+        n0, n1, n2 = z[r, 0], z[r, 1], z[r, 2]
+        sx = sy = sz = total = 0.0
+        for j in range(1, idx.shape[1]):
+            q = idx[r, j]
+            dx, dy, dz = points[q, 0] - points[i, 0], points[q, 1] - points[i, 1], points[q, 2] - points[i, 2]
+            sx += dx
+            sy += dy
+            sz += dz
+            total += math.sqrt(dx * dx + dy * dy + dz * dz)
+        d = sx * n0 + sy * n1 + sz * n2
+        sx, sy, sz = sx - d * n0, sy - d * n1, sz - d * n2
+        length = math.sqrt(sx * sx + sy * sy + sz * sz)
+        if not length > 1e-9 * total:
+            continue
+        a0, a1, a2 = sx / length, sy / length, sz / length
+        t1[r, 0], t1[r, 1], t1[r, 2] = a0, a1, a2
+        t2[r, 0], t2[r, 1], t2[r, 2] = n1 * a2 - n2 * a1, n2 * a0 - n0 * a2, n0 * a1 - n1 * a0

@@ -120,3 +120,23 @@ def test_outward_orientation_of_flipped_normals_restores_result(cloud):
     b = core.estimate(pts, -nrm, k=15, orientation="outward")
     np.testing.assert_allclose(b.k1, a.k1, rtol=1e-9, atol=1e-9)
     np.testing.assert_allclose(b.normals, a.normals, rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("noise", [0.0, 0.2])
+@pytest.mark.parametrize("proper", [True, False], ids=["rotation", "reflection"])
+def test_auto_chooses_the_same_scale_whatever_the_pose(noise, proper, helpers):
+    """k="auto"'s rules compare fitted entries one by one (the jet's Hessian, NF's W) in
+    tangent frames that turn with the cloud (core.kernels.frame.intrinsic_frames): in
+    frames fixed to the world's axes a rotated torus chose other k at 7-300 of 3000 points
+    and k1 moved by up to 4 %."""
+    s = core.shapes.torus(3000, seed=0)
+    pts = core.noise.add_noise(s.points, noise, seed=1) if noise else s.points
+    Q = helpers.random_orthogonal(5, proper=proper)
+    a, b = core.estimate(pts), core.estimate(pts @ Q.T)
+    np.testing.assert_array_equal(a.k_point, b.k_point)
+    np.testing.assert_array_equal(a.degree_point, b.degree_point)
+    np.testing.assert_array_equal(a.valid, b.valid)
+    for f in ("k1", "k2"):  # noise-free the richest jets amplify the rounding of the rotation
+        x, y = getattr(a, f), getattr(b, f)
+        assert np.all(np.abs(x - y) <= 1e-8 * np.maximum(1.0, np.abs(x))), f
+    np.testing.assert_allclose(b.normals, a.normals @ Q.T, rtol=0, atol=1e-8)
