@@ -24,8 +24,12 @@ def fit_points(chunk):
 
 
 def normal_rows(patch):
-    """Design rows and targets of the normal equations shared by QN, CN and CF."""
-    return -patch.X / patch.Z, -patch.Y / patch.Z
+    """Design rows and targets of the normal equations shared by QN, CN and CF. A
+    neighbour's normal in the tangent plane (Z = 0: at its smallest k on a grid) gives an
+    inf or NaN target: the point's curvatures come out non-finite and the frame flags it
+    invalid (:func:`core.frame.darboux_frame`)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return -patch.X / patch.Z, -patch.Y / patch.Z
 
 
 def fit_normals(chunk):
