@@ -1,15 +1,21 @@
-"""Clouds no estimate can be made on: too few points, all points at one place, or a scale
-where squared distances leave the float64 range. They get a result with ``valid=False``
-everywhere (and the reason in ``params["degenerate"]``), never a crash or a made-up number."""
+"""Clouds no estimate can be made on: too few points, all points at one place, on one straight
+line, or at a scale where squared distances leave the float64 range. They get a result with
+``valid=False`` everywhere (and the reason in ``params["degenerate"]``), never a crash or a
+made-up number; the arguments are checked first, as on any cloud (:func:`checked_plan`)."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
-from ._validate import as_normals, check_int
+from ._validate import check_int
 from .kernels.bounds import bounds
 from .methods import check_options, get_method
+from .neighbours import Neighbours
+from .normal_repair import split_normals
 from .result import CurvatureResult
+from .stages import find_neighbours
 
 #: largest |coordinate|: the fits sum squared distances over up to 226 neighbours and cubic
 #: terms in units of the neighbourhood radius. Measured: a unit sphere scaled by 1e150
@@ -21,10 +27,21 @@ MIN_EXTENT = 1e-150
 #: smallest extent relative to |coordinates|: below it the cloud spans fewer than ~4500
 #: float64 steps and its shape is rounding noise.
 MIN_RELATIVE_EXTENT = 1e-12
-#: a cloud whose second principal spread is below this share of its first lies on a line
-#: (no surface passes through it, so no point has a normal). The spreads come from the 3x3
-#: scatter matrix, whose rounding leaves a line ~1e-8; a 1000:1 thin tube measures 1e-3.
+#: a cloud whose second principal spread is below this share of its first may lie on a line
+#: (then :func:`_straight_runs` decides). The spreads come from the 3x3 scatter matrix,
+#: whose rounding leaves a line ~1e-8; a 1000:1 thin tube measures 1e-3.
 MIN_WIDTH = 1e-6
+#: the scatter matrix is summed over at most ~this many points (every n // SAMPLE-th): a
+#: subset that spreads in two directions shows the cloud does (at 1M points 40 -> 4 ms;
+#: a subset in line, e.g. one column of a grid, only sends the cloud on to the runs).
+SAMPLE = 65536
+#: points per run along the line's direction in :func:`_straight_runs`.
+RUN = 16
+#: a run is straight when its points' rms distance from their own line parallel to the
+#: cloud's is at most this share of their mean gap along it (a line's rounding, or jitter
+#: far below its spacing). A surface's runs measure more than 1: 1.3-3 along a 1000:1
+#: tube, 100 and more on slices across a sphere or a plane.
+LINE_JITTER = 0.1
 
 
 def reason(points: np.ndarray, min_k: int) -> str | None:
@@ -43,26 +60,77 @@ def reason(points: np.ndarray, min_k: int) -> str | None:
     if extent < MIN_EXTENT or extent < MIN_RELATIVE_EXTENT * size:
         return (f"the cloud spans only {extent:.3g} at coordinates up to {size:.3g} (too small to resolve "
                 "in float64); rescale or re-centre the cloud")
-    return _collinear(points)
+    return _collinear(points, (lo + hi) / 2)
 
 
-def _collinear(points: np.ndarray) -> str | None:
-    """The reason when every point lies on one straight line (within rounding), else None."""
-    centred = points - points.mean(axis=0)
-    spread = np.linalg.svd(centred.T @ centred, compute_uv=False) ** 0.5
-    if spread[1] <= MIN_WIDTH * spread[0]:
-        return "all points lie on one straight line: a surface needs points spread in two directions"
-    return None
+def _collinear(points: np.ndarray, centre: np.ndarray) -> str | None:
+    """The reason when every point lies on one straight line (within rounding), else None.
+
+    A cloud is a line only if every part of it is: the whole cloud's spread across its
+    principal direction is only a screen (two spheres 1e9 apart are thin next to their
+    distance, yet surfaces); :func:`_straight_runs` then judges each part against the
+    spacing of its own points."""
+    sample = points[:: max(1, len(points) // SAMPLE)] - centre  # centred first: no cancellation far from 0
+    mean = np.einsum("ij->j", sample) / len(sample)
+    values, vectors = np.linalg.eigh(sample.T @ sample - len(sample) * np.outer(mean, mean))
+    spread = np.sqrt(np.maximum(values[::-1], 0.0))
+    if spread[1] > MIN_WIDTH * spread[0] or not _straight_runs(points, vectors[:, ::-1]):
+        return None
+    return "all points lie on one straight line: a surface needs points spread in two directions"
+
+
+def _straight_runs(points: np.ndarray, frame: np.ndarray) -> bool:
+    """Whether every run of :data:`RUN` consecutive points along ``frame[:, 0]`` (the
+    cloud's principal direction; ``frame`` orthonormal) is straight: its points' rms
+    distance from their own line along it at most :data:`LINE_JITTER` of their mean gap.
+    Each run is taken relative to its first point, so parts far from each other (or from
+    0) are judged at their own scale; a run across two parts spans their distance and is
+    straight, but any run inside a surface (a slice across it) is not."""
+    n = len(points)
+    m = min(RUN, n)
+    order = np.argsort(points @ frame[:, 0])
+    rows = np.concatenate([order[: n - n % m], order[n - m:]]) if n % m else order
+    runs = np.take(points, rows, axis=0).reshape(-1, m, 3)  # np.take: 3.5x faster than points[rows]
+    local = (runs - runs[:, :1]) @ frame  # along, across, across
+    across = local[..., 1:]
+    centre = np.einsum("rij->rj", across) / m
+    width2 = np.einsum("rij,rij->r", across, across) / m - np.einsum("rj,rj->r", centre, centre)
+    gap = np.ptp(local[..., 0], axis=1) / (m - 1)
+    return bool((width2 <= (LINE_JITTER * gap) ** 2).all())
+
+
+def checked_plan(n: int, asked: dict, make_plan, *, planned: bool):
+    """:func:`core.estimate`'s request on ``n`` points checked as on any cloud, degenerate or
+    not: ``make_plan(n, asked)`` (its ``_plan``: the given plan, or one built from ``asked``;
+    a ValueError naming the argument, its value and what is allowed). A cloud of fewer
+    points than the method needs for one fit leaves an integer k no allowed value; it gets
+    the all-invalid result for any k >= 1 (:func:`reason`) and its other arguments are
+    checked by the plan of the smallest cloud the method fits, made for its ``n`` points
+    (all of them searched, as k="auto" does). ``planned``: a plan was given."""
+    k = asked["k"]
+    if not planned and not isinstance(k, str):
+        method = get_method(asked["method"])
+        low = method.min_k_for(check_options(method, asked["options"]))
+        if n < low:
+            k = check_int(k, name="k", low=1)
+            least = make_plan(low, {**asked, "k": low})
+            return replace(least, n_points=n, k=k, candidates=(n,), k_search=n, k_initial=n)
+    return make_plan(n, asked)
 
 
 def invalid_result(points, normals, *, method: str, k, passes, why: str, params: dict) -> CurvatureResult:
     """A result for ``points`` with every point invalid: NaN curvatures and directions;
-    the given normals (unit length) or NaN."""
+    the given normals (any length, NaN allowed: :func:`core.normal_repair.split_normals`)
+    at unit length where they have a direction, else (and without them) NaN."""
     n = len(points)
     if not (isinstance(k, str) and k == "auto"):
         check_int(k, name="k", low=1)
     nan3 = np.full((n, 3), np.nan)
-    nrm = nan3.copy() if normals is None else as_normals(normals, n)
+    if normals is None:
+        nrm = nan3.copy()
+    else:  # a degenerate cloud has no neighbourhoods to estimate a missing normal from
+        nrm, _, counts = split_normals(normals)
+        params = {**params, "normals_repaired": {**counts, "estimated": 0}}
     return CurvatureResult(
         points=points, normals=nrm, k1=np.full(n, np.nan), k2=np.full(n, np.nan), e1=nan3.copy(),
         e2=nan3.copy(), valid=np.zeros(n, dtype=bool), method=method, k=k, passes=passes,
@@ -71,19 +139,27 @@ def invalid_result(points, normals, *, method: str, k, passes, why: str, params:
     )
 
 
-def invalid_if_degenerate(points, kept, normals, asked: dict, plan=None) -> CurvatureResult | None:
+def invalid_if_degenerate(points, kept, given, asked: dict, plan=None, *, neighbours=None) -> CurvatureResult | None:
     """For :func:`core.estimate`: the all-invalid result when no fit can be made on
-    ``points`` (validated, after dropping the rows not ``kept``), else None. ``asked``
-    holds estimate's k, method, passes and options; a given ``plan`` overrides them."""
+    ``points`` (validated, after dropping the rows not ``kept``), else None. ``given``: the
+    given normals of the points kept, shape checked (any length, NaN allowed), or None.
+    ``plan``: the checked request (:func:`checked_plan`), else ``asked`` (estimate's k,
+    method, passes and options) gives the method. A given ``neighbours`` graph must be a
+    :class:`core.Neighbours` on every cloud (one of copies uses no given graph) and, on a
+    degenerate one, is checked as on a cloud that is estimated
+    (:func:`core.stages.find_neighbours`: its ``k_max`` and points)."""
     if plan is not None:
         method, options, k, passes = plan.method, dict(plan.options), plan.k, plan.passes
     else:
         method = get_method(asked["method"])
         options = check_options(method, asked["options"])
         k, passes = asked["k"], asked["passes"]
+    if neighbours is not None and not isinstance(neighbours, Neighbours):  # on every cloud (copies' use no graph)
+        find_neighbours(points, plan, neighbours, None)  # its ValueError naming the type
     why = reason(points, method.min_k_for(options))
     if why is None:
         return None
-    given = None if normals is None else np.asarray(normals)[kept]
+    if neighbours is not None:
+        find_neighbours(points, plan, neighbours, None)
     return invalid_result(points, given, method=method.name, k=k, passes=passes, why=why,
                           params={"dropped": int(np.count_nonzero(~kept))})

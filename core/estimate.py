@@ -115,16 +115,19 @@ def estimate(
         raise ValueError(f"points must hold at least 3 points, got {len(pts)}")
     asked = dict(k=k, method=method, passes=passes, tol=tol, initial=initial, orientation=orientation,
                  options=options)
-    invalid = degenerate.invalid_if_degenerate(pts, kept, normals, asked, plan)  # harden: valid=False, no crash
-    if invalid is not None:
+    # harden: every argument checked alike on every cloud, degenerate or not, before any work
+    checked = degenerate.checked_plan(len(pts), asked, lambda n, ask: _plan(plan, n, ask, normals is not None),
+                                      planned=plan is not None)
+    given = None if normals is None else as_normals(_given_rows(normals, kept), len(pts), repair=True)
+    report, cache = Progress(progress), stage_cache.checked(cache)
+    invalid = degenerate.invalid_if_degenerate(pts, kept, given, asked, checked, neighbours=neighbours)
+    if invalid is not None:  # harden: valid=False, no crash
         return invalid
-    merged = find_duplicates(pts, cache=stage_cache.checked(cache))  # harden: copies of a point are estimated once, at their position
+    merged = find_duplicates(pts, cache=cache)  # harden: copies of a point are estimated once, at their position
     args = dict(plan=plan, neighbours=neighbours, progress=progress, cache=cache)
     if merged is not None:
         return _on_distinct(merged, pts, kept, normals, asked, **args)
-    plan = _plan(plan, len(pts), asked, normals is not None)
-    given = None if normals is None else as_normals(_given_rows(normals, kept), len(pts), repair=True)
-    report = Progress(progress)
+    plan = checked
 
     try:
         front = prepare(pts, given, plan, neighbours, report, cache=cache, near=True, sort_given=True)

@@ -85,46 +85,96 @@ def test_list_and_float32_input_accepted(small):
 # ----------------------------------------------------------------------------- k / method / options / passes
 
 
-@pytest.mark.parametrize(
-    "kw, match",
-    [
-        (dict(k=0), r"k=0 is out of range; allowed: in \[4, 200\]"),
-        (dict(k=-5), r"k=-5 is out of range"),
-        (dict(k=201), r"k=201 is out of range; allowed: in \[4, 200\]"),
-        (dict(k=2.5), r"k must be an integer, got 2.5"),
-        (dict(k=15.0), r"k must be an integer, got 15.0"),
-        (dict(k=True), r"k must be an integer, got True"),
-        (dict(k="15"), r"k must be an integer.*got '15'"),
-        (dict(k=None), r"k must be an integer, got None"),
-        (dict(method="foo"), r"method 'foo' is unknown; valid methods are: nr, nf, ct, qp, qn, cf, cn, jet"),
-        (dict(method=None), r"method None is unknown; valid methods are: .*nr.*jet"),
-        (dict(options={"bogus": 1}),
-         r"option\(s\) \['bogus'\] do not apply to method 'nr'; its options are: .*constraint.*weights"),
-        (dict(method="ct", options={"weights": "theta"}),
-         r"option\(s\) \['weights'\] do not apply to method 'ct'; its options are: none"),
-        (dict(method="jet", options={"constraint": "none"}),
-         r"\['constraint'\] do not apply to method 'jet'; its options are: degree"),
-        (dict(options={"weights": "gauss"}), r"weights 'gauss' is invalid; must be one of \['uniform', 'theta'\]"),
-        (dict(options={"constraint": "strict"}), r"constraint 'strict' is invalid"),
-        (dict(method="jet", options={"degree": 4}), r"degree 4 is invalid; must be 2 or 3"),
-        (dict(passes=-1), r"passes=-1 is out of range; allowed: in \[0, 20\]"),
-        (dict(passes=1.5), r"passes must be an integer, got 1.5"),
-        (dict(passes=21), r"passes=21 is out of range"),
-        (dict(orientation="inward"),
-         r"orientation 'inward' is invalid; must be one of \['auto', 'propagate', 'outward', 'keep'\] "
-         r"or a \(3,\) viewpoint"),
-        (dict(orientation=[0, 0]), r"orientation as a viewpoint must be 3 finite numbers, got \[0, 0\]"),
-        (dict(orientation=[0, 0, 0, 1]),
-         r"orientation as a viewpoint must be 3 finite numbers, got \[0, 0, 0, 1\]"),
-        (dict(orientation=(0, np.nan, 1)), r"orientation as a viewpoint must be 3 finite numbers"),
-        (dict(progress=5), r"progress must be callable or None, got 5"),
-        (dict(progress="yes"), r"progress must be callable or None, got 'yes'"),
-    ],
-    ids=lambda x: repr(x) if isinstance(x, dict) else None,
-)
+BAD_ARGUMENTS = [
+    (dict(k=0), r"k=0 is out of range; allowed: in \[4, 200\]"),
+    (dict(k=-5), r"k=-5 is out of range"),
+    (dict(k=201), r"k=201 is out of range; allowed: in \[4, 200\]"),
+    (dict(k=2.5), r"k must be an integer, got 2.5"),
+    (dict(k=15.0), r"k must be an integer, got 15.0"),
+    (dict(k=True), r"k must be an integer, got True"),
+    (dict(k="15"), r"k must be an integer.*got '15'"),
+    (dict(k=None), r"k must be an integer, got None"),
+    (dict(method="foo"), r"method 'foo' is unknown; valid methods are: nr, nf, ct, qp, qn, cf, cn, jet"),
+    (dict(method=None), r"method None is unknown; valid methods are: .*nr.*jet"),
+    (dict(options={"bogus": 1}),
+     r"option\(s\) \['bogus'\] do not apply to method 'nr'; its options are: .*constraint.*weights"),
+    (dict(method="ct", options={"weights": "theta"}),
+     r"option\(s\) \['weights'\] do not apply to method 'ct'; its options are: none"),
+    (dict(method="jet", options={"constraint": "none"}),
+     r"\['constraint'\] do not apply to method 'jet'; its options are: degree"),
+    (dict(options={"weights": "gauss"}), r"weights 'gauss' is invalid; must be one of \['uniform', 'theta'\]"),
+    (dict(options={"constraint": "strict"}), r"constraint 'strict' is invalid"),
+    (dict(method="jet", options={"degree": 4}), r"degree 4 is invalid; must be 2 or 3"),
+    (dict(passes=-1), r"passes=-1 is out of range; allowed: in \[0, 20\]"),
+    (dict(passes=1.5), r"passes must be an integer, got 1.5"),
+    (dict(passes=21), r"passes=21 is out of range"),
+    (dict(orientation="inward"),
+     r"orientation 'inward' is invalid; must be one of \['auto', 'propagate', 'outward', 'keep'\] "
+     r"or a \(3,\) viewpoint"),
+    (dict(orientation=[0, 0]), r"orientation as a viewpoint must be 3 finite numbers, got \[0, 0\]"),
+    (dict(orientation=[0, 0, 0, 1]),
+     r"orientation as a viewpoint must be 3 finite numbers, got \[0, 0, 0, 1\]"),
+    (dict(orientation=(0, np.nan, 1)), r"orientation as a viewpoint must be 3 finite numbers"),
+    (dict(progress=5), r"progress must be callable or None, got 5"),
+    (dict(progress="yes"), r"progress must be callable or None, got 'yes'"),
+    (dict(k=2), r"k=2 is out of range; allowed: in \[4, 200\]"),
+    (dict(tol=-1), r"tol must be a positive number of degrees or None, got -1"),
+    (dict(initial="bogus"), r"initial 'bogus' is invalid; must be one of \['auto', 'pca', 'jet'\]"),
+    (dict(neighbours="x"), r"neighbours must be a core.Neighbours, got str"),
+    (dict(plan=5), r"plan must be a core.EstimatePlan \(from core.plan\) or None, got int"),
+    (dict(cache="x"), r"cache must be a core.stage_cache.StageCache or None, got str"),
+]
+_IDS = dict(ids=lambda x: repr(x) if isinstance(x, dict) else None)
+
+
+@pytest.mark.parametrize("kw, match", BAD_ARGUMENTS, **_IDS)
 def test_bad_arguments(kw, match, small):
     with pytest.raises(ValueError, match=match):
         core.estimate(small.points, **{"k": 15, **kw})
+
+
+def _flat_clouds():
+    """Clouds of 200 points (as ``small``) that no fit can be made on."""
+    t = np.linspace(0.0, 1.0, 200)
+    return {"line": np.outer(t, [1.0, 2.0, 3.0]) + [0.5, -1, 2], "identical": np.full((200, 3), 7.25),
+            "two_places": np.repeat([[0.0, 0, 0], [1.0, 1, 1]], 100, axis=0)}
+
+
+FLAT = _flat_clouds()
+
+
+@pytest.mark.parametrize("cloud", list(FLAT))
+@pytest.mark.parametrize("kw, match", BAD_ARGUMENTS, **_IDS)
+def test_bad_arguments_refused_alike_on_degenerate_clouds(cloud, kw, match):
+    """A degenerate cloud's all-invalid result used to be returned before the arguments
+    were checked: passes=-1, k=201 > N, orientation="inward" ... were accepted, plan=5 an
+    AttributeError. The same checks (and messages) run on every cloud."""
+    with pytest.raises(ValueError, match=match):
+        core.estimate(FLAT[cloud], **{"k": 15, **kw})
+
+
+@pytest.mark.parametrize("kw, match", [(kw, m) for kw, m in BAD_ARGUMENTS if "k" not in kw], **_IDS)
+def test_bad_arguments_refused_on_too_few_points(kw, match, small):
+    """Fewer points than a fit needs leave k no allowed value: any k >= 1 gives the
+    all-invalid result (test_degenerate), but every other argument is checked."""
+    with pytest.raises(ValueError, match=match):
+        core.estimate(small.points[:3], **{"k": 15, **kw})
+
+
+def test_k_on_too_few_points_is_an_integer_from_1(small):
+    with pytest.raises(ValueError, match=r"k=0 is out of range; allowed: >= 1"):
+        core.estimate(small.points[:3], k=0)
+    with pytest.raises(ValueError, match=r"k must be an integer, got 2.5"):
+        core.estimate(small.points[:3], k=2.5)
+    for k in (1, 3, 15):
+        res = core.estimate(small.points[:3], k=k)
+        assert not res.valid.any() and res.k == k and "fewer than" in res.params["degenerate"]
+
+
+def test_k_beyond_the_points_refused_on_a_line_as_on_a_surface():
+    for pts in (FLAT["line"], shapes.sphere(200, seed=1).points):
+        with pytest.raises(ValueError, match=r"k=1000 is out of range; allowed: in \[4, 200\]"):
+            core.estimate(pts, k=1000)
 
 
 def test_fewer_points_than_k():
@@ -151,17 +201,17 @@ def test_validation_happens_before_the_search(small):
 # ----------------------------------------------------------------------------- normals
 
 
-@pytest.mark.parametrize(
-    "make, match",
-    [
-        (lambda n: n[:-1], r"normals must have shape \(200, 3\) to match points, got shape \(199, 3\)"),
-        (lambda n: n[:, :2], r"normals must have shape \(200, 3\) to match points, got shape \(200, 2\)"),
-        (lambda n: n[:, 0], r"normals must have shape \(200, 3\) to match points, got shape \(200,\)"),
-        (lambda n: n.astype(object), r"normals must be a numeric array.*dtype object"),
-        (lambda n: n.astype(str), r"normals must be a numeric array.*dtype <U"),
-    ],
-    ids=["short", "N2", "1d", "object", "strings"],
-)
+BAD_NORMALS = [
+    (lambda n: n[:-1], r"normals must have shape \(200, 3\) to match points, got shape \(199, 3\)"),
+    (lambda n: n[:, :2], r"normals must have shape \(200, 3\) to match points, got shape \(200, 2\)"),
+    (lambda n: n[:, 0], r"normals must have shape \(200, 3\) to match points, got shape \(200,\)"),
+    (lambda n: n.astype(object), r"normals must be a numeric array.*dtype object"),
+    (lambda n: n.astype(str), r"normals must be a numeric array.*dtype <U"),
+]
+BAD_NORMAL_IDS = ["short", "N2", "1d", "object", "strings"]
+
+
+@pytest.mark.parametrize("make, match", BAD_NORMALS, ids=BAD_NORMAL_IDS)
 def test_bad_normals(make, match, small):
     with pytest.raises(ValueError, match=match):
         core.estimate(small.points, make(small.normals), k=15)
@@ -177,6 +227,46 @@ def test_unusable_file_normals_repaired_not_refused(bad, small):
     assert r.params["normals_repaired"] == {"unusable": 3, "renormalised": 0, "estimated": 3}
     assert np.all(np.einsum("ij,ij->i", r.normals[[0, 5, 6]], small.normals[[0, 5, 6]]) > 0.99)
     np.testing.assert_array_equal(given[[0, 5, 6]], [bad] * 3)  # the caller's array untouched
+
+
+@pytest.mark.parametrize("cloud", list(FLAT))
+@pytest.mark.parametrize("make, match", BAD_NORMALS, ids=BAD_NORMAL_IDS)
+def test_bad_normals_refused_alike_on_degenerate_clouds(cloud, make, match, small):
+    """Normals of the wrong length were an IndexError on a degenerate cloud."""
+    with pytest.raises(ValueError, match=match):
+        core.estimate(FLAT[cloud], make(small.normals), k=15)
+    with pytest.raises(ValueError, match=match):
+        core.estimate(FLAT[cloud], make(small.normals), k=15, drop_nonfinite=True)
+
+
+@pytest.mark.parametrize("cloud", list(FLAT))
+def test_unusable_normals_not_refused_on_degenerate_clouds(cloud):
+    """A NaN or zero row was refused on a degenerate cloud but repaired on any other: here
+    it is kept as NaN (no neighbourhood can estimate it), the others unit length."""
+    given = np.tile([0.0, 0.0, 2.0], (200, 1))
+    given[[0, 5, 6]] = [[np.nan, 0, 1], [0.0, 0, 0], [np.inf, 0, 0]]
+    r = core.estimate(FLAT[cloud], given, k=15)
+    assert not r.valid.any() and r.params["degenerate"]
+    assert np.isnan(r.normals[[0, 5, 6]]).all()
+    np.testing.assert_array_equal(np.delete(r.normals, [0, 5, 6], axis=0), np.tile([0.0, 0, 1], (197, 1)))
+    assert r.params["normals_repaired"] == {"unusable": 3, "renormalised": 197, "estimated": 0}
+
+
+def test_neighbours_checked_on_degenerate_clouds():
+    """A given graph is checked as on a cloud that is estimated (and then not used)."""
+    line = FLAT["line"]
+    with pytest.raises(ValueError, match=r"neighbours were built with k_max=10 < k=15"):
+        core.estimate(line, k=15, neighbours=core.build_neighbours(line, 10))
+    with pytest.raises(ValueError, match="neighbours were built on different points"):
+        core.estimate(line, k=15, neighbours=core.build_neighbours(line + 1.0, 15))
+    assert not core.estimate(line, k=15, neighbours=core.build_neighbours(line, 15)).valid.any()
+
+
+def test_neighbours_type_checked_on_a_cloud_of_copies(small):
+    """A cloud with copies of points ignores a given graph (searched on the copies); a
+    graph that is no core.Neighbours was accepted silently there."""
+    with pytest.raises(ValueError, match=r"neighbours must be a core.Neighbours, got str"):
+        core.estimate(np.vstack([small.points, small.points[:5]]), k=15, neighbours="x")
 
 
 def test_unnormalised_normals_are_normalised(small):

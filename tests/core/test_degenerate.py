@@ -4,12 +4,13 @@ many duplicate points do not make the neighbour search quadratic."""
 from __future__ import annotations
 
 import time
+import warnings
 
 import numpy as np
 import pytest
 
 import core
-from core import neighbours, shapes
+from core import degenerate, neighbours, shapes
 
 
 @pytest.fixture(scope="module")
@@ -131,6 +132,63 @@ def test_thin_but_honest_cloud_is_not_called_a_line():
     t, a = rng.uniform(0, 1000, 3000), rng.uniform(0, 2 * np.pi, 3000)
     tube = np.c_[t, np.cos(a), np.sin(a)]  # 1000:1, still a surface
     assert "degenerate" not in core.estimate(tube, k=15).params
+
+
+@pytest.mark.parametrize("radius, offset", [(1.0, 1e9), (1e-3, 1e6)], ids=["unit_1e9", "1mm_1e6"])
+def test_far_apart_parts_are_not_a_line(radius, offset):
+    """Two surfaces far apart are thin next to their distance, but each part is a surface:
+    the whole cloud's spread called them "one straight line" (all invalid). Each part's
+    answer is the one it has alone."""
+    a, b = shapes.sphere(1000, seed=1).points, shapes.sphere(1000, radius=radius, seed=2).points + [offset, 0, 0]
+    res = core.estimate(np.vstack([a, b]), k=15)
+    assert "degenerate" not in res.params and res.valid.all()
+    for part, alone in ((res.k1[:1000], core.estimate(a, k=15).k1), (res.k1[1000:], core.estimate(b, k=15).k1)):
+        np.testing.assert_allclose(part, alone, rtol=1e-9, atol=1e-9 / radius)
+    np.testing.assert_allclose(np.median(res.mean[1000:]) * radius, 1.0, rtol=0.05)
+
+
+def test_far_apart_grids_are_not_a_line():
+    """Runs along the line's direction inside a grid hold points of one column (no extent
+    along it): still a surface."""
+    g = np.stack(np.meshgrid(np.arange(40.0), np.arange(40.0)), -1).reshape(-1, 2)
+    square = np.c_[g, np.zeros(len(g))]
+    assert degenerate.reason(np.vstack([square, square + [1e9, 0, 0]]), 4) is None
+
+
+def _line(n, seed=3):
+    t = np.linspace(-1.0, 2.0, n)
+    rot = np.linalg.qr(np.random.default_rng(seed).normal(size=(3, 3)))[0]
+    return np.c_[t, 3 * t + 1, -2 * t] @ rot, np.array([1.0, 3.0, -2.0]) @ rot / np.sqrt(14.0)
+
+
+@pytest.mark.parametrize("case", ["jitter_1e-9", "1M_jitter_1e-2_spacing", "two_segments_1e9_apart", "copies",
+                                  "offset_1e6"])
+def test_lines_are_still_lines(case):
+    """What was a line still is: within rounding or with a jitter far below the spacing
+    (that the whole cloud's spread caught), in pieces far apart, with copies of its
+    points, far from 0."""
+    line, direction = _line(300)
+    rng = np.random.default_rng(5)
+    pts = {"jitter_1e-9": lambda: line + 1e-9 * rng.normal(size=line.shape),
+           "1M_jitter_1e-2_spacing": lambda: _line(10**6)[0] + 1e-7 * rng.normal(size=(10**6, 3)),
+           "two_segments_1e9_apart": lambda: np.vstack([line, line + 1e9 * direction]),
+           "copies": lambda: np.repeat(line, 7, axis=0),
+           "offset_1e6": lambda: line + 1e6}[case]()
+    assert "straight line" in (degenerate.reason(pts, 4) or "")
+
+
+def test_qn_on_a_grid_at_its_smallest_k_warns_nothing():
+    """A neighbour's normal in the tangent plane (Z = 0) made QN's (and CN's, CF's) targets
+    -X/Z leak numpy's divide-by-zero RuntimeWarnings; those points stay invalid."""
+    g = np.stack(np.meshgrid(np.arange(50), np.arange(60)), -1).reshape(-1, 2)
+    pts = np.c_[g, (np.arange(3000) % 7 == 0).astype(int)]
+    for method, k in (("qn", 3), ("cn", 5), ("cf", 4)):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            res = core.estimate(pts, k=k, method=method)
+        assert not [w for w in caught if issubclass(w.category, RuntimeWarning)], method
+        assert 0.5 < res.valid.mean() < 1.0 and np.isfinite(res.k1[res.valid]).all()
+        assert np.isnan(res.k1[~res.valid]).all()
 
 
 def test_bounds_kernel_is_numpys_min_and_max():
