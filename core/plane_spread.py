@@ -29,16 +29,18 @@ from .tuning import THIN_SPREAD
 
 
 def spreads(pts, normals, nb, k, centres=None) -> np.ndarray:
-    """The plane spread of ``centres`` (default: every point) over their first ``k``
-    neighbours (an int, or one per centre) of the graph ``nb``, in the plane normal to
-    ``normals``; NaN where a point has no normal."""
-    centres = np.arange(len(pts)) if centres is None else np.asarray(centres, dtype=np.int64)
+    """The plane spread of ``centres`` (default: every point, on the columns the graph
+    holds, read in place) over their first ``k`` neighbours (an int, or one per centre) of
+    the graph ``nb``, in the plane normal to ``normals``; NaN where a point has no normal."""
+    every = centres is None
+    centres = np.arange(len(pts)) if every else np.asarray(centres, dtype=np.int64)
     kc = np.broadcast_to(np.asarray(k, dtype=np.int64), centres.shape).copy()
     out = np.empty(len(centres))
     if len(centres):
-        idx, _ = nb.rows(centres, int(kc.max()))
-        plane_spread(pts, np.ascontiguousarray(normals, dtype=np.float64), centres, np.ascontiguousarray(idx), kc,
-                     out)
+        idx = nb.take(nb.width)[0] if every else np.ascontiguousarray(nb.rows(centres, int(kc.max()))[0])
+        idx.flags.writeable = False  # one compiled signature: the held graph is read-only
+        rows = centres if every else np.arange(len(centres))
+        plane_spread(pts, np.ascontiguousarray(normals, dtype=np.float64), centres, idx, rows, kc, out)
     return out
 
 

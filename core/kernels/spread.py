@@ -10,9 +10,10 @@ from ._base import OPTS
 
 
 @njit(**OPTS, parallel=True)
-def plane_spread(points, normals, centres, idx, kc, out):
+def plane_spread(points, normals, centres, idx, rows, kc, out):
     """out[r] = sqrt(lambda_min / lambda_max) of the second moments about centre
-    ``centres[r]`` of its first ``kc[r]`` neighbours (row r of ``idx``), projected on the
+    ``centres[r]`` of its first ``kc[r]`` neighbours (row ``rows[r]`` of ``idx``, which may
+    be the whole cloud's graph, read in place), projected on the
     plane normal to its normal: 1 for neighbours all around, 0 for neighbours on a line
     through it. NaN where the normal is not finite or every neighbour sits on the centre.
 
@@ -25,8 +26,9 @@ def plane_spread(points, normals, centres, idx, kc, out):
             out[r] = math.nan
             continue
         m00 = m01 = m02 = m11 = m12 = m22 = 0.0
+        row = rows[r]
         for j in range(kc[r]):
-            q = idx[r, j]
+            q = idx[row, j]
             dx, dy, dz = points[q, 0] - points[i, 0], points[q, 1] - points[i, 1], points[q, 2] - points[i, 2]
             s = dx * nx + dy * ny + dz * nz
             dx, dy, dz = dx - s * nx, dy - s * ny, dz - s * nz
