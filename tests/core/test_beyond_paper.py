@@ -33,8 +33,9 @@ def test_auto_k_beats_the_papers_k_on_a_noisy_torus(noisy_torus):
 
 
 def test_ici_kernel_matches_separate_fits():
-    """The one-pass nested-sums kernel picks what separate NF fits at each k would.
-    (k="auto" now chooses by the jet rule, tested in test_scale_jets; this is the NF rule.)"""
+    """The one-pass nested-sums kernel picks what separate NF fits at each k would, in the
+    same frames (turning with the cloud: Chunk.turning). (k="auto" now chooses by the jet
+    rule, tested in test_scale_jets; this is the NF rule.)"""
     s = core.shapes.saddle(3000, seed=2)
     p = core.noise.add_noise(s.points, 0.1, seed=1)
     nb = core.build_neighbours(p, scale.AUTO_KS[-1])
@@ -51,7 +52,7 @@ def test_ici_kernel_matches_separate_fits():
     alive = np.ones(200, bool)
     pick = np.full(200, scale.AUTO_KS[0])
     for k in scale.AUTO_KS:
-        chunk = Chunk.build(nb.points, s.normals, idx[centres], h, centres, np.full(200, k))
+        chunk = Chunk.build(nb.points, s.normals, idx[centres], h, centres, np.full(200, k)).turning(scale.AUTO_KS[0])
         _, W, ok, diag = m.fit(chunk, weights="uniform", constraint="none", robust=None, degree=scale.AUTO_DEGREE)
         est = np.stack([W[:, 0, 0], 0.5 * (W[:, 0, 1] + W[:, 1, 0]), W[:, 1, 1]], axis=1)
         sd = np.sqrt(diag["var"])
