@@ -51,13 +51,18 @@ class SpatialOrder:
             return self._scatter(obj)
         return obj
 
-    def _scatter(self, a):
+    @property
+    def inverse(self) -> np.ndarray:
+        """Where each caller's point sits in the sorted order (``order``'s inverse; computed once)."""
         if self._inverse is None:
             self._inverse = np.empty_like(self.order)
             self._inverse[self.order] = np.arange(len(self.order), dtype=self.order.dtype)
+        return self._inverse
+
+    def _scatter(self, a):
         # a gather by the inverse permutation: numpy's take, single-threaded, beats a parallel
         # kernel on the ~20 small per-point arrays of a result (no thread start per array)
-        return np.take(a, self._inverse, axis=0)
+        return np.take(a, self.inverse, axis=0)
 
     def neighbours_to_caller(self, nb: Neighbours, points: np.ndarray, *, in_place=True) -> Neighbours:
         """``nb`` (found on the sorted points) as neighbours of ``points``, the caller's;
@@ -95,11 +100,9 @@ def given_in_spatial_order(pts: np.ndarray, nb: Neighbours) -> tuple[Neighbours,
         return held[0], SpatialOrder(held[1])
     if type(nb) is not Neighbours or nb.indices.nbytes + nb.distances.nbytes > COPY_BYTES:
         return nb, SpatialOrder(None)
-    order = np.asarray(cKDTree(pts).indices, dtype=nb.indices.dtype)
-    inverse = np.empty_like(order)
-    inverse[order] = np.arange(len(order), dtype=order.dtype)
-    idx, dist = np.empty_like(nb.indices), np.empty_like(nb.distances)
-    relabel_rows(np.ascontiguousarray(nb.indices), np.ascontiguousarray(nb.distances), inverse, idx, dist)
+    order = SpatialOrder(np.asarray(cKDTree(pts).indices, dtype=nb.indices.dtype))
+    idx, dist = np.empty_like(nb.indices), np.empty_like(nb.distances)  # its inverse serves the results too
+    relabel_rows(np.ascontiguousarray(nb.indices), np.ascontiguousarray(nb.distances), order.inverse, idx, dist)
     idx.setflags(write=False)
     dist.setflags(write=False)
-    return Neighbours(points=pts[order], indices=idx, distances=dist), SpatialOrder(order)
+    return Neighbours(points=pts[order.order], indices=idx, distances=dist), order
