@@ -27,6 +27,7 @@ import numpy as np
 from .kernels import patches
 from .kernels import sign_evidence as kern
 from .kernels.union_find import signed_forest
+from .part_joins import join_parts
 from .tuning import FOLD_TRUST, PATCH_COS, PATCH_MAX, PATCH_ROUNDS, PATCH_TILT, PATCH_TRUST, RESETTLE_K, VOTE_GROWTH, VOTE_SIZE
 
 #: neighbours per point in the orientation graph. 10 rather than Hoppe's 8: the chord
@@ -101,7 +102,8 @@ def orient(points, normals, idx, mode="outward", *, ok=None, rank=None, trust=Fa
     n = len(pts)
     labels = np.where(ok, 0, -1)
     rank = np.arange(n) if rank is None else np.asarray(rank, dtype=np.int64)
-    ev, first = _evidence(pts, nrm, graph, ok, rank, trust=trust)
+    spread = np.empty(n)
+    ev, first = _evidence(pts, nrm, graph, ok, rank, trust=trust, spread=spread)
     sign = np.ones(n)
     if not isinstance(mode, str):
         sign[np.einsum("ij,ij->i", nrm, np.asarray(mode, dtype=float) - pts) < 0] = -1.0
@@ -113,7 +115,11 @@ def orient(points, normals, idx, mode="outward", *, ok=None, rank=None, trust=Fa
         roots = kern.voted_signs(edges, signed_forest(n), flip, rank, VOTE_SIZE, VOTE_GROWTH)
         sign[flip == 1] = -1.0
         labels = np.where(ok, _numbered(roots), -1)
-        _global_signs(pts, nrm * sign[:, None], labels, mode, sign, rank)
+        group, parity = join_parts(pts, nrm * sign[:, None], labels, spread, rank, GATE)
+        if (parity < 0).any():
+            sign[ok] *= parity[labels[ok]]
+        _global_signs(pts, nrm * sign[:, None], (labels, group), mode, sign, rank)
+        labels = np.append(group, -1)[labels]  # -1 (no normal) stays -1
     confidence = np.empty(n)
     kern.agreement(ev, graph, (sign < 0).astype(np.int8), ok, confidence)
     if mode != "keep" and isinstance(mode, str):
@@ -214,10 +220,13 @@ def orient_normals(points, normals, idx, mode, *, ok=None):
     return orient(points, normals, idx, mode, ok=ok).normals
 
 
-def _global_signs(points, normals, labels, mode, sign, rank):
-    """Flip whole components (in ``sign``): "outward" by a vote of each component's points beyond its RMS
-    distance from the cloud's centre (:data:`FAR_SHARE`) (weighted by how squarely they face away), "propagate" by the sign
-    of its highest point's normal z (of equally high ones, the lowest ``rank``)."""
+def _global_signs(points, normals, parts, mode, sign, rank):
+    """Flip whole groups of components (in ``sign``; ``parts`` = (component label per point,
+    group per component), :func:`core.part_joins.join_parts`): "outward" by the sum of its
+    components' votes, each by its points beyond its RMS distance from the cloud's centre
+    (:data:`FAR_SHARE`) (weighted by how squarely they face away), "propagate" by the sign
+    of the group's highest point's normal z (of equally high ones, the lowest ``rank``)."""
+    labels, group = parts
     have = np.flatnonzero(labels >= 0)
     if not len(have):
         return
@@ -225,6 +234,7 @@ def _global_signs(points, normals, labels, mode, sign, rank):
     lab = labels[rows]
     n_comp = int(lab.max()) + 1
     if mode == "propagate":
+        lab = group[lab]
         z = points[rows, 2]
         order = np.lexsort((rank[rows], -z, lab))  # by component, highest first
         first = order[np.r_[0, np.flatnonzero(np.diff(lab[order])) + 1]]
@@ -236,7 +246,8 @@ def _global_signs(points, normals, labels, mode, sign, rank):
         square = np.einsum("ij,ij->i", rel, rel)
         rms = np.sqrt(np.bincount(lab, square, n_comp) / np.maximum(np.bincount(lab, minlength=n_comp), 1))
         far, facing = far_facing(rel, normals[rows], rms[lab])
-        vote = np.bincount(lab[far], facing, n_comp)
+        vote = np.bincount(group, np.bincount(lab[far], facing, n_comp), n_comp)
+        lab = group[lab]
     sign[have[vote[lab] < 0]] *= -1.0
 
 
@@ -252,7 +263,7 @@ def far_facing(rel, normals, rms):
     return far, np.nan_to_num(facing)
 
 
-def _evidence(points, normals, graph, ok, rank, *, trust=False, want_first=True, raw_weight=False, flat=None):
+def _evidence(points, normals, graph, ok, rank, *, trust=False, want_first=True, raw_weight=False, flat=None, spread=None):
     """The signed evidence of every graph edge, and which entries are an edge's first copy
     (None without ``want_first``: :func:`resettle` reads only the evidence; each point's
     noise gate from its first :data:`ORIENT_K` neighbours, however wide the graph). With
@@ -260,10 +271,11 @@ def _evidence(points, normals, graph, ok, rank, *, trust=False, want_first=True,
     (the median offset of their neighbours from their plane) / (the distance to the farthest
     of them), clipped to [:data:`TRUST_FLOOR`, 1]: ~1 on a sheet, small where the neighbours
     fold over. ``raw_weight``: as :func:`core.kernels.sign_evidence.sign_evidence`'s; ``flat``: an
-    (N,) array that receives each point's trust (1 without ``trust``)."""
+    (N,) array that receives each point's trust (1 without ``trust``); ``spread``: one that
+    receives each point's noise spread (:func:`core.kernels.sign_evidence.offset_spread`)."""
     n = len(points)
     spread_graph = graph[:, :ORIENT_K]  # a view: the kernels read strided rows as fast
-    spread = np.empty(n)
+    spread = np.empty(n) if spread is None else spread
     kern.offset_spread(points, normals, spread_graph, ok, spread)
     weight = np.empty(0)  # none: every trust 1
     if trust:

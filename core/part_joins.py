@@ -1,0 +1,155 @@
+"""Parts of the orientation graph joined across gaps.
+
+The spanning forest of :func:`core.orientation.orient` joins points by the evidence of
+their :data:`core.orientation.ORIENT_K` nearest. Parts those neighbours do not reach
+across were each turned outward on their own: scan lines farther apart than the 10
+nearest reach, pieces of a wall split by an occlusion shadow, the two skins of a thick
+wall. A nearly flat part has no outside, so its sign was a coin flip, and one sheet in
+scan lines 12 spacings apart came out as two blocks of opposite orientation, each with
+confidence 1.
+
+Here the parts of at least :data:`core.tuning.VOTE_SIZE` points are joined by the same
+signed evidence (:func:`core.kernels.sign_evidence.sign_evidence`) on the chords between
+their closest points: Hoppe's test where a chord lies in both tangent planes (pieces of
+one sheet), the chord test where it leaves them. The chord test holds at any distance: a
+segment between two surface points that crosses no surface lies wholly inside or wholly
+outside the solid, so a consistent orientation leaves both points on the same side of
+it; the segment between two parts' closest points crosses neither part. Each part is
+offered to its :data:`JOIN_NEAREST` nearest parts, the offers are taken strongest mean
+evidence first (Kruskal with parities), and an offer whose mean evidence is below
+:data:`JOIN_EVIDENCE` is refused: such parts keep their own outward vote.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from .kernels import sign_evidence as kern
+from .tuning import VOTE_SIZE
+
+#: points of each part that stand for it when the parts' distances are measured (evenly
+#: spaced in the caller's order): the distances are those of samples, good to a few spacings
+JOIN_SAMPLE = 128
+#: parts joined, the largest first; smaller ones keep their own vote (the cost is
+#: JOIN_PARTS x JOIN_PARTS x JOIN_SAMPLE nearest-point queries at worst)
+JOIN_PARTS = 64
+#: nearest parts each part is offered to
+JOIN_NEAREST = 3
+#: closest sample pairs whose chords vote on one offer, from each side
+JOIN_PAIRS = 8
+#: least mean evidence (of +-1) that joins two parts
+JOIN_EVIDENCE = 0.25
+
+
+def join_parts(points, normals, labels, spread, rank, gate):
+    """Groups of parts (``labels``: part number per point, -1 where there is no normal)
+    whose signs are tied by the evidence between them.
+
+    ``normals`` are the forest's (signs consistent within each part), ``spread`` each
+    point's noise gate (:func:`core.kernels.sign_evidence.offset_spread`), ``rank`` each
+    point's index in the caller's order (the samples do not depend on the order in memory),
+    ``gate`` the forest's noise gate (:data:`core.orientation.GATE`).
+
+    Returns ``(group, parity)``: per part, its group's number (the lowest part number in
+    it) and +1 / -1, what to multiply its normals by to agree with its group.
+    """
+    n_parts = int(labels.max()) + 1 if len(labels) else 0
+    group, parity = np.arange(n_parts), np.ones(n_parts)
+    parts, samples = _samples(labels, rank, n_parts)
+    if len(parts) < 2:
+        return group, parity
+    dist, near = _distances(points, samples)
+    offers = _offers(points, normals, (spread, gate), samples, dist, near)
+    parent, par = list(range(len(parts))), [0] * len(parts)
+    for strength, a, b in sorted(offers, key=lambda o: (-abs(o[0]), o[1], o[2])):
+        ra, pa = _find(parent, par, a)
+        rb, pb = _find(parent, par, b)
+        if ra != rb and abs(strength) >= JOIN_EVIDENCE:
+            lo, hi = min(ra, rb), max(ra, rb)
+            parent[hi], par[hi] = lo, pa ^ pb ^ int(strength < 0)
+    for x, part in enumerate(parts):
+        r, p = _find(parent, par, x)
+        group[part], parity[part] = parts[r], -1.0 if p else 1.0
+    return group, parity
+
+
+def _samples(labels, rank, n_parts):
+    """The parts that take part (at least VOTE_SIZE points, the JOIN_PARTS largest; ties
+    to the part whose first point comes first in the caller's order) and each one's
+    sample rows, evenly spaced in the caller's order."""
+    have = np.flatnonzero(labels >= 0)
+    lab = labels[have]
+    size = np.bincount(lab, minlength=n_parts)
+    big = np.flatnonzero(size >= VOTE_SIZE)
+    if len(big) < 2:  # one surface: nothing to join, at the cost of a count
+        return big, []
+    first = np.full(n_parts, np.iinfo(np.int64).max)
+    np.minimum.at(first, lab, rank[have])
+    parts = np.sort(big[np.lexsort((first[big], -size[big]))][:JOIN_PARTS])
+    order = have[np.lexsort((rank[have], lab))]  # by part, then the caller's order
+    start = np.concatenate([[0], np.cumsum(size)])
+    samples = []
+    for part in parts:
+        rows = order[start[part]:start[part + 1]]
+        samples.append(rows[np.linspace(0, len(rows) - 1, min(len(rows), JOIN_SAMPLE)).astype(np.int64)])
+    return parts, samples
+
+
+def _distances(points, samples):
+    """Each sample's distance to every part's nearest sample, and which one that is:
+    ``dist[a, s]``, ``near[a, s]`` (a row of ``points``) for part a and sample s of all
+    parts' samples, end to end."""
+    every = np.concatenate(samples)
+    dist, near = np.empty((len(samples), len(every))), np.empty((len(samples), len(every)), dtype=np.int64)
+    for a, rows in enumerate(samples):
+        d, j = cKDTree(points[rows]).query(points[every], k=1)
+        dist[a], near[a] = d, rows[j]
+    return dist, near
+
+
+def _offers(points, normals, noise, samples, dist, near):
+    """(mean evidence, a, b) for each part b and each of its JOIN_NEAREST nearest parts a:
+    the evidence on the chords of the JOIN_PAIRS closest sample pairs seen from each side."""
+    n = len(samples)
+    start = np.concatenate([[0], np.cumsum([len(s) for s in samples])])
+    every = np.concatenate(samples)
+    gap = np.minimum.reduceat(dist, start[:-1], axis=1)  # gap[a, b]: b's samples to a's nearest
+    gap = np.minimum(gap, gap.T)
+    np.fill_diagonal(gap, np.inf)
+    pairs = set()
+    for b in range(n):
+        for a in np.argsort(gap[b], kind="stable")[:JOIN_NEAREST]:
+            pairs.add((min(a, b), max(a, b)))
+    offers = []
+    for a, b in sorted(pairs):
+        ends = []
+        for x, y in ((a, b), (b, a)):
+            cols = start[y] + np.argsort(dist[x, start[y]:start[y + 1]], kind="stable")[:JOIN_PAIRS]
+            ends += zip(every[cols], near[x, cols])
+        offers.append((float(np.mean(_chord_evidence(points, normals, noise, np.array(ends)))), a, b))
+    return offers
+
+
+def _chord_evidence(points, normals, noise, ends):
+    """The signed evidence (:func:`core.kernels.sign_evidence.sign_evidence`, ``noise`` =
+    (spread, gate)) of each chord ``ends[t] = (i, j)``: the kernel run on the 2 t points,
+    each row paired with its partner."""
+    spread, gate = noise
+    rows = ends.reshape(-1)
+    m = len(rows)
+    graph = np.arange(m).reshape(-1, 2)[:, ::-1].reshape(-1)  # row 2t pairs with 2t + 1 and back
+    idx = np.stack([np.arange(m), graph], axis=1)
+    out = np.empty((m, 2))
+    kern.sign_evidence(points[rows], normals[rows], spread[rows], np.empty(0), idx, np.ones(m, dtype=np.bool_),
+                       gate, out, np.empty((0, 0), dtype=np.bool_), np.arange(m), False)
+    return out[0::2, 1]
+
+
+def _find(parent, par, x):
+    """Root of x and its parity relative to the root (a few dozen parts: no compression)."""
+    p = 0
+    while parent[x] != x:
+        p ^= par[x]
+        x = parent[x]
+    return x, p
