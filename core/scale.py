@@ -36,33 +36,32 @@ jet itself is the result: it inherits no error of estimated normals (on 7 stand-
 surfaces 2-30x better than NR at the same k). Elsewhere NR fits a cubic normal field on the
 chosen k (at least the noise-set initial scale) and refines it: with noise it averages
 better than the jet (1.2-1.8x). Quiet but sparse points, whose 15 neighbours reach over
-0.4 of a radius of curvature (:data:`JET_REACH`), use NR with the NF rule below.
+0.4 of a radius of curvature (:data:`JET_REACH`), or whose jet tilts from the initial normal
+(:data:`JET_TILT`: three grid lines do not determine a cubic), use NR with the NF rule below.
 ``res.k_point`` and ``res.degree_point`` hold the choice. (Values and reasons of the
 constants: :mod:`core.tuning`.)
 
-**The principal direction with noise (measured; not solved).** With noise of 0.1-0.2 mean
-spacing, e1 is the quantity the default still loses (to a cubic jet on 240 neighbours on
-some hold-out surfaces). Four explanations were tested on the tuning surfaces and a private
-set (``python -m core bench holdout --probe``), then on the hold-out, and none holds across
-surfaces: (1) *k too small*: not at 226 alone, NR fits the largest candidate (226) at 76-100 % of the
-points of every noisy graph, and forcing 226 everywhere moves e1 by <= 2 % there (but one candidate more, 320, gains
-10-30 % on e1 on smooth noisy graphs: :data:`core.tuning.AUTO_KS`); (2) *the
-refinement passes bias the direction*: no, they are what makes it good (the first fit
-alone: 1.0-3.0x worse), and more passes help e1 on some surfaces only, while smoothing the
-curvatures; (3) *e1 from the
-position jet's Hessian*: at the jet rule's own k its e1 is 0.6-1.0x NR's on most hold-out
-and private graphs at 0.05 spacing, but 1.2-1.9x on the torus, ellipsoid and chirp and
-worse nearly everywhere at 0.2; averaging the two traceless shape operators (fixed weights,
-gated by their agreement, or weighted by each field's roughness) gains up to 25 % on the
-hold-out at 0.05-0.1 but loses 20-40 % on the ellipsoid and chirp and 14-42 % at 0.5: a net
-loss on the tuning set, so adopting it would be fitting the hold-out; the jet's
-relative error does not fall with its reach h|k| either, so no per-point choice follows;
-(4) *a wider scale for the direction alone* (NR's shape operator averaged over nearby
-points): worse, 1.6x on the torus with 8 points, because the lines of curvature turn by
-about 2 degrees between nearest neighbours there, more than the 0.4 degree error being
-averaged. What remains is a model difference that depends on the surface; choosing between
-the two models per point would need NR's own variance, which its least squares
-underestimates (neighbouring estimated normals share their neighbours).
+**The principal direction with noise (measured; not solved).** With noise of 0.1-0.2 mean spacing,
+e1 is the quantity the default still loses (to a cubic jet on 240 neighbours on some hold-out
+surfaces). Four explanations were tested on the tuning surfaces and a private set (``python -m core
+bench holdout --probe``), then on the hold-out, and none holds across surfaces: (1) *k too small*:
+not at 226 alone, NR fits the largest candidate (226) at 76-100 % of the points of every noisy
+graph, and forcing 226 everywhere moves e1 by <= 2 % there (but one candidate more, 320, gains 10-30
+% on e1 on smooth noisy graphs: :data:`core.tuning.AUTO_KS`); (2) *the refinement passes bias the
+direction*: no, they are what makes it good (the first fit alone: 1.0-3.0x worse), and more passes
+help e1 on some surfaces only, while smoothing the curvatures; (3) *e1 from the position jet's
+Hessian*: at the jet rule's own k its e1 is 0.6-1.0x NR's on most hold-out and private graphs at
+0.05 spacing, but 1.2-1.9x on the torus, ellipsoid and chirp and worse nearly everywhere at 0.2;
+averaging the two traceless shape operators (fixed weights, gated by their agreement, or weighted by
+each field's roughness) gains up to 25 % on the hold-out at 0.05-0.1 but loses 20-40 % on the
+ellipsoid and chirp and 14-42 % at 0.5: a net loss on the tuning set, so adopting it would be
+fitting the hold-out; the jet's relative error does not fall with its reach h|k| either, so no
+per-point choice follows; (4) *a wider scale for the direction alone* (NR's shape operator averaged
+over nearby points): worse, 1.6x on the torus with 8 points, because the lines of curvature turn by
+about 2 degrees between nearest neighbours there, more than the 0.4 degree error being averaged.
+What remains is a model difference that depends on the surface; choosing between the two models per
+point would need NR's own variance, which its least squares underestimates (neighbouring estimated
+normals share their neighbours).
 
 **The NF rule** (:func:`choose_k`, issue 4; now only for those sparse points): small
 neighbourhoods give unbiased but noisy normal derivatives; large ones average the
@@ -93,11 +92,11 @@ from .linalg import tangent_basis
 from .patch import Chunk
 from .tuning import (AUTO_DEGREE, AUTO_KS, FOLD_COS, FOLD_FRACTION, FOLD_MIN_BAD, FOLD_NOISE, GAMMA,
                      INITIAL_K0, JET_DEGREE, JET_GAMMA, JET_DEGREES, JET_KS, JET_QUIET, JET_REACH, JET_SCORE,
-                     NEIGHBOUR_BUDGET, NOISE_KS, NOISE_POOL, RCOND, WIDEN_SHARE)
+                     NEIGHBOUR_BUDGET, NOISE_KS, NOISE_POOL, RCOND, JET_RCOND, JET_TILT, WIDEN_SHARE)
 
-__all__ = ["AUTO_DEGREE", "AUTO_KS", "GAMMA", "INITIAL_K0", "NEIGHBOUR_BUDGET", "JET_KS", "JET_DEGREE",
-           "JET_SCORE", "candidates", "choose_k", "noise_ratio", "initial_k", "jet_candidates",
-           "noise_variance", "choose_jets", "aligned_jets", "choose_model"]
+__all__ = ["AUTO_DEGREE", "AUTO_KS", "GAMMA", "INITIAL_K0", "NEIGHBOUR_BUDGET", "JET_KS", "JET_DEGREE", "JET_SCORE",
+           "candidates", "choose_k", "noise_ratio", "initial_k", "jet_candidates", "noise_variance", "choose_jets",
+           "aligned_jets", "choose_model"]
 
 _CHUNK = 32_768
 
@@ -238,7 +237,7 @@ def _jet_frames(points, normals, rows, centres, s, t1, t2):
 
 
 def _jet_rule():
-    return kernels.ScaleRule(JET_DEGREE, JET_GAMMA, RCOND, FOLD_FRACTION, FOLD_COS, FOLD_NOISE, FOLD_MIN_BAD)
+    return kernels.ScaleRule(JET_DEGREE, JET_GAMMA, JET_RCOND, FOLD_FRACTION, FOLD_COS, FOLD_NOISE, FOLD_MIN_BAD)
 
 
 def choose_jets(points, normals, nb, has_normal, ks, report):
@@ -377,9 +376,9 @@ def aligned_jets(jets, normals):
 def choose_model(points, normals, nb, has_normal, ks, report):
     """k per point by :func:`choose_jets`, and where the cubic jet itself is the result.
 
-    Returns ``(k, on_jet, quiet, jets, degree)``: jets (aligned with ``normals``, of
-    ``degree`` per point, see :func:`choose_jets`) are kept where the
-    noise is below :data:`JET_QUIET` and the jet does not reach too far (:data:`JET_REACH`);
+    Returns ``(k, on_jet, quiet, jets, degree)``: jets (aligned with ``normals``, of ``degree`` per
+    point, see :func:`choose_jets`) are kept where the noise is below :data:`JET_QUIET`, the jet
+    does not reach too far (:data:`JET_REACH`) and its normal is within :data:`JET_TILT` of ``normals``;
     elsewhere NR fits on k neighbours, k by the NF rule (:func:`choose_k`) where the data
     are quiet but too sparse for the jet. A cloud too small for a cubic jet or for the
     noise measurement (fewer than ``NOISE_KS[-1]`` neighbours) keeps NR on ``ks[0]`` everywhere.
@@ -392,7 +391,8 @@ def choose_model(points, normals, nb, has_normal, ks, report):
     k, jets, noise, degree = choose_jets(points, normals, nb, has_normal, jks, report)
     quiet = jets[-1] & (noise <= JET_QUIET)
     reach = nb.take(jks[0])[1][:, -1] * np.maximum(np.abs(jets[1]), np.abs(jets[2]))
-    on_jet = quiet & (reach <= JET_REACH)
+    tilt = np.abs(np.einsum("ij,ij->i", jets[0], np.nan_to_num(normals)))  # cos to the initial normal (NaN: no jet)
+    on_jet = quiet & (reach <= JET_REACH) & (tilt >= np.cos(np.radians(JET_TILT)))
     nf_rule = quiet & ~on_jet
     if nf_rule.any():  # too few points per radius of curvature for a position jet: NF's own rule
         k_nf = choose_k(points, normals, nb, nf_rule, ks, AUTO_DEGREE, lambda *a: None)

@@ -17,6 +17,21 @@ from __future__ import annotations
 #: neighbourhoods while keeping thin but honest ones (measured: no valid point of the
 #: torus, saddle or cube is lost at k = 15).
 RCOND = 1e-10
+#: the same threshold for the position jets of k="auto" (core.scale.choose_jets, their cubic
+#: and quartic fits). On an exact grid whose spacing differs between its two directions (a UV
+#: sphere's vertices, a parametric torus, gridded terrain) the k nearest can lie on three grid
+#: lines, where a cubic is not determined (u^3 is a combination of 1, u, u^2 on three values of
+#: u); rounding and the surface's bend leave pivots of 1e-15 to 1e-6 there, which RCOND passed:
+#: normals 25-76 degrees off, valid. Honest samplings (uniform random, hex, square grid; 300
+#: centres each, torus and chirp, 15-56 neighbours): cubic pivots >= 6e-4, quartic >= 1e-5.
+#: The hold-out race is unchanged cell for cell.
+JET_RCOND = 1e-6
+#: a quiet point keeps its jet as the result only if the jet's normal is within this many
+#: degrees of its initial (2-jet) normal (core.scale.choose_model); elsewhere NR fits it. The
+#: second guard against a jet the rank test let through (a 5:1 grid's three-column fits reach
+#: pivots of 1e-4). Measured on the noise-free tuning shapes: at most 2.8 degrees (chirp),
+#: p99.9 1.5; the jets of the grids above: 5-80 degrees.
+JET_TILT = 5.0
 
 # ----------------------------------------------------------------------------- neighbour search
 
