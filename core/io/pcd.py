@@ -3,7 +3,7 @@
 Fields x y z are the points, normal_x normal_y normal_z (or nx ny nz) the normals;
 a packed ``rgb``/``rgba`` field becomes uint8 fields red, green, blue; ``_`` padding is
 skipped; a field with COUNT 3 becomes name_x/_y/_z, other counts name_0, name_1, ...
-Binary data is read as little-endian.
+Binary data is read as little-endian; a point count that does not match the data is refused.
 """
 
 from __future__ import annotations
@@ -122,11 +122,17 @@ def _ascii_block(path, values, name, dtype):
 
 
 def _read_binary(f, path, fields, n):
+    """The records of DATA binary; fewer bytes than declared, or a whole record more, refused."""
     dtype = np.dtype([(name, dt, (count,)) if count > 1 else (name, dt) for name, dt, count in fields])
     need, have = n * dtype.itemsize, remaining_bytes(f)
     if have < need:
         raise CloudFileError(
             path, f"truncated: the header declares {n} points ({need} bytes) but only {have} bytes follow"
+        )
+    if have - need >= dtype.itemsize:
+        raise CloudFileError(
+            path, f"the header declares {n} points ({need} bytes) but {have} bytes follow, "
+            f"{have // dtype.itemsize} points of {dtype.itemsize} bytes; the point count does not match the data"
         )
     data = np.frombuffer(f.read(need), dtype=dtype)
     return {name: data[name] for name in dtype.names}

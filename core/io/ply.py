@@ -2,45 +2,80 @@
 
 The header is parsed by plyfile. Vertex data made only of scalar properties is then loaded
 with numpy directly (plyfile reads ascii rows, and binary elements with list properties
-such as faces, one row at a time in Python); anything else falls back to ``PlyData.read``.
-Faces and other elements are ignored.
+such as faces, one row at a time in Python); anything else falls back to plyfile's element
+reader. Faces and other elements are not returned, but their rows are counted: a body
+that holds more or fewer rows than the header declares is refused. Non-ASCII bytes are
+allowed in ``comment`` and ``obj_info`` lines only. ASCII float coordinates keep their
+float64 parse; x, y, z, nx, ny, nz in exact case win over other spellings.
 """
 
 from __future__ import annotations
 
 import io
+import re
+import sys
 import warnings
 
 import numpy as np
 from plyfile import PlyData, PlyElement, PlyListProperty, PlyParseError
 
-from .cloud import CloudFileError, RawCloud, find_normals, remaining_bytes
+from .cloud import NORMAL_NAMES, CloudFileError, RawCloud, remaining_bytes
 
 #: numpy type code -> the PLY type name, for messages
 _PLY_NAMES = {"i1": "char", "u1": "uchar", "i2": "short", "u2": "ushort", "i4": "int", "u4": "uint",
               "f4": "float", "f8": "double"}
 _PLY_DTYPES = {np.dtype(t) for t in ("i1", "u1", "i2", "u2", "i4", "u4", "f4", "f8")}
+#: how far to look for ``end_header`` before handing the file to plyfile as it is
+_HEADER_SCAN = 1 << 20
+_END_HEADER = re.compile(rb"(?:^|[\r\n])end_header(?:\r\n|\r|\n)")
+_ASCII_ONLY = bytes(range(128)) + b"?" * 128
 
 
 def read_ply(path) -> RawCloud:
     """Points, normals (nx/ny/nz or normal_x/...) and other scalar vertex properties."""
     with open(path, "rb") as f:
-        try:
-            header = PlyData._parse_header(f)  # plyfile's own header parser, without the data
-        except PlyParseError as exc:
-            raise CloudFileError(path, f"not a valid PLY header: {exc}") from None
-        except UnicodeDecodeError:
-            raise CloudFileError(path, "not a valid PLY header: non-ASCII bytes in the header") from None
+        header = _parse_header(f, path)
         names = [el.name for el in header.elements]
         if "vertex" not in names:
             raise CloudFileError(path, f"has no 'vertex' element (elements: {', '.join(names) or 'none'})")
         if any(el.count < 0 for el in header.elements):
             raise CloudFileError(path, "not a valid PLY header: negative element count")
+        start = f.tell()
         _check_declared_size(header, remaining_bytes(f), path)
+        if header.text:
+            _check_ascii_rows(f, header, path)
+        else:
+            _check_binary_layout(path, header, start)
         props = _read_vertex_fast(f, header, names.index("vertex"), path)
-    if props is None:
-        props = _read_vertex_plyfile(path)
+        if props is None:
+            props = _read_vertex_plyfile(f, header, start, path)
     return _raw_from_properties(props, path)
+
+
+def _parse_header(f, path):
+    """plyfile's header parser on the header, with non-ASCII bytes in ``comment`` and
+    ``obj_info`` lines read as '?'; non-ASCII bytes on another line are refused by line number."""
+    raw = f.read(_HEADER_SCAN)
+    end = _END_HEADER.search(raw)
+    if end is None:  # no end_header near the start: plyfile says what is wrong
+        f.seek(0)
+        stream = f
+    else:
+        raw = raw[: end.end()]
+        for lineno, line in enumerate(raw.splitlines(), start=1):
+            if not line.isascii() and line.split()[:1] not in ([b"comment"], [b"obj_info"]):
+                raise CloudFileError(path, f"not a valid PLY header: line {lineno} "
+                                           f"({line.decode('utf-8', 'replace')[:60]!r}) has non-ASCII bytes; "
+                                           "only comment and obj_info lines may")
+        stream = io.BytesIO(raw.translate(_ASCII_ONLY))
+    try:
+        header = PlyData._parse_header(stream)  # plyfile's own header parser, without the data
+    except PlyParseError as exc:
+        raise CloudFileError(path, f"not a valid PLY header: {exc}") from None
+    except UnicodeDecodeError:
+        raise CloudFileError(path, "not a valid PLY header: non-ASCII bytes in the header") from None
+    f.seek(stream.tell())
+    return header
 
 
 def _min_row_bytes(element, header) -> int:
@@ -71,6 +106,162 @@ def _check_declared_size(header, have: int, path) -> None:
                 path, f"truncated: the header declares {element.count} {_plural(element.name)} (at least "
                 f"{need} bytes) but only {have} bytes follow the header",
             )
+
+
+def _declared(elements) -> str:
+    """The counts the header declares, as "8 vertices and 20 faces"."""
+    return " and ".join(f"{el.count} {_plural(el.name)}" for el in elements)
+
+
+def _check_ascii_rows(f, header, path) -> None:
+    """Refuse an ASCII body with more non-blank lines than the header declares rows (one
+    line per row); blank lines are fine, and too few rows are left to the readers."""
+    start, declared = f.tell(), sum(el.count for el in header.elements)
+    newlines, last = 0, b"\n"
+    for block in iter(lambda: f.read(1 << 20), b""):
+        newlines, last = newlines + block.count(b"\n"), block[-1:]
+    if newlines + (last != b"\n") > declared:  # at most this many lines: count the non-blank ones
+        f.seek(start)
+        found = _nonblank_lines(f)
+        if found > declared:
+            rows = "vertex rows" if len(header.elements) == 1 else f"data lines (one per row: {declared} declared)"
+            raise CloudFileError(path, f"the header declares {_declared(header.elements)} but {found} {rows} follow")
+    f.seek(start)
+
+
+def _nonblank_lines(f) -> int:
+    """Lines with more than whitespace from the position of ``f`` to its end."""
+    count, tail = 0, b""
+    for block in iter(lambda: f.read(1 << 20), b""):
+        lines = (tail + block).replace(b"\r", b"\n").split(b"\n")
+        tail = lines.pop()
+        count += sum(1 for line in lines if line.strip())
+    return count + bool(tail.strip())
+
+
+def _check_binary_layout(path, header, start: int) -> None:
+    """Refuse a binary body whose bytes do not match the declared counts: every element is
+    walked (list lengths read) from the end of the header, and data left after the last
+    one (a vertex record or more) is refused too."""
+    data = np.memmap(path, dtype=np.uint8, mode="r")[start:]
+    pos, vstart = 0, None  # where the vertex element starts, once reached
+    for element in header.elements:
+        vstart = pos if element.name == "vertex" else vstart
+        size = _element_bytes(data, pos, element, header.byte_order)
+        if size is None:
+            raise CloudFileError(path, _layout_problem(data, header, vstart, f"the {_plural(element.name)} run past "
+                                                       "the end of the file"))
+        pos += size
+    extra = len(data) - pos
+    if extra >= _min_row_bytes(header["vertex"], header):
+        raise CloudFileError(path, _layout_problem(data, header, vstart, f"{extra} bytes are left after the "
+                                                   f"last {header.elements[-1].name} row"))
+
+
+def _layout_problem(data, header, vstart: int, what: str) -> str:
+    """The message for counts that do not match the data, with the vertices found when that
+    can be told (vertices last, or followed by one element of rows with one list)."""
+    vertex = header["vertex"]
+    found = None if vstart is None else _found_vertices(data, header, vstart)
+    if found is not None and found != vertex.count:
+        rest = [el for el in header.elements if el.name != "vertex"]
+        others = f" (and its {_declared(rest)})" if rest else ""
+        return (f"the header declares {vertex.count} vertices but the file holds {found}{others}; "
+                "the vertex count does not match the data")
+    return f"the header declares {_declared(header.elements)} but the data does not match these counts: {what}"
+
+
+def _found_vertices(data, header, vstart: int):
+    """The vertex count that makes the data end exactly at the end of the file, when the
+    vertices (of scalars only) are last, or followed by one element of scalars and one list."""
+    elements, order = header.elements, header.byte_order
+    index = [el.name for el in elements].index("vertex")
+    vertex, later = elements[index], elements[index + 1 :]
+    if any(isinstance(p, PlyListProperty) for p in vertex.properties) or len(later) > 1:
+        return None
+    size, have = vertex.dtype(order).itemsize, len(data) - vstart
+    if not later:
+        return have // size if have % size == 0 else None
+    fits = _vertices_before_list(data, vstart, size, later[0], order)
+    return fits[0] if len(fits) == 1 else None
+
+
+def _vertices_before_list(data, vstart: int, size: int, element, order) -> list:
+    """Every vertex count (records of ``size`` bytes) after which ``element``, rows of scalars
+    and one list, ends exactly at the end of the file."""
+    layout = _row_layout(element, order)
+    kinds = [kind for kind, _ in layout]
+    if kinds.count("list") != 1:
+        return []
+    head = sum(b for kind, b in layout[: kinds.index("list")] if kind == "scalar")
+    count_dt, item = layout[kinds.index("list")][1]
+    n = np.arange((len(data) - vstart) // size + 1)
+    n = n[vstart + n * size + head + count_dt.itemsize <= len(data)]
+    at = vstart + n * size + head
+    lengths = data[at[:, None] + np.arange(count_dt.itemsize)].view(count_dt)[:, 0].astype(np.int64)
+    row = sum(b for kind, b in layout if kind == "scalar") + count_dt.itemsize + lengths * item
+    starts = vstart + n[vstart + n * size + element.count * row == len(data)] * size
+    return [(int(s) - vstart) // size for s in starts if _element_bytes(data, int(s), element, order) == len(data) - s]
+
+
+def _row_layout(element, order) -> list:
+    """[("scalar", bytes) or ("list", (count dtype, item bytes))] for the properties of a row."""
+    layout = []
+    for prop in element.properties:
+        if isinstance(prop, PlyListProperty):
+            count_dt, item_dt = prop.list_dtype(order)
+            layout.append(("list", (np.dtype(count_dt), np.dtype(item_dt).itemsize)))
+        else:
+            layout.append(("scalar", np.dtype(prop.dtype(order)).itemsize))
+    return layout
+
+
+def _element_bytes(data, pos: int, element, order):
+    """The bytes the rows of ``element`` take from ``data[pos:]``, or None past the end."""
+    layout = _row_layout(element, order)
+    if all(kind == "scalar" for kind, _ in layout):
+        size = element.count * sum(n for _, n in layout)
+        return size if pos + size <= len(data) else None
+    row = _rows_bytes(data, pos, layout, min(element.count, 1))
+    if row and pos + element.count * row <= len(data) and _uniform(data, pos, layout, row, element.count):
+        return element.count * row
+    return row if row is None or element.count <= 1 else _rows_bytes(data, pos, layout, element.count)
+
+
+def _rows_bytes(data, pos: int, layout, count: int):
+    """The bytes of ``count`` rows from ``data[pos:]`` read one by one (lists of different
+    lengths), or None past the end or at a negative list length."""
+    buf, end = memoryview(data), pos
+    big = {">": "big", "=": sys.byteorder}
+    steps = [(spec, None, "", False) if kind == "scalar" else
+             (spec[0].itemsize, spec[1], big.get(spec[0].byteorder, "little"), spec[0].kind == "i")
+             for kind, spec in layout]
+    for _ in range(count):
+        for width, item, byteorder, signed in steps:
+            if item is not None:
+                length = int.from_bytes(buf[end : end + width], byteorder, signed=signed)
+                if length < 0 or end + width > len(buf):
+                    return None
+                end += length * item
+            end += width
+        if end > len(buf):
+            return None
+    return end - pos
+
+
+def _uniform(data, pos: int, layout, row: int, count: int) -> bool:
+    """Whether all ``count`` rows from ``pos`` have the lists of the first (``row`` bytes each)."""
+    offset = 0
+    for kind, spec in layout:
+        if kind == "list":
+            first = data[pos + offset : pos + offset + spec[0].itemsize].view(spec[0])[0]
+            counts = np.lib.stride_tricks.as_strided(data[pos + offset :], shape=(count, spec[0].itemsize),
+                                                     strides=(row, 1))
+            if not (np.ascontiguousarray(counts).view(spec[0])[:, 0] == first).all():
+                return False
+            spec = spec[0].itemsize + int(first) * spec[1]
+        offset += spec
+    return True
 
 
 def _read_vertex_fast(f, header, index, path):
@@ -116,8 +307,11 @@ def _read_ascii_vertex(f, vertex, path):
 
 def _ascii_column(values: np.ndarray, prop, path) -> np.ndarray:
     """An ASCII column in the declared type; integers out of range or with a fraction are refused
-    (a cast would wrap 300 to 44 in a uchar)."""
+    (a cast would wrap 300 to 44 in a uchar). Float coordinates keep the float64 parse: the
+    text has their precision (float32 rounds UTM northings to 0.5 m)."""
     dtype = np.dtype(prop.dtype())
+    if dtype.kind == "f" and prop.name.lower() in ("x", "y", "z"):
+        return values
     if dtype.kind in "iu":
         info = np.iinfo(dtype)
         bad = (values < info.min) | (values > info.max) | (values != np.round(values))
@@ -130,9 +324,16 @@ def _ascii_column(values: np.ndarray, prop, path) -> np.ndarray:
     return values.astype(dtype, copy=False)
 
 
-def _read_vertex_plyfile(path):
+def _read_vertex_plyfile(f, header, start: int, path):
+    """The vertex properties read by plyfile's element reader, every element in turn from ``start``."""
+    f.seek(start)
+    stream = io.TextIOWrapper(f, "ascii") if header.text else f
     try:
-        vertex = PlyData.read(str(path))["vertex"]
+        for element in header.elements:
+            element._read(stream, header.text, header.byte_order, "c")  # what PlyData.read does
+        vertex = header["vertex"]
+    except UnicodeDecodeError:
+        raise CloudFileError(path, "malformed PLY data: non-ASCII bytes in the ASCII body") from None
     except PlyParseError as exc:
         problem = "truncated" if "end-of-file" in str(exc) else "malformed PLY data"
         raise CloudFileError(path, f"{problem}: {exc}") from None
@@ -141,13 +342,33 @@ def _read_vertex_plyfile(path):
     return {p.name: vertex.data[p.name] for p in vertex.properties if not isinstance(p, PlyListProperty)}
 
 
+def _property(props, wanted: str, path):
+    """The property named ``wanted``: in exact case, else the one spelling that differs in
+    case only (X for x); None if there is none, refused if there are several (Nx and NX)."""
+    if wanted in props:
+        return wanted
+    matches = [name for name in props if name.lower() == wanted]
+    if len(matches) > 1:
+        raise CloudFileError(path, f"the vertex properties {', '.join(map(repr, matches))} all name {wanted}; "
+                                   f"rename all but one, or add one named exactly {wanted!r}")
+    return matches[0] if matches else None
+
+
+def _normal_names(props, path):
+    """The properties holding normal x, y, z (nx ny nz, normal_x ..., in that order), or None."""
+    for triple in NORMAL_NAMES:
+        found = [_property(props, name, path) for name in triple]
+        if None not in found:
+            return found
+    return None
+
+
 def _raw_from_properties(props: dict, path) -> RawCloud:
-    lower = {name.lower(): name for name in props}
-    if not all(c in lower for c in "xyz"):
+    xyz = [_property(props, c, path) for c in "xyz"]
+    if None in xyz:
         raise CloudFileError(path, f"the vertex element has no x, y, z properties (found: {', '.join(props)})")
-    xyz = [lower[c] for c in "xyz"]
     points = np.column_stack([props[name] for name in xyz])
-    nrm = find_normals(props)
+    nrm = _normal_names(props, path)
     normals = None if nrm is None else np.column_stack([props[name] for name in nrm])
     used = set(xyz) | set(nrm or ())
     fields = {name: np.array(values) for name, values in props.items() if name not in used}

@@ -4,14 +4,19 @@ Reading: leading non-numeric lines are a header (the last one may name the colum
 x, y, z, nx, ny, nz in any order, other names become fields); ``#`` starts a comment; a
 first line holding a single integer is a point count (as in .pts) and is checked. The
 separator is a comma, a semicolon or whitespace, guessed from the first data line.
-Without usable column names: 3 columns are x y z, 6 or more are x y z nx ny nz and the
-rest become fields ``col6``, ``col7``... (0-based column numbers); 4 or 5 columns give
-fields ``col3`` (``col4``); a .pts file of 4 or 7 columns is Leica's x y z intensity
-[red green blue]. The numbers are parsed by ``np.loadtxt`` straight from the file.
+Without usable column names: x y z come first; other columns become fields ``col3``,
+``col4``... (0-based column numbers), except a triple that holds unit normals (lengths
+1 +- 0.01 on 99 % of its non-zero rows): columns 3-5 (x y z nx ny nz ...) or else 6-8
+(x y z r g b nx ny nz, CloudCompare). With 6 or more columns and no such triple (x y z
+r g b, x y z i r g b) a warning says that no normals were read. A .pts file of 4 or 7
+columns is Leica's x y z intensity [red green blue]. The file is decoded as UTF-8 when it
+is valid UTF-8, else as latin-1. The numbers are parsed by ``np.loadtxt`` from the file.
 """
 
 from __future__ import annotations
 
+import codecs
+import re
 import warnings
 
 import numpy as np
@@ -20,6 +25,15 @@ from .cloud import CloudFileError, RawCloud, find_normals
 
 _MAX_HEADER_LINES = 1000
 _CHUNK_ROWS = 100_000
+#: a token shaped like a number in a style the parser does not take ("3.5e", C99 hex
+#: "0x1.8p+0", Fortran "1.5D+00"): a line made mostly of them is a data line, not a header
+_NUMBERISH = re.compile(r"[+-]?(0[xX][0-9a-fA-F]*\.?[0-9a-fA-F]*([pP][+-]?\d*)?|(\d+\.?\d*|\.\d+)([eEdD][+-]?\d*)?)")
+#: headerless columns are normals where, of the finite non-zero rows, this share has a
+#: length within _UNIT_TOL of 1 (colours 0-255 or 0-1, intensities do not)
+_UNIT_SHARE = 0.99
+_UNIT_TOL = 0.01
+#: where headerless normals may start: x y z nx ny nz ..., x y z r g b nx ny nz (CloudCompare)
+_NORMAL_STARTS = (3, 6)
 
 
 def read_text(path, fmt: str) -> RawCloud:
@@ -31,12 +45,13 @@ def read_text(path, fmt: str) -> RawCloud:
         raise CloudFileError(
             path, f"line {head['count_line']} declares {head['count']} points but {len(table)} data lines follow"
         )
-    return _raw_from_table(table, head["names"], fmt)
+    return _raw_from_table(table, head["names"], fmt, path)
 
 
 def _encoding(path) -> str:
-    """UTF-8 (with a BOM) or UTF-16 (with a BOM) as marked; otherwise latin-1, which never
-    fails to decode and reads ASCII numbers right. NUL bytes without a BOM are refused."""
+    """UTF-8 (with a BOM) or UTF-16 (with a BOM) as marked; otherwise UTF-8 if the file is
+    valid UTF-8, else latin-1, which never fails to decode and reads ASCII numbers right.
+    NUL bytes without a BOM are refused."""
     with open(path, "rb") as f:
         start = f.read(4096)
     if start.startswith(b"\xef\xbb\xbf"):
@@ -47,7 +62,27 @@ def _encoding(path) -> str:
         kind = "UTF-16 text without a byte-order mark" if start[1::2].count(0) > len(start) // 4 else "binary data"
         raise CloudFileError(path, f"is not a text point cloud: it looks like {kind} (NUL bytes); "
                              "save it as UTF-8 or ASCII text")
-    return "latin-1"
+    return "utf-8" if _is_utf8(path) else "latin-1"
+
+
+def _is_utf8(path) -> bool:
+    """Whether the file has non-ASCII bytes and they are all valid UTF-8 (read in 1 MB blocks)."""
+    decoder = codecs.getincrementaldecoder("utf-8")()
+    seen = False
+    with open(path, "rb") as f:
+        while block := f.read(1 << 20):
+            if block.isascii() and not decoder.getstate()[0]:
+                continue
+            seen = True
+            try:
+                decoder.decode(block)
+            except UnicodeDecodeError:
+                return False
+    try:
+        decoder.decode(b"", final=True)
+    except UnicodeDecodeError:
+        return False
+    return seen
 
 
 def _decimal_comma(text: str) -> bool:
@@ -86,7 +121,7 @@ def _empty_column(lineno: int, tokens: list[str]) -> str:
     return f"line {lineno}: column {column} of {len(tokens)} is empty; every data line needs a number in each column"
 
 
-def _header_line(path, lineno: int, text: str, tokens: list[str]) -> tuple[bool, str]:
+def _header_line(path, lineno: int, text: str, tokens: list[str]) -> tuple[bool, str, int]:
     """A non-numeric line before the data, as a header entry; numbers with decimal commas
     are not a header but a number style the reader does not take, and numbers with an empty
     field a data line with a hole: both refused by name."""
@@ -97,13 +132,24 @@ def _header_line(path, lineno: int, text: str, tokens: list[str]) -> tuple[bool,
             path, f"line {lineno}: {text[:40]!r} uses decimal commas; write numbers with a decimal "
             "point (1.5, not 1,5), separated by commas, semicolons or spaces",
         )
-    return (False, text)
+    return (False, text, lineno)
+
+
+def _refuse_data_like(path, header, ncols: int) -> None:
+    """Refuse a header line with the data's column count made mostly of number-like tokens
+    ("1.5 2.5 3.5e"): a data line the parser cannot take, named as on any later line."""
+    for is_comment, text, lineno in header:
+        tokens = _split(text, _guess_delimiter(text))
+        numberish = sum(bool(_is_number(t) or _NUMBERISH.fullmatch(t)) for t in tokens)
+        if not is_comment and len(tokens) == ncols and 2 * numberish > ncols:
+            bad = next(t for t in tokens if not _is_number(t))
+            raise CloudFileError(path, f"line {lineno}: cannot parse {bad!r} as a number")
 
 
 def _scan_head(path, encoding) -> dict:
     """Find the first data line, the separator, the column count, names and a count line."""
     count = count_line = None
-    header = []  # (is_comment, text) of the non-blank lines before the data
+    header = []  # (is_comment, text, lineno) of the non-blank lines before the data
     with open(path, encoding=encoding, errors="replace", newline=None) as f:
         for lineno, line in enumerate(f, start=1):
             if lineno > _MAX_HEADER_LINES:
@@ -112,7 +158,7 @@ def _scan_head(path, encoding) -> dict:
             if not text:
                 continue
             if text.startswith(("#", "//")):
-                header.append((True, text.lstrip("#/ \t")))
+                header.append((True, text.lstrip("#/ \t"), lineno))
                 continue
             text = text.split("#", 1)[0].strip()
             delimiter = _guess_delimiter(text)
@@ -120,13 +166,14 @@ def _scan_head(path, encoding) -> dict:
             if not all(_is_number(t) for t in tokens):
                 header.append(_header_line(path, lineno, text, tokens))
                 continue
-            if len(tokens) == 1 and count is None and tokens[0].isdigit() and all(c for c, _ in header):
+            if len(tokens) == 1 and count is None and tokens[0].isdigit() and all(c for c, *_ in header):
                 count, count_line = int(tokens[0]), lineno
                 continue
             if len(tokens) < 3:
                 raise CloudFileError(
                     path, f"line {lineno}: found {len(tokens)} column(s); need at least 3 (x y z [nx ny nz ...])"
                 )
+            _refuse_data_like(path, header, len(tokens))
             names = _header_names(header, len(tokens))
             trailing = delimiter is not None and text.endswith(delimiter)
             return dict(skip=lineno - 1, first=lineno, delimiter=delimiter, ncols=len(tokens), names=names,
@@ -138,7 +185,7 @@ def _header_names(header, ncols):
     """Column names from the last header line if it has one name per column."""
     if not header:
         return None
-    is_comment, text = header[-1]
+    is_comment, text, _ = header[-1]
     names = _split(text, _guess_delimiter(text))
     lower = [n.lower() for n in names]
     if len(names) != ncols or len(set(lower)) != ncols:
@@ -183,7 +230,7 @@ def diagnose_lines(path, encoding, head, exc) -> CloudFileError:
     return CloudFileError(path, f"cannot parse the data lines: {exc}")
 
 
-def _raw_from_table(table, names, fmt) -> RawCloud:
+def _raw_from_table(table, names, fmt, path) -> RawCloud:
     ncols = table.shape[1]
     lower = [n.lower() for n in names] if names else None
     if lower and {"x", "y", "z"} <= set(lower):
@@ -191,7 +238,7 @@ def _raw_from_table(table, names, fmt) -> RawCloud:
         nrm = find_normals(lower)
         nrm_idx = [lower.index(n) for n in nrm] if nrm else []
     else:
-        xyz, nrm_idx, names = _by_position(ncols, names, fmt)
+        xyz, nrm_idx, names = _by_position(table, names, fmt, path)
     points = table[:, xyz]
     normals = table[:, nrm_idx] if nrm_idx else None
     used = set(xyz) | set(nrm_idx)
@@ -199,15 +246,41 @@ def _raw_from_table(table, names, fmt) -> RawCloud:
     return RawCloud(points, normals, fields)
 
 
-def _by_position(ncols: int, names, fmt: str):
-    """Without x/y/z names: x y z first, then nx ny nz if there are 6 or more columns (not
-    in a 7-column .pts: x y z intensity red green blue); column names col0, col1..."""
-    nrm_idx = [3, 4, 5] if ncols >= 6 and not (fmt == "pts" and ncols == 7) else []
+def _by_position(table, names, fmt: str, path):
+    """Without x/y/z names: x y z first, then normals at the first of columns 3-5 and 6-8
+    that holds unit vectors (none in a 7-column .pts: x y z intensity red green blue);
+    column names col0, col1... With 6 or more columns and no normals found, a warning."""
+    ncols = table.shape[1]
     if names is None:
         names = [f"col{i}" for i in range(ncols)]
         if fmt == "pts" and ncols in (4, 7):
             names[3:] = ["intensity", "red", "green", "blue"][: ncols - 3]
-    return [0, 1, 2], nrm_idx, names
+    if ncols < 6 or (fmt == "pts" and ncols == 7):
+        return [0, 1, 2], [], names
+    starts = [s for s in _NORMAL_STARTS if s + 3 <= ncols]
+    start = next((s for s in starts if _unit_rows(table[:, s : s + 3])), None)
+    if start is not None:
+        return [0, 1, 2], [start, start + 1, start + 2], names
+    _warn_no_normals(path, table, names, starts)
+    return [0, 1, 2], [], names
+
+
+def _warn_no_normals(path, table, names, starts) -> None:
+    """Say that a headerless file of 6 or more columns was read without normals, and why."""
+    spans = " and ".join(f"{s}-{s + 2}" for s in starts)
+    kept = ", ".join(names[3:9]) + (", ..." if len(names) > 9 else "")
+    row = ", ".join(f"{v:g}" for v in table[0, 3:6])
+    warnings.warn(f"{path}: no header names the columns x y z ..., and columns {spans} (counting from 0) are not "
+                  f"unit normals (row 0: {row}); they are read as fields {kept} and the cloud has no normals. "
+                  "To read normals, name the columns in a first line, e.g. 'x y z nx ny nz'", UserWarning, stacklevel=8)
+
+
+def _unit_rows(block: np.ndarray) -> bool:
+    """Whether a column triple looks like normals: of its finite non-zero rows (zero and NaN
+    rows are "no normal"), at least _UNIT_SHARE have a length within _UNIT_TOL of 1."""
+    length = np.linalg.norm(block[np.isfinite(block).all(axis=1)], axis=1)
+    length = length[length > 0]
+    return len(length) > 0 and np.count_nonzero(np.abs(length - 1.0) <= _UNIT_TOL) >= _UNIT_SHARE * len(length)
 
 
 def _row_format(values: np.ndarray) -> tuple[str, str]:

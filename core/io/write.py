@@ -50,7 +50,8 @@ def write_cloud(path: str | os.PathLike | BinaryIO, points: ArrayLike, *, normal
     normals : (N, 3) array_like, optional
     fields : dict, optional
         name -> (N,) or (N, 3) array (numeric or bool); an (N, 3) array is written as
-        name_x, name_y, name_z. Names must not contain whitespace, ``,;"#``.
+        name_x, name_y, name_z. Names must not contain whitespace, ``,;"#``, nor equal
+        x y z nx ny nz or each other ignoring case.
     format : {"ply", "csv", "xyz", "txt"}, optional
         By default from the extension. PLY is binary little-endian (bool -> uint8); CSV has
         a header line; XYZ/TXT are space-separated columns, preceded by a ``# names`` line
@@ -137,10 +138,11 @@ def _field_columns(fields, n: int) -> list:
     extra = []
     for name, values in (fields or {}).items():
         extra += _field_column(name, values, n)
-    names = [name for name, _ in extra]
-    bad = sorted({name for name in names if names.count(name) > 1 or name in _RESERVED})
+    lower = [name.lower() for name, _ in extra]
+    bad = sorted({name for name, _ in extra if lower.count(name.lower()) > 1 or name.lower() in _RESERVED})
     if bad:
-        raise ValueError(f"field names {', '.join(bad)} clash with x y z nx ny nz or with each other")
+        raise ValueError(f"field names {', '.join(bad)} clash with x y z nx ny nz or with each other "
+                         "(names are compared ignoring case)")
     return extra
 
 

@@ -154,8 +154,12 @@ def test_xyz_cloudcompare_header_comments_and_tabs(tmp_path):
 @pytest.mark.parametrize("ncols, normals, fields", [(3, False, []), (4, False, ["col3"]), (6, True, []),
                                                    (8, True, ["col6", "col7"])])
 def test_headerless_columns(tmp_path, ncols, normals, fields):
+    """Columns 3-5 are normals when they hold unit vectors (core.io.text._unit_rows)."""
     path = tmp_path / "plain.txt"
-    np.savetxt(path, RNG.random((5, ncols)))
+    table = RNG.random((5, ncols))
+    if normals:
+        table[:, 3:6] /= np.linalg.norm(table[:, 3:6], axis=1, keepdims=True)
+    np.savetxt(path, table)
     cloud = read_cloud(path)
     assert (cloud.normals is not None) == normals
     assert list(cloud.fields) == fields
