@@ -113,6 +113,8 @@ class WindowActions:
             self.recent_menu.add(path)
             self.settings.setValue("last_dir", safe_text(path.resolve().parent))
         self.set_source(source)
+        for note in source.notes:  # what the reader warned about (e.g. columns not taken for normals)
+            self.notifier.warning(note)
 
     def _on_load_failed(self, ticket, message: str, detail: str) -> None:
         if self._closed:

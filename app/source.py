@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import itertools
 import os
+import warnings
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -40,6 +41,9 @@ class CloudSource:
         Ground truth for synthetic shapes (enables the error fields).
     uid : int
         Identity used by the worker's caches (noisy copies, neighbours).
+    notes : tuple of str
+        What the reader warned about (columns it did not take for normals, ...), for the
+        window to show once the cloud is loaded.
     """
 
     name: str
@@ -48,6 +52,7 @@ class CloudSource:
     path: Path | None = None
     sample: object | None = None
     uid: int = field(default_factory=lambda: next(_uids))
+    notes: tuple = ()
 
     def __post_init__(self):
         for arr in (self.points, self.normals):
@@ -78,10 +83,13 @@ def load_file(path) -> CloudSource:
         With a message that names the file, when it cannot be read.
     """
     path = Path(os.fsdecode(path))
-    cloud = core.io.read_cloud(path)
+    with warnings.catch_warnings(record=True) as caught:  # the reader's warnings, kept for the window
+        warnings.simplefilter("always", UserWarning)
+        cloud = core.io.read_cloud(path)
+    notes = tuple(dict.fromkeys(str(w.message) for w in caught if issubclass(w.category, UserWarning)))
     points = np.array(cloud.points, dtype=float, copy=True)
     normals = None if cloud.normals is None else np.array(cloud.normals, dtype=float, copy=True)
-    return CloudSource(name=display_name(path), points=points, normals=normals, path=path)
+    return CloudSource(name=display_name(path), points=points, normals=normals, path=path, notes=notes)
 
 
 def make_shape(name: str, n: int = 5000, *, seed: int = 0) -> CloudSource:

@@ -208,3 +208,18 @@ def test_the_worker_searches_the_neighbours_once_and_matches_a_fresh_estimate(qa
                 assert np.asarray(getattr(res, name)).tobytes() == np.asarray(getattr(fresh, name)).tobytes(), name
             assert res.params == fresh.params
     assert got[1].spacing == pytest.approx(core.spacing.mean_spacing(source.points))
+
+
+def test_reader_warnings_reach_the_loaded_source(tmp_path):
+    """A headerless x y z r g b file: the reader keeps the colours as fields and warns; the
+    warning rides with the source for the window to show (not lost on the loader thread)."""
+    from app.source import load_file
+
+    path = tmp_path / "scan.xyz"
+    rng = np.random.default_rng(0)
+    np.savetxt(path, np.column_stack([rng.random((50, 3)), rng.integers(0, 256, (50, 3))]))
+    source = load_file(path)
+    assert source.normals is None
+    assert len(source.notes) == 1 and "no normals" in source.notes[0]
+    np.savetxt(path, rng.random((50, 3)))
+    assert load_file(path).notes == ()
