@@ -17,6 +17,7 @@ import numpy as np
 from . import io as cio
 from .io.formats import READ_FORMATS, WRITE_FORMATS, resolve_format
 from .tiled import cli as tiled_cli
+from .tiled.run import refuse_input_as_output
 
 STDIO = "-"
 #: output name in a directory, when several inputs share one -o directory
@@ -47,11 +48,9 @@ def plan_outputs(inputs, output: str, out_format) -> list[tuple[str, str]]:
             raise ValueError("-o - (standard output) takes a single input")
         return [(STDIO, resolve_format(pathlib.Path(STDIO), out_format or "csv", WRITE_FORMATS, "writing"))]
     paths = _output_paths(inputs, output, out_format)
-    plan = [(path, resolve_format(pathlib.Path(path), out_format, WRITE_FORMATS, "writing")) for path in paths]
-    for src, (dst, _) in zip(inputs, plan):
-        if src != STDIO and os.path.exists(dst) and os.path.samefile(src, dst):
-            raise ValueError(f"output {dst!r} is the input file; choose another name")
-    return plan
+    for dst in paths:  # no output may replace an input (its name, a symlink or a hard link to it)
+        refuse_input_as_output(inputs, dst)
+    return [(path, resolve_format(pathlib.Path(path), out_format, WRITE_FORMATS, "writing")) for path in paths]
 
 
 def _output_paths(inputs, output: str, out_format) -> list[str]:
@@ -114,6 +113,7 @@ class ProgressBar:
 def cmd_estimate(args) -> int:
     inputs = expand_inputs(args.inputs)
     if len(inputs) == 1 and inputs[0] != STDIO:
+        refuse_input_as_output(inputs, args.output)  # the tiled and LAS/LAZ paths too
         one = argparse.Namespace(**vars(args), input=inputs[0])
         if tiled_cli.wanted(one):  # tiles on Dask (large scans), or a LAS/LAZ output
             return tiled_cli.run(one)
@@ -163,6 +163,13 @@ def _summary(res, name, elapsed, dst, out) -> None:
         print(f"duplicate points: {res.params['duplicates']} (each estimated at its place, once)", file=out)
     if "degenerate" in res.params:
         print(f"  no estimate: {res.params['degenerate']}", file=out)
+    repaired = res.params.get("normals_repaired") or {}
+    if repaired.get("unusable"):
+        oriented = repaired.get("oriented", 0)
+        print(f"file normals: {repaired['unusable']} unusable (zero, NaN or inf), {repaired['estimated']} estimated"
+              + (f"; {oriented} of them oriented as estimated normals are (no neighbour has a file normal)"
+                 if oriented else ""),
+              file=out)
     v = res.valid
     if v.any():
         for name in SUMMARY_FIELDS:

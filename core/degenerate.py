@@ -1,5 +1,6 @@
 """Clouds no estimate can be made on: too few points, all points at one place, on one straight
-line, or at a scale where squared distances leave the float64 range. They get a result with
+line, at a scale where squared distances leave the float64 range, or float32 coordinates
+rounded to a grid as coarse as their spacing. They get a result with
 ``valid=False`` everywhere (and the reason in ``params["degenerate"]``), never a crash or a
 made-up number; the arguments are checked first, as on any cloud (:func:`checked_plan`)."""
 
@@ -35,6 +36,17 @@ MIN_WIDTH = 1e-6
 #: subset that spreads in two directions shows the cloud does (at 1M points 40 -> 4 ms;
 #: a subset in line, e.g. one column of a grid, only sends the cloud on to the runs).
 SAMPLE = 65536
+#: a cloud whose coordinates are float32 values is refused when float32's step at their
+#: magnitude exceeds this share of the median distance between nearest points: the points
+#: were moved by up to half a step, a large share of the spacing the fits measure shape at
+FLOAT32_STEP_SHARE = 0.1
+#: float32's step is not compared with the spacing (no neighbour search, ~0.3 s at 1M points)
+#: when it is below 1/FLOAT32_PLAUSIBLE of the cloud's extent / sqrt(N), the spacing of an
+#: even surface sampling: the flag would then need a median nearest distance 100x below
+#: that (a clustered scan's is some times below it; an estimate, not measured on scans)
+FLOAT32_PLAUSIBLE = 1e3
+#: neighbours read for a point's nearest distinct one (exact copies are skipped)
+SPACING_K = 8
 #: points per run along the line's direction in :func:`_straight_runs`.
 RUN = 16
 #: a run is straight when its points' rms distance from their own line parallel to the
@@ -60,7 +72,54 @@ def reason(points: np.ndarray, min_k: int) -> str | None:
     if extent < MIN_EXTENT or extent < MIN_RELATIVE_EXTENT * size:
         return (f"the cloud spans only {extent:.3g} at coordinates up to {size:.3g} (too small to resolve "
                 "in float64); rescale or re-centre the cloud")
-    return _collinear(points, (lo + hi) / 2)
+    return _float32_grid(points, lo, hi) or _collinear(points, (lo + hi) / 2)
+
+
+def _float32_grid(points: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> str | None:
+    """The reason when the coordinates are float32 values (a float32 array or file, read as
+    float64: the precision was lost before) whose step at their magnitude is more than
+    :data:`FLOAT32_STEP_SHARE` of the distance between nearest points, else None. A unit
+    sphere at UTM coordinates in float32 lies on a 0.5 m grid: 3000 points on ~60 places,
+    flat curvature. Cheap on float64 clouds (their sample has finer values) and on float32
+    ones far finer than any plausible spacing (:data:`FLOAT32_PLAUSIBLE`)."""
+    top = np.maximum(np.abs(lo), np.abs(hi))
+    if top.max() > np.finfo(np.float32).max:
+        return None
+    sample = points[:: max(1, len(points) // SAMPLE)]
+    if not np.array_equal(sample, sample.astype(np.float32)):
+        return None
+    step = _float32_step(sample, top)
+    if step * FLOAT32_PLAUSIBLE < float(np.linalg.norm(hi - lo)) / np.sqrt(len(points)):
+        return None
+    spacing = _median_spacing(points)
+    if step <= FLOAT32_STEP_SHARE * spacing:
+        return None
+    return (f"the coordinates are float32 values: their step {step:.3g} at coordinates up to {top.max():.6g} is "
+            f"{step / spacing:.2g}x the median distance between nearest points ({spacing:.3g}): rounding to "
+            "float32 moved the points by a large share of their spacing (too coarse to resolve in float32); "
+            "re-centre the cloud before converting it to float32, or keep float64 coordinates")
+
+
+def _float32_step(sample: np.ndarray, top: np.ndarray) -> float:
+    """The largest float32 step the coordinates show: per axis, float32's step at its
+    largest |value| if some value is an odd multiple of it (else the axis lies on a coarser
+    grid of its own, e.g. whole numbers: float32 did not round it)."""
+    steps = np.spacing(top.astype(np.float32)).astype(np.float64)
+    used = [bool(np.any(np.mod(sample[:, a] / steps[a], 2.0) != 0.0)) for a in range(3)]
+    return float(max((steps[a] for a in range(3) if used[a]), default=0.0))
+
+
+def _median_spacing(points: np.ndarray) -> float:
+    """Median distance from a point to its nearest distinct point (a sample of the points
+    queried against all; a point whose :data:`SPACING_K` nearest are all copies of it
+    does not count, and with none left the spacing is 0)."""
+    from scipy.spatial import cKDTree
+
+    tree = cKDTree(points, balanced_tree=False, compact_nodes=False)  # 2.5x faster to build, as fast here
+    dist, _ = tree.query(points[:: max(1, len(points) // 4096)], k=min(SPACING_K, len(points)))
+    dist = np.where(dist > 0, dist, np.inf).min(axis=1)
+    dist = dist[np.isfinite(dist)]
+    return float(np.median(dist)) if len(dist) else 0.0
 
 
 def _collinear(points: np.ndarray, centre: np.ndarray) -> str | None:

@@ -113,9 +113,11 @@ def outlier_scores(pts, idx) -> np.ndarray:
 
 def given_normals(pts, normals, nb, plan) -> tuple[Initial, dict]:
     """The caller's (or file's) normals with unusable rows (zero, NaN, inf) estimated from
-    their neighbours and unscaled ones renormalised (:mod:`core.normal_repair`); the
-    counts go to ``params["normals_repaired"]``."""
-    fixed, counts = repair_normals(pts, normals, *nb.take(plan.k_initial))
+    their neighbours and unscaled ones renormalised (:mod:`core.normal_repair`), the rows no
+    file normal decides (all, when none is usable) oriented "outward" as estimated ones are:
+    whatever the orientation, which this cached stage does not depend on (:mod:`core.stage_cache`;
+    the other modes re-orient every row). The counts go to ``params["normals_repaired"]``."""
+    fixed, counts = repair_normals(pts, normals, *nb.take(plan.k_initial), orientation="outward", trust=plan.auto)
     return Initial(fixed, np.isfinite(fixed).all(axis=1)), counts
 
 

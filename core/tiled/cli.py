@@ -12,7 +12,7 @@ import sys
 
 from .._memory import available_memory
 from ..io.las_stream import open_las
-from .run import bytes_per_point, estimate_tiled, parse_memory
+from .run import bytes_per_point, estimate_tiled, parse_memory, refuse_input_as_output
 
 _LAS = (".las", ".laz")
 #: bytes per point of an in-memory k="auto" estimate (1M points measured 1.3-1.6 GB)
@@ -62,6 +62,7 @@ def _in_memory_budget(memory) -> int:
 def run(args) -> int:
     """Run the estimate of ``args`` in tiles (or, for k="auto" within memory and no tile
     option, whole, into LAS/LAZ: the same answer without the tiles' halos)."""
+    refuse_input_as_output([args.input], args.output)  # before any work, on every path below
     orientation = args.viewpoint if args.viewpoint is not None else args.orientation
     asked = args.tile_points is not None or args.workers is not None or args.scheduler is not None
     if args.k == "auto" and not asked and not _too_big(args):

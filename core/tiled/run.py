@@ -178,11 +178,12 @@ def estimate_tiled(source, output, *, normals=None, k="auto", method="nr", passe
     TiledRun
     """
     t0 = time.perf_counter()
+    refuse_input_as_output([source], output)  # before the input is opened: never overwritten
     report = Progress(progress)
     src, spec, rule, budget, tile_points = _prepare(
         source, normals, k, method=method, passes=passes, orientation=orientation, options=options,
         tile_points=tile_points, workers=workers, memory=memory, ignore_normals=ignore_normals)
-    output = _output(src, output)
+    output = _output(output)
     store = TileStore(workdir or directory_for(output))
     same_run = {**spec.__dict__, "threads": None}  # any number of workers may resume a run
     resumed = store.open({"input": list(map(str, src.identity)), "spec": repr(same_run), "rule": rule,
@@ -249,11 +250,32 @@ def _estimate(store, plan, sizes, spec, tasks, report):
     return spec, PassView(store.root, kept, back), params
 
 
-def _output(src, output) -> pathlib.Path:
-    """The output path, checked before any work: not the input, in an existing folder."""
+def refuse_input_as_output(inputs, output) -> None:
+    """Raise ValueError when ``output`` is the same file as any of ``inputs`` (paths; "-" and
+    arrays are skipped): the same name, a symlink or a hard link to it. An output that does
+    not exist yet is a new file, never an input. Every output of the CLI and of
+    :func:`estimate_tiled` goes through this check before any work."""
+    if not isinstance(output, (str, os.PathLike)) or os.fspath(output) == "-":
+        return
+    for src in inputs:
+        if isinstance(src, (str, os.PathLike)) and os.fspath(src) != "-" and _same_file(src, output):
+            raise ValueError(f"output {os.fspath(output)!r} is the input file; choose another name")
+
+
+def _same_file(a, b) -> bool:
+    """Whether paths ``a`` and ``b`` name one file (by device and inode when both exist)."""
+    if not (os.path.lexists(a) and os.path.lexists(b)):
+        return False
+    try:
+        return os.path.samefile(a, b)
+    except OSError:  # a dangling link or an unreadable folder: compare the resolved paths
+        return os.path.realpath(a) == os.path.realpath(b)
+
+
+def _output(output) -> pathlib.Path:
+    """The output path, checked before any work: in an existing folder (and not the input:
+    :func:`refuse_input_as_output`)."""
     output = pathlib.Path(os.fspath(output))
-    if src.identity[0] == os.path.abspath(output):
-        raise ValueError(f"output {output} is the input; the input is never overwritten")
     if not output.parent.is_dir():
         raise ValueError(f"output {output}: the folder {output.parent} does not exist")
     return output
