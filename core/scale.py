@@ -91,7 +91,7 @@ from .kernels.frame import intrinsic_frames
 from .linalg import tangent_basis
 from .patch import Chunk
 from .tuning import (AUTO_DEGREE, AUTO_KS, FOLD_COS, FOLD_FRACTION, FOLD_MIN_BAD, FOLD_NOISE, GAMMA,
-                     INITIAL_K0, JET_DEGREE, JET_GAMMA, JET_DEGREES, JET_KS, JET_QUIET, JET_REACH, JET_SCORE,
+                     INITIAL_K0, INITIAL_SHARE, JET_DEGREE, JET_GAMMA, JET_DEGREES, JET_KS, JET_QUIET, JET_REACH, JET_SCORE,
                      NEIGHBOUR_BUDGET, NOISE_KS, NOISE_POOL, RCOND, JET_RCOND, JET_TILT, WIDEN_SHARE)
 
 __all__ = ["AUTO_DEGREE", "AUTO_KS", "GAMMA", "INITIAL_K0", "NEIGHBOUR_BUDGET", "JET_KS", "JET_DEGREE", "JET_SCORE",
@@ -172,10 +172,10 @@ def noise_ratio(height, h) -> float:
     return float(np.median(ratio)) if len(ratio) else 0.0
 
 
-def initial_k(noise: float, k_min: int, k_max: int) -> int:
-    """Neighbours for the initial normals at a measured ``noise_ratio`` (see :data:`core.tuning.INITIAL_K0`)."""
+def initial_k(noise: float, k_min: int, k_max: int, n_points: int) -> int:
+    """Initial normals' neighbours at a ``noise_ratio`` (tuning.INITIAL_K0), at most n_points / INITIAL_SHARE."""
     k = int(round(INITIAL_K0 * np.sqrt(max(noise, 0.0))))
-    return int(min(max(k, k_min), max(k_max, k_min)))
+    return int(min(max(k, k_min), max(min(k_max, n_points // INITIAL_SHARE), k_min)))
 
 
 # ----------------------------------------------------------------------------- jets (issue 15)

@@ -144,7 +144,7 @@ def initial_normals(pts, nb, plan, outlier, report) -> Initial:
     if noise is None:
         jet, ratio, clean = noise_samples(pts, nrm, ok, idx_p, dist_p, outlier)
         noise = scale.noise_ratio(np.where(clean, ratio, np.nan) if clean.any() else ratio, 1.0)
-    k_init = scale.initial_k(noise, plan.k_initial, plan.k_search)
+    k_init = scale.initial_k(noise, plan.k_initial, plan.k_search, plan.n_points)
     if k_init > nb.width:  # noise this large grows most jets to k_search too: search them all once
         del idx_p, dist_p  # views of the narrow graph would keep it alive beside the wide one
         nb.widen(plan.k_search)

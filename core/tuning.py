@@ -94,6 +94,13 @@ COLLINEAR = 1e-10
 #: (the radius of 15 neighbours is ~4.2 spacings): measured best on the torus, saddle and
 #: ellipsoid at 0.05-1 spacing of noise.
 INITIAL_K0 = 182.0
+#: the initial normals' neighbourhood holds at most 1/INITIAL_SHARE of the cloud (core.scale.
+#: initial_k): more of a closed surface is not local. A coarse sample reads as noise (the
+#: 2-jets' residual is the surface's bend between samples): a 150-point torus measured
+#: 0.05-0.06 and took 42-45 neighbours, its tube's far side among them, and k="auto" returned
+#: inward normals at 99 % (seed 1) or a mix; 100 points, 56-79 neighbours. Only clouds under
+#: INITIAL_SHARE x k_search (3200 points at k_search 320) can reach the cap.
+INITIAL_SHARE = 10
 #: with k="auto" and noise (initial normals wider than PCA_K) a point keeps its PCA_K normal
 #: where the PCA_K normals of its wide neighbourhood agree less than this share of the
 #: cloud's median (core.stages.unfolded: the largest eigenvalue of their unsigned scatter):

@@ -89,7 +89,7 @@ def _fold_samples(ctx):
 
 
 def _k_init(plan) -> int:
-    return initial_k(plan.noise, plan.k_initial, plan.k_search)
+    return initial_k(plan.noise, plan.k_initial, plan.k_search, plan.n_points)
 
 
 def _folds_tested(plan) -> bool:
