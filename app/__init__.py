@@ -14,12 +14,12 @@ Layout (one responsibility per module):
 - :mod:`app.scene`    every pyvista/VTK call (GUI thread only); :mod:`app.lod` level of detail
 - :mod:`app.errors`   the one notifier that errors reach the user through
 - :mod:`app.window`   the main window, composition; :mod:`app.layout` its docks;
-  :mod:`app.actions` menus, dialogs, export, drag-and-drop
+  :mod:`app.actions` menus, dialogs, export, drag-and-drop; :mod:`app.status` the status bar
 - :mod:`app.persist`  what is remembered between runs (QSettings); :mod:`app.theme` light/dark
 - :mod:`app.compiling` tells the user when numba compiles; :mod:`app.text` safe names
 - :mod:`app.bench`    ``python -m app.bench``: the interaction benchmark
 - :mod:`app.widgets`  one small widget per file, each bound to the state
-- :mod:`app.glyphs`   ± segment geometry for direction glyphs; numpy only
+- :mod:`app.glyphs`   ± segment geometry for direction glyphs; numpy only; :mod:`app.legend` their legend
 - :mod:`app._refguard` works around a PySide6 6.12 reference-count bug
 """
 

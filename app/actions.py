@@ -16,6 +16,7 @@ import core.io
 import core.shapes
 
 from . import DEFAULT_CLOUD, big_result
+from .presenter import result_parameters
 from .text import safe_text
 from .widgets import RecentFilesMenu, ShapeDialog
 
@@ -115,6 +116,8 @@ class WindowActions:
         self.set_source(source)
         for note in source.notes:  # what the reader warned about (e.g. columns not taken for normals)
             self.notifier.warning(note)
+        if source.notes:  # about the cloud itself: it stays over the cloud's first result
+            self._message_gen = self.estimator.generation + 1
 
     def _on_load_failed(self, ticket, message: str, detail: str) -> None:
         if self._closed:
@@ -135,15 +138,29 @@ class WindowActions:
 
     # -- export ---------------------------------------------------------------------
     def export_result(self, path) -> Path | None:
-        if self.output is None:
-            self.notifier.warning("Nothing to export yet: wait for the estimate to finish.")
+        """Write the last full result to ``path`` (File > Export).
+
+        While a preview is on screen (its full result still computing) the preview is not
+        written: it is an approximation on a subsample, like a display-only state in
+        CloudCompare, which saves the entities as they are. The last full result is written
+        and the notification says so, with that result's parameters.
+        """
+        out = self.output
+        if out is None:
+            self.notifier.warning("Nothing to export yet: wait for the estimate to finish"
+                                  + (" (a preview is not exported)." if self.presenter.preview is not None else "."))
             return None
         try:
-            written = core.io.write_result(path, self.output.result)
+            written = core.io.write_result(path, out.result)
         except Exception as exc:  # noqa: BLE001
-            self.notifier.error(f"Could not export to {path}: {exc}", exc)
+            text = str(exc) if str(path) in str(exc) else f"{path}: {exc}"  # core's messages name the file
+            self.notifier.error(f"Could not export to {text}", exc)
             return None
-        self.notifier.info(f"Exported the result to {written}")
+        if self.presenter.preview is not None:
+            self.notifier.warning(f"Exported to {written}: the preview on screen is not exported; exported the last "
+                                  f"full result: {result_parameters(out)}")
+        else:
+            self.notifier.info(f"Exported the result to {written}")
         return Path(written)
 
     def export_dialog(self) -> None:

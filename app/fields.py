@@ -125,7 +125,7 @@ def compute_fields(result, *, reference_normals=None, sample=None) -> dict[str, 
         "k2": result.k2,
         "shape_index": result.shape_index,
         "curvedness": result.curvedness,
-        "k_point": result.k_point,
+        "k_point": np.where(np.asarray(result.k_point) > 0, result.k_point, np.nan),  # -1: no fit, not a size
         "outlier_score": result.outlier_score,
         "anisotropy": result.anisotropy,
     }

@@ -14,6 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from core.degenerate import MAX_COORD
+
 from .framing import FIT_SAMPLE, cloud_spacing
 
 __all__ = ["CloudGeometry"]
@@ -30,7 +32,9 @@ class CloudGeometry:
     Attributes
     ----------
     n_points : int
-    centre : (3,) centre of the bounding box of the finite points.
+    centre : (3,) centre of the bounding box of the drawable points: finite, and within
+        ``core.degenerate.MAX_COORD`` (a coordinate of 1e300 would put the camera at
+        infinity; core does not estimate such a cloud either, and says why).
     radius : float, half the box diagonal (1.0 for an empty or single-point cloud).
     spacing : float, mean distance to the 3rd neighbour (:func:`app.framing.cloud_spacing`).
     fit_index : indices of the points whose projection bounds the cloud's
@@ -49,9 +53,11 @@ class CloudGeometry:
 
     @classmethod
     def of(cls, points: np.ndarray, *, seed: int = 0) -> "CloudGeometry":
-        """Compute the geometry of ``points`` ((N, 3); rows with NaN/inf are left out)."""
+        """Compute the geometry of ``points`` ((N, 3); rows with NaN/inf or a coordinate beyond
+        ``MAX_COORD`` are left out: not framed, not drawn)."""
         points = np.asarray(points, dtype=float)
-        finite = np.isfinite(points).all(axis=1)
+        with np.errstate(invalid="ignore"):
+            finite = (np.abs(points) <= MAX_COORD).all(axis=1)  # False for NaN too
         index = np.flatnonzero(finite) if not finite.all() else np.arange(len(points))
         pts = points[index] if len(index) < len(points) else points
         if len(pts) == 0:

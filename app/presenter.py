@@ -8,6 +8,8 @@ changes re-draw without a new estimate.
 
 from __future__ import annotations
 
+import textwrap
+
 import numpy as np
 
 import core
@@ -15,7 +17,7 @@ import core
 from .fields import FIELDS, colouring, curvature_floor
 
 __all__ = ["ResultPresenter", "method_title", "uses_passes", "summary_line", "status_line", "preview_line",
-           "point_info"]
+           "point_info", "result_parameters"]
 
 
 def method_title(name: str | None) -> str:
@@ -48,6 +50,7 @@ class ResultPresenter:
         self.histogram = histogram
         self.inspector = inspector
         self.output = None
+        self.preview = None  # the preview on screen while its full result is computed
         self.shown: dict = {}
 
     def _pairs(self):
@@ -60,7 +63,7 @@ class ResultPresenter:
 
     def clear(self) -> None:
         """A new cloud is loading: forget the old result."""
-        self.output = None
+        self.output = self.preview = None
         self.shown = {}
         self.scene.set_highlight(None)
         for kind in ("e1", "e2", "normals"):
@@ -78,22 +81,43 @@ class ResultPresenter:
 
     def show_preview(self, out) -> None:
         """Colour the cloud by a preview (:mod:`app.preview`); glyphs and pick wait for the full result."""
-        s = self.state
-        name = s.field if s.field in out.fields else "mean"
+        self.preview = out
+        self.scene.set_cloud(out.points, geometry=out.request.source.geometry)
+        self._colour_preview()
+        self.scene.lod.hold(True)  # a big cloud shows its stand-in until the full result
+        self.scene.set_title(f"{method_title(out.request.method)} — preview on {out.preview:,} points\n"
+                             f"{out.request.source.name}\ncomputing the full result…")
+
+    def _colour_preview(self) -> None:
+        """The preview's colours, colour bar, limit boxes and histogram for the current field."""
+        out = self.preview
+        name = self.state.field if self.state.field in out.fields else "mean"
         spec = FIELDS[name]
         values = out.fields[name]
         look = self._look(name, values)
         clim, cmap = look.clim, look.cmap
-        self.scene.set_cloud(out.points, geometry=out.request.source.geometry)
         self.scene.set_values(values, title=spec.title, cmap=cmap, clim=clim, log=look.log)
-        self.scene.lod.hold(True)  # a big cloud shows its stand-in until the full result
-        self.scene.set_title(f"{method_title(out.request.method)} — preview on {out.preview:,} points\n"
-                             f"{out.request.source.name}\ncomputing the full result…")
+        self.field_panel.show_limits(*clim)
         self.histogram.set_data(values, clim=clim, cmap=cmap, label=spec.label + " (preview)")
+        self.shown = {"field": name, "clim": clim, "cmap": cmap, "gen": out.gen, "preview": True}
+
+    def drop_preview(self) -> bool:
+        """The full result of the preview on screen will not come (cancelled, failed): draw the
+        kept result again, or grey the cloud if there is none. True if a preview was dropped."""
+        out, self.preview = self.preview, None
+        if out is None:
+            return False
+        if self.output is not None:
+            self.show(self.output)
+        else:
+            self.clear()
+            self.scene.set_cloud(out.request.source.points, geometry=out.request.source.geometry)
+            self.scene.lod.hold(False)
+        return True
 
     def show(self, out) -> None:
         """Draw a new result in the main view (and the compare view if set)."""
-        self.output = out
+        self.output, self.preview = out, None
         req = out.request
         self.scene.lod.hold(False)
         for scene, res, _fields in self._pairs():
@@ -107,6 +131,9 @@ class ResultPresenter:
         self.pick()
 
     def recolour(self) -> None:
+        if self.preview is not None:  # a field change during a preview colours the preview
+            self._colour_preview()
+            return
         out = self.output
         if out is None:
             return
@@ -145,9 +172,8 @@ class ResultPresenter:
                     scene.set_highlight(None)
             return
         for scene, res, _fields in self._pairs():
-            k = min(int(res.k_point[index]), res.neighbours.k_max)  # a tiled result carries 16 of them
-            neighbours = np.asarray(res.neighbours.rows(np.array([index]), k)[0][0])  # a lazy graph: one row searched
-            scene.set_highlight(index, neighbours, {"e1": res.e1[index], "e2": res.e2[index], "n": res.normals[index]})
+            scene.set_highlight(index, _neighbours_of(res, index),
+                                {"e1": res.e1[index], "e2": res.e2[index], "n": res.normals[index]})
         self.inspector.show_point(point_info(out, index))
 
     def set_point_size(self, size: float) -> None:
@@ -157,6 +183,20 @@ class ResultPresenter:
         self.pick()
 
 
+def _neighbours_of(res, index: int):
+    """Indices of the neighbours point ``index`` was fitted with (None: no estimate there)."""
+    graph = getattr(res, "neighbours", None)  # None: a degenerate cloud has no neighbourhoods
+    k = min(int(res.k_point[index]), graph.k_max) if graph is not None else 0  # a tiled result carries 16
+    if k <= 0:
+        return None
+    return np.asarray(graph.rows(np.array([index]), k)[0][0])  # a lazy graph: one row searched
+
+
+def _degenerate(result) -> str | None:
+    """Why core made no estimate for the whole cloud, or None."""
+    return (getattr(result, "params", None) or {}).get("degenerate")
+
+
 def _passes_text(result) -> str:
     """Refinement passes kept, with the maximum when fewer were (k="auto" stops early)."""
     run = getattr(result, "params", {}).get("passes_run", result.passes)
@@ -164,13 +204,15 @@ def _passes_text(result) -> str:
 
 
 def _title(out, method: str, result, summary: dict | None) -> str:
-    """Top-left caption of a view: method and parameters, cloud, errors."""
+    """Top-left caption of a view: method and parameters (or why there is no estimate), cloud, errors."""
     req = out.request
-    text = f"{method_title(method)}\nk = {result.k}"
-    if getattr(result, "passes", None) is not None and uses_passes(method):
+    why = _degenerate(result)
+    text = f"{method_title(method)}\n" + ("no estimate: " + "\n  ".join(textwrap.wrap(why, 48)) if why
+                                           else f"k = {result.k}")
+    if not why and getattr(result, "passes", None) is not None and uses_passes(method):
         text += f",  passes = {_passes_text(result)}"
     if req.noise > 0:
-        text += f",  noise {req.noise:g}%"
+        text += f"{chr(10) if why else ',  '}noise {req.noise:g}%"
     text += f"\n{req.source.name}"
     if summary:
         text += "\n" + summary_line(summary, None, short=True)
@@ -185,19 +227,27 @@ def _off_border(values, res, *, keep_shape=False):
     return np.where(border, np.nan, values) if keep_shape else np.asarray(values)[~border]
 
 
+def result_parameters(out) -> str:
+    """Method and parameters of a result: "NR k=auto (median 14) passes=4  ·  noise 5%"."""
+    res, req = out.result, out.request
+    why = _degenerate(res)  # nothing ran: the k asked for, no median of the -1 placeholders, no passes
+    k = f"auto (median {int(np.median(res.k_point))})" if res.k == "auto" and not why else res.k
+    text = f"{req.method.upper()} k={k}"
+    if not why and getattr(res, "passes", None) is not None and uses_passes(req.method):
+        text += f" passes={_passes_text(res)}"
+    return text + (f"  ·  noise {req.noise:g}%" if req.noise > 0 else "")
+
+
 def status_line(out) -> str:
     """The status bar's description of a result."""
     res, req = out.result, out.request
+    why = _degenerate(res)
     invalid = int(getattr(res, "n_invalid", int(np.count_nonzero(~np.asarray(res.valid)))))
-    k = f"auto (median {int(np.median(res.k_point))})" if res.k == "auto" else res.k
-    text = f"{req.source.name}: {len(out.points):,} points  ·  {req.method.upper()} k={k}"
-    if getattr(res, "passes", None) is not None and uses_passes(req.method):
-        text += f" passes={_passes_text(res)}"
-    if req.noise > 0:
-        text += f"  ·  noise {req.noise:g}%"
+    if why:  # nothing was estimated: the reason first (a narrow window cuts the line off), no passes
+        return (f"{req.source.name}: {len(out.points):,} points  ·  {result_parameters(out)} — no estimate: {why}"
+                f"  ·  {invalid:,} invalid (grey)  ·  {out.elapsed:.2f} s")
+    text = f"{req.source.name}: {len(out.points):,} points  ·  {result_parameters(out)}"
     text += f"  ·  {invalid:,} invalid (grey)" if invalid else "  ·  all valid"
-    why = (getattr(res, "params", None) or {}).get("degenerate")
-    text += f" — no estimate: {why}" if why else ""
     border = getattr(res, "border", None)
     n_border = 0 if border is None else int(np.count_nonzero(border))
     text += f"  ·  {n_border:,} on a border (grey)" if n_border else ""
@@ -246,6 +296,8 @@ def point_info(out, index: int) -> dict:
         "curvedness": out.fields["curvedness"][index],
         "valid": bool(np.asarray(res.valid)[index]),
     }
+    if _degenerate(res):
+        info["no_estimate"] = _degenerate(res)
     sample = out.request.source.sample
     if sample is not None:
         k1, k2 = float(sample.k1[index]), float(sample.k2[index])

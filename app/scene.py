@@ -11,7 +11,7 @@ import numpy as np
 import pyvista as pv
 from pyvistaqt import QtInteractor
 
-from . import framing, glyphs
+from . import framing, glyphs, legend
 from .detail import VisibleDetail
 from .geometry import CloudGeometry
 from .lod import LevelOfDetail
@@ -79,6 +79,7 @@ class CloudScene(Picking):
         self._bar = None
         self._bar_title = ""
         self._glyph_names: set[str] = set()
+        self._legend_size = None  # the window size the glyph legend was placed for
         self._pick_callback = None
         self._press = None
         self._observers = []
@@ -186,8 +187,11 @@ class CloudScene(Picking):
         if self._lut.cmap is None or getattr(self._lut.cmap, "name", None) != cmap:
             self._lut.cmap = cmap
             self._lut.nan_color = NAN_COLOUR
-        self._lut.log_scale = bool(log) and clim[0] > 0
+        log = bool(log) and clim[0] > 0
+        if not log:  # the scale before the range, or the range before the log scale: never a log
+            self._lut.log_scale = False  # table over a range with 0 or below (a VTK warning)
         self._lut.scalar_range = (float(clim[0]), float(clim[1]))
+        self._lut.log_scale = log
         self._bar_title = title
         self.show_bar(True)
 
@@ -220,6 +224,8 @@ class CloudScene(Picking):
         if self._fit_pending is not None and window is not None and self._fit_pending[0] != tuple(window.GetSize()):
             if self._fit_pending[1] == _camera_state(self.plotter.renderer):  # nobody moved it since
                 self._fit()
+        if self._glyph_names and window is not None and self._legend_size != tuple(window.GetSize()):
+            self._legend_size = legend.place_legend(self.plotter)
         self._update_sprites()
 
     # -- glyphs -------------------------------------------------------------------
@@ -258,20 +264,9 @@ class CloudScene(Picking):
         self._glyph_legend()
 
     def _glyph_legend(self) -> None:
-        """A legend of the glyphs shown, in the lower-left corner (saved figures carry it)."""
-        labels = dict(zip(("e1", "e2", "normals"), (text for text, _ in glyphs.LEGEND)))
-        row = 0
-        for kind in ("normals", "e2", "e1"):
-            name = f"glyph-legend-{kind}"
-            if f"glyph-{kind}" not in self._glyph_names:
-                self.plotter.remove_actor(name, render=False)
-                continue
-            actor = self.plotter.add_text(f"\u2014 {labels[kind]}", position=(0.012, 0.03 + 0.04 * row),
-                                          viewport=True, font_size=7, color=GLYPH_COLOURS[kind], name=name,
-                                          render=False)
-            actor.prop.font_size = 13
-            actor.prop.bold = True
-            row += 1
+        """A legend of the glyphs shown, in the lower-left corner (app/legend.py)."""
+        shown = [kind for kind in legend.KINDS if f"glyph-{kind}" in self._glyph_names]
+        self._legend_size = legend.update_legend(self.plotter, shown, GLYPH_COLOURS)
 
     # -- picked point ---------------------------------------------------------------
     def set_highlight(self, index: int | None, neighbours: np.ndarray | None = None, frame: dict | None = None):
@@ -342,7 +337,7 @@ class CloudScene(Picking):
 
     def _fit(self) -> None:
         """Fill the view above the colour bar with the cloud's projection (app/framing.py)."""
-        if self.points is None or not len(self.points):
+        if self.points is None or not len(self.geometry.fit_index):  # (no drawable point)
             return
         renderer = self.plotter.renderer
         sample = self.points[self.geometry.fit_index]

@@ -75,7 +75,14 @@ class CloudSource:
 
 
 def load_file(path) -> CloudSource:
-    """Read a cloud with :func:`core.io.read_cloud`.
+    """Read a cloud with :func:`core.io.read_cloud`, without its rows with NaN/inf coordinates
+    (as CloudCompare does); what the reader warns about (dropped rows, columns not taken for
+    normals, ...) becomes the source's ``notes``.
+
+    The reader's warnings are caught with :func:`warnings.catch_warnings`, which swaps the
+    process-wide warning state while the file is read (Python < 3.14 has no per-thread one).
+    Warnings of other threads in that time are not lost but re-issued after the read (from
+    this thread); only the reader's own, which name the file, become notes.
 
     Raises
     ------
@@ -85,8 +92,12 @@ def load_file(path) -> CloudSource:
     path = Path(os.fsdecode(path))
     with warnings.catch_warnings(record=True) as caught:  # the reader's warnings, kept for the window
         warnings.simplefilter("always", UserWarning)
-        cloud = core.io.read_cloud(path)
-    notes = tuple(dict.fromkeys(str(w.message) for w in caught if issubclass(w.category, UserWarning)))
+        cloud = core.io.read_cloud(path, drop_nonfinite=True)
+    ours = [w for w in caught if issubclass(w.category, UserWarning) and path.name in str(w.message)]
+    for w in caught:
+        if w not in ours:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno, source=w.source)
+    notes = tuple(dict.fromkeys(str(w.message) for w in ours))
     points = np.array(cloud.points, dtype=float, copy=True)
     normals = None if cloud.normals is None else np.array(cloud.normals, dtype=float, copy=True)
     return CloudSource(name=display_name(path), points=points, normals=normals, path=path, notes=notes)

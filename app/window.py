@@ -9,7 +9,8 @@ Everything here runs on the GUI thread. Data flow::
     Estimator.preview   -> a fast first picture (app.preview), then
     Estimator.result    -> the full result (latest generation only) -> scene + panels
 
-Menus, dialogs, export and drag-and-drop are in :class:`app.actions.WindowActions`.
+Menus, dialogs, export and drag-and-drop are in :class:`app.actions.WindowActions`; the
+status line and the notifications over it in :class:`app.status.WindowStatus`.
 """
 
 from __future__ import annotations
@@ -29,11 +30,12 @@ from .estimator import Estimator
 from .layout import build_controls
 from .loader import CloudLoader
 from .persist import save_layout, save_state
-from .presenter import ResultPresenter, preview_line, status_line, summary_line
+from .presenter import ResultPresenter, preview_line
 from .request import ESTIMATE_KEYS, EstimateRequest
 from .scene import CloudScene, make_plotter
 from .source import CloudSource
 from .state import ViewerState
+from .status import WindowStatus
 from .teach import install_teach
 from .theme import current_theme
 from .widgets import CompareView, EstimateProgress
@@ -50,7 +52,7 @@ _DISPLAY_KEYS = {"field", "clim_auto", "clim", "clip_percent"}
 _GLYPH_KEYS = {"show_e1", "show_e2", "show_normals", "glyph_density", "glyph_length"}
 
 
-class MainWindow(WindowActions, QMainWindow):
+class MainWindow(WindowActions, WindowStatus, QMainWindow):
     """Darboux viewer window.
 
     Parameters
@@ -203,6 +205,7 @@ class MainWindow(WindowActions, QMainWindow):
             self._show_status()
 
     def _on_source(self, source: CloudSource) -> None:
+        self._clear_message()  # a notification about the previous cloud
         self.presenter.clear()
         self.scene.spacing = 1.0
         self.scene.set_cloud(source.points, reset_camera="oblique" if source.has_truth else "front",
@@ -240,6 +243,7 @@ class MainWindow(WindowActions, QMainWindow):
             self.compare.hide()
             self.presenter.compare_scene = None
         self.presenter.show(out)
+        self._clear_message(out.gen)
         self._show_status()
         self.render_all()
         self.result_shown.emit(out)
@@ -252,36 +256,8 @@ class MainWindow(WindowActions, QMainWindow):
         self.render_all()
         self.preview_shown.emit(out)
 
-    def _show_status(self) -> None:
-        """The status line for what is on screen (the result, or why there is none)."""
-        out, source = self.output, self.state.source
-        if out is not None and out.request.source is source:
-            self.status_label.setText(status_line(out))
-            self.summary_label.setText(summary_line(out.summary, out.request.method))
-        elif source is not None and not self.estimator.busy:
-            self.status_label.setText(f"{source.name}: {source.n_points:,} points — not estimated "
-                                      "(cancelled or failed; change a parameter or press F5)")
-            self.scene.set_title(f"{source.name}\nnot estimated")
-            self.scene.lod.hold(False)
-            self.render_all()
-        elif source is None:
-            self.status_label.setText("No cloud")
-
     def _on_busy(self, _busy: int) -> None:
         self.progress.set_busy(self.estimator.busy or self.loader.pending is not None)
-
-    def _on_failed(self, message: str) -> None:
-        self.notifier.error(f"The estimate failed: {message}")
-        self._show_status()
-
-    def _on_cancelled(self, gen: int) -> None:
-        if gen == self.estimator.generation and not self.estimator.busy:
-            self._show_status()
-            if self.output is not None:
-                # the label, not showMessage(): a temporary message hides the status widgets,
-                # re-lays out the window and re-renders the whole cloud (seconds at 1M points)
-                self.status_label.setText("Estimate cancelled; showing the previous result: "
-                                          + self.status_label.text())
 
     def _show_compare(self) -> None:
         """Create (once) and show the second view beside the main one."""
@@ -341,26 +317,6 @@ class MainWindow(WindowActions, QMainWindow):
         self.plotter.update()
         if self.compare is not None and self.compare.isVisible():
             self.compare.plotter.update()
-
-    # -- notifications ------------------------------------------------------------------
-    def _show_notification(self, note) -> None:
-        if self._closed:
-            return
-        colour = {"error": "#b2182b", "warning": "#b35806"}.get(note.level, "")
-        self.statusBar().setStyleSheet(f"QStatusBar {{ color: {colour}; }}" if colour else "")
-        self.statusBar().showMessage(note.message, 15000 if note.level == "error" else 6000)
-        if note.level == "error" and self.dialogs:
-            box = QMessageBox(QMessageBox.Icon.Critical, "Darboux", note.message, QMessageBox.StandardButton.Ok, self)
-            if note.detail:
-                box.setDetailedText(note.detail)
-            box.setModal(False)
-            box.setAttribute(Qt.WidgetAttribute.WA_DeleteOnClose)
-            box.finished.connect(self._forget_boxes)
-            self._boxes.append(box)
-            box.show()
-
-    def _forget_boxes(self, *_args) -> None:
-        self._boxes = [b for b in self._boxes if b.isVisible()]
 
     # -- closing --------------------------------------------------------------------------------
     def closeEvent(self, event) -> None:  # noqa: N802

@@ -3,6 +3,11 @@
 
 from __future__ import annotations
 
+import math
+import re
+import sys
+
+from PySide6.QtGui import QValidator
 from PySide6.QtWidgets import QCheckBox, QComboBox, QDoubleSpinBox, QFormLayout, QHBoxLayout, QWidget
 
 from ..fields import FIELDS
@@ -16,6 +21,37 @@ def _spin(lo=-1e9, hi=1e9, decimals=4, step=0.1) -> QDoubleSpinBox:
     s.setSingleStep(step)
     s.setKeyboardTracking(False)  # one valueChanged when typing is done
     return s
+
+
+#: What a number being typed can look like ("-", "1e", "2.5e-").
+_PARTIAL = re.compile(r"[+-]?(\d*\.?\d*)([eE][+-]?\d*)?")
+
+
+class LimitBox(QDoubleSpinBox):
+    """A colour limit: any finite value, shown with 6 significant digits (scientific when
+    large or small), and kept exactly: a box left as it was does not round its value."""
+
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        self.setDecimals(323)  # Qt rounds a value to this many decimals: the most it allows keeps any double
+        self.setRange(-sys.float_info.max, sys.float_info.max)
+        self.setKeyboardTracking(False)  # one valueChanged when typing is done
+
+    def textFromValue(self, value: float) -> str:  # noqa: N802 - Qt's name
+        return f"{value:.6g}"
+
+    def valueFromText(self, text: str) -> float:  # noqa: N802
+        if text.strip() == self.textFromValue(self.value()):
+            return self.value()  # what is shown of the value, not a new one
+        return float(text)
+
+    def validate(self, text: str, pos: int):
+        try:
+            ok = math.isfinite(float(text))
+        except ValueError:
+            partial = _PARTIAL.fullmatch(text.strip())
+            return (QValidator.State.Intermediate if partial else QValidator.State.Invalid), text, pos
+        return (QValidator.State.Acceptable if ok else QValidator.State.Invalid), text, pos
 
 
 class FieldPanel(QWidget):
@@ -37,7 +73,8 @@ class FieldPanel(QWidget):
         self.clip = _spin(0.0, 25.0, 1, 0.5)
         self.clip.setSuffix(" % clip")
         self.clip.setToolTip("Percent of the most extreme values left out of the automatic limits")
-        self.lo, self.hi = _spin(), _spin()
+        self.lo, self.hi = LimitBox(), LimitBox()
+        self._limits = (self.lo.value(), self.hi.value())  # the limits in use (show_limits)
         self.lo.setToolTip("Lower colour limit")
         self.hi.setToolTip("Upper colour limit")
         self.point_size = _spin(1.0, 30.0, 1, 1.0)
@@ -61,8 +98,8 @@ class FieldPanel(QWidget):
         self.combo.currentIndexChanged.connect(self._on_field)
         self.auto.toggled.connect(lambda on: self._state.set(clim_auto=bool(on)))
         self.clip.valueChanged.connect(lambda v: self._state.set(clip_percent=float(v)))
-        self.lo.valueChanged.connect(self._on_limits)
-        self.hi.valueChanged.connect(self._on_limits)
+        self.lo.valueChanged.connect(lambda v: self._on_limits(float(v), self._limits[1]))
+        self.hi.valueChanged.connect(lambda v: self._on_limits(self._limits[0], float(v)))
         self.point_size.valueChanged.connect(lambda v: self._state.set(point_size=float(v)))
         state.changed.connect(self._on_state)
 
@@ -70,8 +107,9 @@ class FieldPanel(QWidget):
     def _on_field(self, index: int) -> None:
         self._state.set(field=self.combo.itemData(index), clim_auto=True)
 
-    def _on_limits(self, _value=None) -> None:
-        self._state.set(clim_auto=False, clim=(self.lo.value(), self.hi.value()))
+    def _on_limits(self, lo: float, hi: float) -> None:
+        """One box edited: the other limit stays the one in use, whatever its box shows."""
+        self._state.set(clim_auto=False, clim=(lo, hi))
 
     # state -> widgets
     def _sync_all(self) -> None:
@@ -93,11 +131,10 @@ class FieldPanel(QWidget):
     def show_limits(self, lo: float, hi: float) -> None:
         """Display the limits in use (called by the window after a recolour)."""
         span = abs(hi - lo) or 1.0
-        step = 10 ** (int(f"{span:e}".split("e")[1]) - 1)
-        decimals = max(2, min(8, 2 - int(f"{span:e}".split("e")[1]) + 1))
+        step = 10.0 ** (math.floor(math.log10(span)) - 1) if math.isfinite(span) else 1.0
+        self._limits = (float(lo), float(hi))
         with blocked(self.lo, self.hi):
             for box, v in ((self.lo, lo), (self.hi, hi)):
-                box.setDecimals(decimals)
                 box.setSingleStep(step)
                 box.setValue(v)
 

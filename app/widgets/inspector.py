@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import html
+
 import numpy as np
 from PySide6.QtGui import QFontDatabase
 from PySide6.QtWidgets import QAbstractItemView, QHeaderView, QLabel, QTableWidget, QTableWidgetItem, QVBoxLayout, QWidget
@@ -11,6 +13,7 @@ from ..glyphs import FRAME_COLOURS
 #: Rows shown, in order: key in the info dict -> label.
 ROWS = (
     ("index", "index"),
+    ("no_estimate", "no estimate"),
     ("position", "position p"),
     ("normal", "normal n"),
     ("k1", "k1"),
@@ -32,6 +35,8 @@ ROWS = (
 def _fmt(value) -> str:
     if value is None:
         return "—"
+    if isinstance(value, str):
+        return value
     if isinstance(value, (bool, np.bool_)):
         return "yes" if value else "no (NaN)"
     if isinstance(value, (int, np.integer)):
@@ -73,6 +78,9 @@ class PointInspector(QWidget):
             self.table.setItem(r, 0, QTableWidgetItem(label))
             self.table.setItem(r, 1, QTableWidgetItem(text))
         index = info.get("index")
+        if "no_estimate" in info:  # a cloud core refused as a whole (app.presenter.point_info)
+            self.header.setText(f"<b>Point {index:,}</b>: no estimate — {html.escape(info['no_estimate'])}")
+            return
         self.header.setText(
             f"<b>Point {index:,}</b>: e1 <span style='color:{FRAME_COLOURS['e1']}'>black</span>, "
             f"e2 <span style='color:{FRAME_COLOURS['e2']}'>green</span>, "

@@ -1,0 +1,58 @@
+"""The glyph legend of a 3D view: one coloured row per glyph kind shown (GUI thread, VTK calls).
+
+Lower-left, beside the colour bar when the view is wide enough for both; in a narrower view
+(the compare view, a window with its docks) above the bar and its title, so it is never
+drawn over the bar or its tick labels (saved figures carry it).
+"""
+
+from __future__ import annotations
+
+from . import glyphs
+from .framing import BAR_BOTTOM, BAR_HEIGHT, BAR_MAX_PX
+
+__all__ = ["update_legend", "place_legend", "KINDS"]
+
+#: Glyph kinds, bottom row first.
+KINDS = ("normals", "e2", "e1")
+#: Left edge of the legend and of the colour bar (CloudScene._add_bar), viewport fractions.
+LEFT, BAR_LEFT = 0.012, 0.25
+#: Pixels: a row, the room the bar's title takes above it, half a tick label left of the bar.
+ROW_PX, TITLE_PX, TICK_PX = 20.0, 26.0, 30.0
+
+
+def update_legend(plotter, shown, colours: dict) -> None:
+    """A row for each glyph kind in ``shown`` (colours: kind -> colour), then place them."""
+    labels = dict(zip(("e1", "e2", "normals"), (text for text, _ in glyphs.LEGEND)))
+    for kind in KINDS:
+        name = f"glyph-legend-{kind}"
+        if kind not in shown:
+            plotter.remove_actor(name, render=False)
+            continue
+        actor = plotter.add_text(f"\u2014 {labels[kind]}", position=(LEFT, 0.03), viewport=True, font_size=7,
+                                 color=colours[kind], name=name, render=False)
+        actor.prop.font_size = 13
+        actor.prop.bold = True
+    place_legend(plotter)
+
+
+def place_legend(plotter) -> tuple | None:
+    """Stack the legend rows beside the colour bar, or above it when they would reach it.
+    Returns the window size it was placed for (None if there is no window yet)."""
+    renderer = plotter.renderer
+    window = renderer.GetRenderWindow()
+    actors = [plotter.actors[f"glyph-legend-{k}"] for k in KINDS if f"glyph-legend-{k}" in plotter.actors]
+    if window is None or not actors:
+        return None
+    x0, y0, x1, y1 = renderer.GetViewport()
+    width, height = window.GetSize()
+    w, h = max((x1 - x0) * width, 1.0), max((y1 - y0) * height, 1.0)
+    widest = 0.0
+    for actor in actors:
+        box = [0.0] * 4
+        actor.GetBoundingBox(renderer, box)
+        widest = max(widest, box[1] - box[0])
+    beside = LEFT * w + widest + TICK_PX < BAR_LEFT * w
+    bottom = BAR_BOTTOM * h + (0.0 if beside else min(BAR_HEIGHT * h, BAR_MAX_PX) + TITLE_PX)
+    for row, actor in enumerate(actors):
+        actor.SetPosition(LEFT, (bottom + ROW_PX * row) / h)
+    return tuple(window.GetSize())
