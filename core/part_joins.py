@@ -47,9 +47,9 @@ def join_parts(points, normals, labels, spread, rank, gate):
     whose signs are tied by the evidence between them.
 
     ``normals`` are the forest's (signs consistent within each part), ``spread`` each
-    point's noise gate (:func:`core.kernels.sign_evidence.offset_spread`), ``rank`` each
+    point's noise spread (:func:`core.kernels.sign_evidence.offset_spread`), ``rank`` each
     point's index in the caller's order (the samples do not depend on the order in memory),
-    ``gate`` the forest's noise gate (:data:`core.orientation.GATE`).
+    ``gate`` the forest's multiple of it (:data:`core.orientation.GATE`).
 
     Returns ``(group, parity)``: per part, its group's number (the lowest part number in
     it) and +1 / -1, what to multiply its normals by to agree with its group.
