@@ -7,6 +7,7 @@ whole window and exits (0 on success, 1 with a message on failure).
 from __future__ import annotations
 
 import argparse
+import math
 import signal
 import sys
 from pathlib import Path
@@ -21,11 +22,22 @@ from core.tuning import AUTO_PASSES
 from . import DEFAULT_CLOUD
 from .fields import resolve_field
 from .persist import restore_layout, restore_state
-from .state import ViewerState
+from .state import ORIENTATIONS, ViewerState
 
 from .teach import cli as teach_cli
 
 __all__ = ["main", "build_parser"]
+
+
+def _viewpoint(text: str) -> tuple:
+    """``--viewpoint X,Y,Z`` (core's CLI spelling) as a tuple of 3 finite floats."""
+    try:
+        vals = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"viewpoint {text!r} must be x,y,z (three numbers)") from None
+    if len(vals) != 3 or not all(math.isfinite(v) for v in vals):
+        raise argparse.ArgumentTypeError(f"viewpoint {text!r} must be x,y,z (three finite numbers)")
+    return vals
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -41,6 +53,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--method", metavar="NAME", help="estimator from core.METHODS (default nr)")
     p.add_argument("--passes", type=int, metavar="N",
                    help=f"NR refinement passes (0 = NF; default {AUTO_PASSES}, a maximum with automatic k)")
+    orient = p.add_mutually_exclusive_group()
+    orient.add_argument("--orientation", choices=list(ORIENTATIONS),
+                        help="how estimated normals are oriented: auto (outward; the file's normals kept, the "
+                        "default), propagate (up, +z) or keep (the file's normals)")
+    orient.add_argument("--viewpoint", type=_viewpoint, metavar="X,Y,Z",
+                        help="orient the normals toward this point (the scanner's position, for scans of scenes; "
+                        "write --viewpoint=-1,0,2 when X is negative)")
     p.add_argument("--noise", type=float, metavar="PCT", help="Gaussian noise, sigma in %% of the mean spacing")
     p.add_argument("--field", metavar="NAME", help="displayed field: mean (H), gaussian (K), k1, k2, shape_index, "
                    "curvedness, normal_dev, err_mean, err_gaussian, ...")
@@ -107,6 +126,8 @@ def _state_from_args(args, parser) -> ViewerState:
             if not number >= 0:
                 parser.error(f"--{flag} must be >= 0, got {number}")
             values[flag] = number
+    if args.viewpoint is not None or args.orientation is not None:
+        values["orientation"] = args.viewpoint if args.viewpoint is not None else args.orientation
     values.update(_display_values(args, parser))
     state = ViewerState()
     state.set(**values)

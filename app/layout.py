@@ -10,6 +10,7 @@ from .widgets import (
     GlyphControls,
     Histogram,
     MethodCombo,
+    OrientationCombo,
     PointInspector,
     StateCheckBox,
     k_slider,
@@ -52,6 +53,9 @@ def build_controls(window) -> None:
         s, "use_input_normals", "Use the cloud's normals",
         "Start from the normals stored in the file (or the shape's exact normals) instead of estimating them",
     )
+    # the camera itself, not pyvista's getter (which renders a fresh renderer once)
+    window.orientation_combo = OrientationCombo(
+        s, lambda: window.plotter.renderer.GetActiveCamera().GetPosition())
     window.compare_combo = MethodCombo(s, key="compare_method")
     window.compare_combo.setToolTip("Show a second method side by side (linked cameras)")
     window.field_panel = FieldPanel(s)
@@ -63,7 +67,8 @@ def build_controls(window) -> None:
     layout = QVBoxLayout(panel)
     layout.setContentsMargins(4, 4, 4, 4)
     layout.addWidget(_group("Estimate", window.method_combo, window.k_slider, window.passes_slider,
-                            window.noise_slider, window.normals_check, QLabel("Compare with"), window.compare_combo))
+                            window.noise_slider, window.normals_check, QLabel("Orientation"), window.orientation_combo,
+                            QLabel("Compare with"), window.compare_combo))
     layout.addWidget(_group("Colour", window.field_panel))
     layout.addWidget(_group("Glyphs", window.glyph_controls))
     layout.addStretch(1)

@@ -17,7 +17,7 @@ import core
 from .fields import FIELDS, colouring, curvature_floor
 
 __all__ = ["ResultPresenter", "method_title", "uses_passes", "summary_line", "status_line", "preview_line",
-           "point_info", "result_parameters"]
+           "point_info", "result_parameters", "orientation_text"]
 
 
 def method_title(name: str | None) -> str:
@@ -203,6 +203,13 @@ def _passes_text(result) -> str:
     return f"{run}" if run == result.passes else f"{run} of max {result.passes}"
 
 
+def orientation_text(orientation) -> str:
+    """How the normals were oriented, for captions ("oriented toward (1, 2, 3)"); "" for the default."""
+    if isinstance(orientation, tuple):
+        return "oriented toward (" + ", ".join(f"{v:.3g}" for v in orientation) + ")"
+    return {"propagate": "oriented up (+z)", "keep": "file's normals kept"}.get(orientation, "")
+
+
 def _title(out, method: str, result, summary: dict | None) -> str:
     """Top-left caption of a view: method and parameters (or why there is no estimate), cloud, errors."""
     req = out.request
@@ -213,6 +220,8 @@ def _title(out, method: str, result, summary: dict | None) -> str:
         text += f",  passes = {_passes_text(result)}"
     if req.noise > 0:
         text += f"{chr(10) if why else ',  '}noise {req.noise:g}%"
+    if orientation_text(req.orientation):
+        text += f"\n{orientation_text(req.orientation)}"
     text += f"\n{req.source.name}"
     if summary:
         text += "\n" + summary_line(summary, None, short=True)
@@ -235,7 +244,8 @@ def result_parameters(out) -> str:
     text = f"{req.method.upper()} k={k}"
     if not why and getattr(res, "passes", None) is not None and uses_passes(req.method):
         text += f" passes={_passes_text(res)}"
-    return text + (f"  ·  noise {req.noise:g}%" if req.noise > 0 else "")
+    text += f"  ·  noise {req.noise:g}%" if req.noise > 0 else ""
+    return text + (f"  ·  {orientation_text(req.orientation)}" if orientation_text(req.orientation) else "")
 
 
 def status_line(out) -> str:
@@ -275,8 +285,9 @@ def preview_line(out) -> str:
     """The status bar while a preview is shown."""
     req = out.request
     k = req.k if not req.k_auto else f"{out.result.k} (paper's pipeline)"
-    return (f"{req.source.name}: PREVIEW ({req.method.upper()} k={k} on {out.preview:,} of {len(out.points):,} "
-            f"points, {out.elapsed:.2f} s) — computing the full result…")
+    oriented = f", {orientation_text(req.orientation)}" if orientation_text(req.orientation) else ""
+    return (f"{req.source.name}: PREVIEW ({req.method.upper()} k={k}{oriented} on {out.preview:,} of "
+            f"{len(out.points):,} points, {out.elapsed:.2f} s) — computing the full result…")
 
 
 def point_info(out, index: int) -> dict:

@@ -20,7 +20,7 @@ __all__ = ["EstimateRequest", "ESTIMATE_KEYS", "AUTO_METHODS"]
 AUTO_METHODS = frozenset({"nf", "nr"})
 
 #: Fields of a request that are not user parameters (set by the controller).
-_CONTROL = frozenset({"gen", "orientation", "seed"})
+_CONTROL = frozenset({"gen", "seed"})
 
 
 @dataclass(frozen=True)
@@ -36,7 +36,7 @@ class EstimateRequest:
     noise: float = 0.0  # sigma in % of mean spacing
     use_input_normals: bool = True
     compare_method: str | None = None
-    orientation: str = "auto"
+    orientation: str | tuple = "auto"  # core's mode, or a viewpoint (x, y, z) tuple (hashable)
     seed: int = 0
 
     @classmethod

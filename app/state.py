@@ -18,7 +18,7 @@ from PySide6.QtCore import QObject, Signal
 
 from core.tuning import AUTO_PASSES
 
-__all__ = ["ViewerState"]
+__all__ = ["ViewerState", "ORIENTATIONS"]
 
 
 @dataclass(frozen=True)
@@ -44,6 +44,22 @@ def _clim(v):
 
 def _opt_int(v):
     return None if v is None else int(v)
+
+
+#: Orientation modes the viewer offers (core.estimate's ``orientation``); a viewpoint is an (x, y, z) tuple.
+ORIENTATIONS = ("auto", "propagate", "keep")
+
+
+def _orientation(v):
+    """A mode of :data:`ORIENTATIONS`, or a viewpoint as a tuple of 3 finite floats (hashable)."""
+    if isinstance(v, str):
+        if v not in ORIENTATIONS:
+            raise ValueError(f"orientation {v!r} is invalid; must be one of {', '.join(ORIENTATIONS)} or (x, y, z)")
+        return v
+    view = tuple(float(x) for x in v)
+    if len(view) != 3 or not np.isfinite(view).all():
+        raise ValueError(f"a viewpoint must be 3 finite numbers, got {v!r}")
+    return view
 
 
 class ViewerState(QObject):
@@ -74,6 +90,7 @@ class ViewerState(QObject):
         "noise": _Field(0.0, float),  # sigma, % of the mean point spacing
         "use_input_normals": _Field(True, bool),
         "compare_method": _Field(None, _opt_str),
+        "orientation": _Field("auto", _orientation),  # core's orientation, or a viewpoint (x, y, z)
         # display
         "field": _Field("mean", str),
         "clim_auto": _Field(True, bool),

@@ -158,7 +158,7 @@ class EstimateWorker(QObject):
         k = min(PREVIEW_K if req.k_auto else int(req.k), len(pts) - 1)
         normals = req.source.normals[sub.index] if (req.use_input_normals and req.source.normals is not None) else None
         passes = None if req.k_auto else (req.passes if core.METHODS[req.method].uses_passes else None)
-        res = core.estimate(pts, normals, k=max(k, 3), method=req.method, passes=passes,
+        res = core.estimate(pts, normals, k=max(k, 3), method=req.method, passes=passes, orientation=req.orientation,
                             progress=_sub(callback, 0.0, 0.05, "preview"), cache=self._sub_cache)
         fields = spread(compute_fields(res), sub)
         return EstimateOutput(gen=req.gen, request=req, points=points, result=res, fields=fields,

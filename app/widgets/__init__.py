@@ -12,6 +12,7 @@ from .glyph_controls import GlyphControls
 from .histogram import Histogram
 from .inspector import PointInspector
 from .method_combo import MethodCombo
+from .orientation_combo import OrientationCombo
 from .progress import EstimateProgress
 from .recent_menu import RecentFilesMenu
 from .shape_dialog import ShapeDialog
@@ -25,6 +26,7 @@ __all__ = [
     "Histogram",
     "KSlider",
     "MethodCombo",
+    "OrientationCombo",
     "PointInspector",
     "RecentFilesMenu",
     "ShapeDialog",

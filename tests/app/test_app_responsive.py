@@ -20,7 +20,7 @@ def test_request_is_built_from_the_state_keys():
     from app.state import ViewerState
 
     assert ESTIMATE_KEYS == {"source", "k", "k_auto", "method", "passes", "noise", "use_input_normals",
-                             "compare_method"}
+                             "compare_method", "orientation"}
     assert ESTIMATE_KEYS <= set(ViewerState.FIELDS)
     torus = make_shape("torus", 300)
     state = ViewerState(source=torus, k=22, k_auto=False, method="ct", noise=5.0)
