@@ -17,7 +17,7 @@ import numpy as np
 from . import io as cio
 from .io.formats import READ_FORMATS, WRITE_FORMATS, resolve_format
 from .tiled import cli as tiled_cli
-from .tiled.run import refuse_input_as_output
+from .io.atomic import refuse_input_as_output
 
 STDIO = "-"
 #: output name in a directory, when several inputs share one -o directory

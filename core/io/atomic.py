@@ -3,7 +3,8 @@
 A temporary file never outlives its write: it is removed when the block raises, and when
 the process gets SIGTERM during the write (the signal then does what it did before).
 Targets that are not regular files (``/dev/null``, a FIFO, a terminal) are written into
-directly, never replaced; a read-only target is refused, not silently replaced.
+directly, never replaced; a read-only target is refused, not silently replaced; an output
+that is one of the inputs is refused before any work (:func:`refuse_input_as_output`).
 """
 
 from __future__ import annotations
@@ -113,3 +114,25 @@ def _on_sigterm(signum, frame) -> None:
                 os.unlink(tmp)
         signal.signal(signal.SIGTERM, signal.SIG_DFL)
         os.kill(os.getpid(), signal.SIGTERM)
+
+
+def refuse_input_as_output(inputs, output) -> None:
+    """Raise ValueError when ``output`` is the same file as any of ``inputs`` (paths; "-" and
+    arrays are skipped): the same name, a symlink or a hard link to it. An output that does
+    not exist yet is a new file, never an input. Every output of the CLI and of
+    :func:`core.tiled.estimate_tiled` goes through this check before any work."""
+    if not isinstance(output, (str, os.PathLike)) or os.fspath(output) == "-":
+        return
+    for src in inputs:
+        if isinstance(src, (str, os.PathLike)) and os.fspath(src) != "-" and _same_file(src, output):
+            raise ValueError(f"output {os.fspath(output)!r} is the input file; choose another name")
+
+
+def _same_file(a, b) -> bool:
+    """Whether paths ``a`` and ``b`` name one file (by device and inode when both exist)."""
+    if not (os.path.lexists(a) and os.path.lexists(b)):
+        return False
+    try:
+        return os.path.samefile(a, b)
+    except OSError:  # a dangling link or an unreadable folder: compare the resolved paths
+        return os.path.realpath(a) == os.path.realpath(b)

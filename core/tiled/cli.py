@@ -12,7 +12,8 @@ import sys
 
 from .._memory import available_memory
 from ..io.las_stream import open_las
-from .run import bytes_per_point, estimate_tiled, parse_memory, refuse_input_as_output
+from ..io.atomic import refuse_input_as_output
+from .run import bytes_per_point, estimate_tiled, parse_memory
 
 _LAS = (".las", ".laz")
 #: bytes per point of an in-memory k="auto" estimate (1M points measured 1.3-1.6 GB)

@@ -14,6 +14,7 @@ import numpy as np
 from .._progress import Progress
 from .._validate import check_int
 from ..methods import check_options, get_method
+from ..io.atomic import refuse_input_as_output
 from ..tuning import DRIFT_POOL, DRIFT_SHARE, MAX_PASSES
 from . import assemble, binning, engine, signs
 from .source import open_source
@@ -250,31 +251,9 @@ def _estimate(store, plan, sizes, spec, tasks, report):
     return spec, PassView(store.root, kept, back), params
 
 
-def refuse_input_as_output(inputs, output) -> None:
-    """Raise ValueError when ``output`` is the same file as any of ``inputs`` (paths; "-" and
-    arrays are skipped): the same name, a symlink or a hard link to it. An output that does
-    not exist yet is a new file, never an input. Every output of the CLI and of
-    :func:`estimate_tiled` goes through this check before any work."""
-    if not isinstance(output, (str, os.PathLike)) or os.fspath(output) == "-":
-        return
-    for src in inputs:
-        if isinstance(src, (str, os.PathLike)) and os.fspath(src) != "-" and _same_file(src, output):
-            raise ValueError(f"output {os.fspath(output)!r} is the input file; choose another name")
-
-
-def _same_file(a, b) -> bool:
-    """Whether paths ``a`` and ``b`` name one file (by device and inode when both exist)."""
-    if not (os.path.lexists(a) and os.path.lexists(b)):
-        return False
-    try:
-        return os.path.samefile(a, b)
-    except OSError:  # a dangling link or an unreadable folder: compare the resolved paths
-        return os.path.realpath(a) == os.path.realpath(b)
-
-
 def _output(output) -> pathlib.Path:
     """The output path, checked before any work: in an existing folder (and not the input:
-    :func:`refuse_input_as_output`)."""
+    :func:`core.io.atomic.refuse_input_as_output`)."""
     output = pathlib.Path(os.fspath(output))
     if not output.parent.is_dir():
         raise ValueError(f"output {output}: the folder {output.parent} does not exist")

@@ -12,7 +12,8 @@ import pytest
 
 import core
 from core.cli import main
-from core.tiled.run import estimate_tiled, refuse_input_as_output
+from core.io.atomic import refuse_input_as_output
+from core.tiled.run import estimate_tiled
 
 laspy = pytest.importorskip("laspy")
 
