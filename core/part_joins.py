@@ -26,6 +26,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .kernels import sign_evidence as kern
+from .kernels.union_find import find_signed, join_signed, signed_forest
 from .tuning import VOTE_SIZE
 
 #: points of each part that stand for it when the parts' distances are measured (evenly
@@ -59,18 +60,20 @@ def join_parts(points, normals, labels, spread, rank, gate):
     parts, samples = _samples(labels, rank, n_parts)
     if len(parts) < 2:
         return group, parity
-    dist, near = _distances(points, samples)
-    offers = _offers(points, normals, (spread, gate), samples, dist, near)
-    parent, par = list(range(len(parts))), [0] * len(parts)
+    every = np.concatenate(samples)
+    start = np.concatenate([[0], np.cumsum([len(s) for s in samples])])
+    dist, near = _distances(points, samples, every)
+    offers = _offers(points, normals, (spread, gate), (every, start), dist, near)
+    link = signed_forest(len(parts))  # the spanning forest's parity union-find
     for strength, a, b in sorted(offers, key=lambda o: (-abs(o[0]), o[1], o[2])):
-        ra, pa = _find(parent, par, a)
-        rb, pb = _find(parent, par, b)
+        ra, pa = find_signed(link, a)
+        rb, pb = find_signed(link, b)
         if ra != rb and abs(strength) >= JOIN_EVIDENCE:
-            lo, hi = min(ra, rb), max(ra, rb)
-            parent[hi], par[hi] = lo, pa ^ pb ^ int(strength < 0)
-    for x, part in enumerate(parts):
-        r, p = _find(parent, par, x)
-        group[part], parity[part] = parts[r], -1.0 if p else 1.0
+            join_signed(link, ra, rb, pa ^ pb ^ int(strength < 0))
+    root, flip = np.array([find_signed(link, x) for x in range(len(parts))]).T
+    lowest = np.full(len(parts), len(parts))
+    np.minimum.at(lowest, root, np.arange(len(parts)))  # each group's lowest part names it
+    group[parts], parity[parts] = parts[lowest[root]], np.where(flip ^ flip[lowest[root]], -1.0, 1.0)
     return group, parity
 
 
@@ -96,11 +99,10 @@ def _samples(labels, rank, n_parts):
     return parts, samples
 
 
-def _distances(points, samples):
+def _distances(points, samples, every):
     """Each sample's distance to every part's nearest sample, and which one that is:
-    ``dist[a, s]``, ``near[a, s]`` (a row of ``points``) for part a and sample s of all
-    parts' samples, end to end."""
-    every = np.concatenate(samples)
+    ``dist[a, s]``, ``near[a, s]`` (a row of ``points``) for part a and sample s of
+    ``every``, all parts' samples end to end."""
     dist, near = np.empty((len(samples), len(every))), np.empty((len(samples), len(every)), dtype=np.int64)
     for a, rows in enumerate(samples):
         d, j = cKDTree(points[rows]).query(points[every], k=1)
@@ -108,12 +110,12 @@ def _distances(points, samples):
     return dist, near
 
 
-def _offers(points, normals, noise, samples, dist, near):
+def _offers(points, normals, noise, ends, dist, near):
     """(mean evidence, a, b) for each part b and each of its JOIN_NEAREST nearest parts a:
-    the evidence on the chords of the JOIN_PAIRS closest sample pairs seen from each side."""
-    n = len(samples)
-    start = np.concatenate([[0], np.cumsum([len(s) for s in samples])])
-    every = np.concatenate(samples)
+    the evidence on the chords of the JOIN_PAIRS closest sample pairs seen from each side.
+    ``ends`` = (all parts' samples end to end, where each part's start)."""
+    every, start = ends
+    n = len(start) - 1
     gap = np.minimum.reduceat(dist, start[:-1], axis=1)  # gap[a, b]: b's samples to a's nearest
     gap = np.minimum(gap, gap.T)
     np.fill_diagonal(gap, np.inf)
@@ -144,12 +146,3 @@ def _chord_evidence(points, normals, noise, ends):
     kern.sign_evidence(points[rows], normals[rows], spread[rows], np.empty(0), idx, np.ones(m, dtype=np.bool_),
                        gate, out, np.empty((0, 0), dtype=np.bool_), np.arange(m), False)
     return out[0::2, 1]
-
-
-def _find(parent, par, x):
-    """Root of x and its parity relative to the root (a few dozen parts: no compression)."""
-    p = 0
-    while parent[x] != x:
-        p ^= par[x]
-        x = parent[x]
-    return x, p
