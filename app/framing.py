@@ -22,6 +22,8 @@ FIT_PAD = 0.04
 #: Top of the colour bar: position_y + height in the scene (0.03 + 0.075 of the view),
 #: its height capped at the bar's SetMaximumHeightInPixels (90 px).
 BAR_BOTTOM, BAR_HEIGHT, BAR_MAX_PX = 0.03, 0.075, 90.0
+#: Left edge and width of the colour bar, viewport fractions (the glyph legend keeps clear of it).
+BAR_LEFT, BAR_WIDTH = 0.25, 0.5
 #: Sprite diameter over the point spacing on screen. The spacing is the mean distance to
 #: the 3rd nearest neighbour, about 1 / sqrt(density) for a grid (1.0) and for a random
 #: sampling (0.94) alike, whereas the nearest-neighbour distance is 1.0 vs 0.5. Discs of

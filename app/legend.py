@@ -8,20 +8,21 @@ drawn over the bar or its tick labels (saved figures carry it).
 from __future__ import annotations
 
 from . import glyphs
-from .framing import BAR_BOTTOM, BAR_HEIGHT, BAR_MAX_PX
+from .framing import BAR_BOTTOM, BAR_HEIGHT, BAR_LEFT, BAR_MAX_PX
 
 __all__ = ["update_legend", "place_legend", "KINDS"]
 
 #: Glyph kinds, bottom row first.
 KINDS = ("normals", "e2", "e1")
-#: Left edge of the legend and of the colour bar (CloudScene._add_bar), viewport fractions.
-LEFT, BAR_LEFT = 0.012, 0.25
+#: Left edge of the legend, a viewport fraction.
+LEFT = 0.012
 #: Pixels: a row, the room the bar's title takes above it, half a tick label left of the bar.
 ROW_PX, TITLE_PX, TICK_PX = 20.0, 26.0, 30.0
 
 
-def update_legend(plotter, shown, colours: dict) -> None:
-    """A row for each glyph kind in ``shown`` (colours: kind -> colour), then place them."""
+def update_legend(plotter, shown, colours: dict) -> tuple | None:
+    """A row for each glyph kind in ``shown`` (colours: kind -> colour), then place them
+    (:func:`place_legend`; its window size is returned)."""
     labels = dict(zip(("e1", "e2", "normals"), (text for text, _ in glyphs.LEGEND)))
     for kind in KINDS:
         name = f"glyph-legend-{kind}"
@@ -32,7 +33,7 @@ def update_legend(plotter, shown, colours: dict) -> None:
                                  color=colours[kind], name=name, render=False)
         actor.prop.font_size = 13
         actor.prop.bold = True
-    place_legend(plotter)
+    return place_legend(plotter)
 
 
 def place_legend(plotter) -> tuple | None:

@@ -168,8 +168,9 @@ class CloudScene(Picking):
         if self._bar is not None:
             return
         self._bar = self.plotter.add_scalar_bar(
-            title=self._bar_title or " ", lookup_table=self._lut, vertical=False, position_x=0.25,
-            position_y=0.03, width=0.5, height=0.075, title_font_size=14, label_font_size=12, n_labels=3,
+            title=self._bar_title or " ", lookup_table=self._lut, vertical=False,
+            position_x=framing.BAR_LEFT, position_y=framing.BAR_BOTTOM, width=framing.BAR_WIDTH,
+            height=framing.BAR_HEIGHT, title_font_size=14, label_font_size=12, n_labels=3,
             fmt="%.3g", color=self.theme.text, render=False,
         )
         self._bar.SetMaximumHeightInPixels(90)
