@@ -38,7 +38,7 @@ from .state import ViewerState
 from .status import WindowStatus
 from .teach import install_teach
 from .theme import current_theme
-from .widgets import CompareView, EstimateProgress
+from .widgets import CompareView, ElidedLabel, EstimateProgress
 from .worker import EstimateOutput
 
 __all__ = ["MainWindow", "DEBOUNCE_MS"]
@@ -136,12 +136,11 @@ class MainWindow(WindowActions, WindowStatus, QMainWindow):
 
     def _build_status(self) -> None:
         bar = self.statusBar()
-        self.status_label = QLabel("No cloud")
-        self.summary_label = QLabel("")
+        self.status_label = ElidedLabel("No cloud")
+        self.summary_label = ElidedLabel("")
         self.summary_label.setStyleSheet("color: #5a3d8a;")
-        self.progress = EstimateProgress()
+        self.progress = EstimateProgress(idle=self.summary_label)  # the summary while idle, the progress while busy
         bar.addWidget(self.status_label, 1)
-        bar.addPermanentWidget(self.summary_label)
         bar.addPermanentWidget(self.progress)
 
     def _connect(self) -> None:
@@ -242,6 +241,7 @@ class MainWindow(WindowActions, WindowStatus, QMainWindow):
         elif self.compare is not None and self.compare.isVisible():
             self.compare.hide()
             self.presenter.compare_scene = None
+            self.scene.linked = []
         self.presenter.show(out)
         self._clear_message(out.gen)
         self._show_status()
@@ -269,6 +269,7 @@ class MainWindow(WindowActions, WindowStatus, QMainWindow):
             self.splitter.addWidget(self.compare)
             self.compare.link_to(self.plotter)
         self.presenter.compare_scene = self.compare.scene
+        self.scene.linked = [self.compare.plotter]  # fits frame the narrower of the two views
         if not self.compare.isVisible():
             self.compare.show()
             half = max(self.splitter.width() // 2, 200)

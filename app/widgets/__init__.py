@@ -7,6 +7,7 @@ blocked, so a state change never echoes back as a user action.
 
 from .check_box import StateCheckBox
 from .compare_view import CompareView
+from .elided_label import ElidedLabel
 from .field_panel import FieldPanel
 from .glyph_controls import GlyphControls
 from .histogram import Histogram
@@ -20,6 +21,7 @@ from .state_slider import KSlider, StateSlider, k_slider, noise_slider, passes_s
 
 __all__ = [
     "CompareView",
+    "ElidedLabel",
     "EstimateProgress",
     "FieldPanel",
     "GlyphControls",

@@ -3,21 +3,23 @@
 from __future__ import annotations
 
 from PySide6.QtCore import Signal
-from PySide6.QtWidgets import QHBoxLayout, QLabel, QProgressBar, QToolButton, QWidget
+from PySide6.QtWidgets import QHBoxLayout, QLabel, QProgressBar, QStackedLayout, QToolButton, QWidget
 
 
 class EstimateProgress(QWidget):
-    """Blank while idle. Emits :attr:`cancel_requested` when Cancel is clicked.
+    """Shows ``idle`` (blank by default: the window puts the result's summary there) while
+    idle. Emits :attr:`cancel_requested` when Cancel is clicked.
 
-    The widget itself always stays visible at a fixed size and only its contents
-    (:attr:`inner`) are shown and hidden: showing or hiding a status-bar widget
-    re-lays out the main window, which repaints the 3D view, and every repaint
-    re-renders the whole cloud (0.25-0.8 s for the bunny with llvmpipe).
+    The widget itself always stays visible at a fixed size and only its pages (:attr:`inner`
+    or ``idle``) are switched: showing or hiding a status-bar widget re-lays out the main
+    window, which repaints the 3D view, and every repaint re-renders the whole cloud
+    (0.25-0.8 s for the bunny with llvmpipe). One slot for both, not two side by side: a
+    900 px window had no room left for the status line.
     """
 
     cancel_requested = Signal()
 
-    def __init__(self, parent=None):
+    def __init__(self, parent=None, idle: QWidget | None = None):
         super().__init__(parent)
         self.inner = QWidget(self)
         self.stage = QLabel()
@@ -35,19 +37,21 @@ class EstimateProgress(QWidget):
         layout.addWidget(self.stage)
         layout.addWidget(self.bar)
         layout.addWidget(self.cancel)
-        outer = QHBoxLayout(self)
-        outer.setContentsMargins(0, 0, 0, 0)
-        outer.addWidget(self.inner)
-        policy = self.inner.sizePolicy()
-        policy.setRetainSizeWhenHidden(True)
-        self.inner.setSizePolicy(policy)
-        self.setFixedSize(self.sizeHint())
-        self.inner.setVisible(False)
+        self.idle = idle if idle is not None else QWidget()
+        self._pages = QStackedLayout(self)
+        self._pages.setContentsMargins(0, 0, 0, 0)
+        self._pages.addWidget(self.idle)
+        self._pages.addWidget(self.inner)
+        self.setFixedSize(self.inner.sizeHint())
+        self._show(False)
+
+    def _show(self, busy: bool) -> None:
+        self._pages.setCurrentWidget(self.inner if busy else self.idle)
 
     @property
     def shown(self) -> bool:
         """Whether the progress (and Cancel) is on screen."""
-        return self.inner.isVisibleTo(self)
+        return self._pages.currentWidget() is self.inner
 
     def set_busy(self, busy) -> None:
         busy = bool(busy)
@@ -55,7 +59,7 @@ class EstimateProgress(QWidget):
             self.bar.setRange(0, 1000)
             self.bar.setValue(0)
             self.stage.setText("working…")
-        self.inner.setVisible(busy)
+        self._show(busy)
 
     def set_progress(self, fraction: float, stage: str) -> None:
         """Show ``stage``; a negative ``fraction`` means "no measure" (reading a file,
@@ -66,6 +70,6 @@ class EstimateProgress(QWidget):
             self.bar.setValue(int(round(1000 * min(fraction, 1.0))))
         else:
             self.bar.setRange(0, 0)
-            self.inner.setVisible(True)
+            self._show(True)
         if stage != self.stage.text():  # each repaint composes the whole window (app/worker.py)
             self.stage.setText(stage)

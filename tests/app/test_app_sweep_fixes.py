@@ -268,3 +268,36 @@ def test_switching_to_the_log_field_gives_no_vtk_warning(make_window, qtbot, tor
         window.scene.render()
     assert not [e for e in catcher.events if "log scale" in str(e)]
     assert window.scene._lut.log_scale
+
+
+def test_the_compare_view_shows_the_whole_cloud(make_window, qtbot):
+    """The two views share one camera; the splitter leaves them different widths, and a fit
+    computed in the wider one cut the cloud off in the narrower (13 % of a torus outside it)."""
+    from app import framing
+
+    window = make_window(make_shape("torus", 3000), size=(1200, 800))
+    with wait_result(qtbot, window, 30_000):
+        window.compare_combo.setCurrentIndex(window.compare_combo.findData("ct"))
+    qtbot.wait(300)  # the refit after the layout (a 0 ms timer)
+    window.plotter.render()
+    window.compare.plotter.render()
+    widths = []
+    for plotter in (window.plotter, window.compare.plotter):
+        x, y, _ = framing.projection(plotter.renderer, window.output.points)
+        width, height = plotter.render_window.GetSize()
+        widths.append(width)
+        assert np.mean((x < 0) | (x >= width) | (y < 0) | (y >= height)) == 0.0
+    assert widths[0] != widths[1]  # the case that failed: views of different widths
+
+
+def test_a_long_status_line_ends_in_an_ellipsis_with_the_whole_line_as_tooltip(make_window, qtbot, torus):
+    """At 900 px the status line was cut off mid-word, before the reason; it also must not
+    widen the window."""
+    window = make_window(torus, size=(900, 700))
+    label = window.status_label
+    label.setText(label.text() + " · " + "a long reason that does not fit in the status bar " * 4)
+    qtbot.wait(50)
+    shown = label.elided()
+    assert shown.endswith("…") and len(shown) < len(label.text()), (shown, label.width())
+    assert label.toolTip() == label.text()
+    assert window.width() <= 900
