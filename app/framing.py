@@ -99,6 +99,16 @@ def free_region(renderer, inset: float = 0.0) -> tuple[float, float, float, floa
     return x0 + pad_x, bar_top + pad_y, x0 + w - pad_x, top - pad_y
 
 
+def narrowest(renderers):
+    """Of renderers sharing one camera, the one whose free region is narrowest for its
+    height: a cloud framed there fits in the others, centred too (every free region is)."""
+    def aspect(renderer):
+        x0, y0, x1, y1 = free_region(renderer)
+        return (x1 - x0) / max(y1 - y0, 1.0)
+
+    return min(renderers, key=aspect)
+
+
 def fit_to_region(renderer, sample: np.ndarray, region=None, steps: int = 4) -> None:
     """Dolly and pan the camera so the projected ``sample`` fills ``region`` (display px).
 

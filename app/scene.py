@@ -342,7 +342,7 @@ class CloudScene(Picking):
         """Fill the view above the colour bar with the cloud's projection (app/framing.py)."""
         if self.points is None or not len(self.geometry.fit_index):  # (no drawable point)
             return
-        renderer = self._framing_renderer()
+        renderer = framing.narrowest([self.plotter.renderer] + [p.renderer for p in self.linked if p.isVisible()])
         sample = self.points[self.geometry.fit_index]
         framing.fit_to_region(renderer, sample)
         # the sprites' size depends on the fit: fit again with half a sprite of room
@@ -351,17 +351,6 @@ class CloudScene(Picking):
         self._fit_sprite = framing.sprite_size(renderer, sample.mean(axis=0), self._sprite_spacing, framing.DEFAULT_SIZE)
         window = self.plotter.renderer.GetRenderWindow()
         self._fit_pending = (tuple(window.GetSize()), _camera_state(renderer)) if window is not None else None
-
-    def _framing_renderer(self):
-        """The renderer a fit is computed in: of this view and the visible views sharing its
-        camera, the one whose free region is narrowest for its height (one camera: a cloud
-        framed there fits in the others, centred too, since every free region is centred)."""
-        def aspect(plotter):
-            x0, y0, x1, y1 = framing.free_region(plotter.renderer)
-            return (x1 - x0) / max(y1 - y0, 1.0)
-
-        views = [self.plotter] + [p for p in self.linked if p.isVisible()]
-        return min(views, key=aspect).renderer
 
     def reset_camera(self, view: str = "front"):
         """Frame the cloud.
