@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ._progress import Progress
 from ._validate import check_choice
 from .point_types import curvature_scale
 
@@ -89,7 +90,7 @@ class _Field:
         return x + np.einsum("lk,lkj->lj", w * (target - h), n)
 
 
-def _trace(field, seeds, start_dirs, h, max_steps):
+def _trace(field, seeds, start_dirs, h, max_steps, report):
     """Advance all lines together; returns a list of (m, 3) polylines.
 
     A line that comes back past its seed (its distance to the seed stops falling within
@@ -105,6 +106,7 @@ def _trace(field, seeds, start_dirs, h, max_steps):
         rows = np.flatnonzero(active)
         if len(rows) == 0:
             break
+        report(step / max_steps, "lines of curvature")
         d1, ok1 = field.sample(x[rows], ref[rows])
         d2, ok2 = field.sample(x[rows] + 0.5 * h * d1, d1)
         new = field.project(x[rows] + h * d2)
@@ -136,7 +138,7 @@ def seed_points(points, spacing: float, separation: float, *, seed: int = 0) -> 
 
 
 def curvature_lines(res, *, direction: str = "e1", seeds=None, separation: float = SEED_SPACING,
-                    step: float = STEP, max_length: float | None = None) -> list:
+                    step: float = STEP, max_length: float | None = None, progress=None) -> list:
     """Lines of curvature of a :class:`core.CurvatureResult`, traced through e1 or e2.
 
     Parameters
@@ -148,6 +150,8 @@ def curvature_lines(res, *, direction: str = "e1", seeds=None, separation: float
     separation : float > 0, seed separation in mean spacings.
     step : float in (0, 2], step length in mean spacings.
     max_length : float, the longest line (default 3 x the bounding-box diagonal).
+    progress : callable(fraction, stage) -> None | False, optional, called every step;
+        returning False cancels (:class:`core.Cancelled`), as in :func:`core.estimate`.
 
     Returns
     -------
@@ -182,22 +186,24 @@ def curvature_lines(res, *, direction: str = "e1", seeds=None, separation: float
         x0 = res.points[seeds]
     d0, _ = field.sample(x0, np.tile([1.0, 0.3, 0.1], (len(x0), 1)))
     steps = int(np.ceil(max_length / h))
-    fwd, looped = _trace(field, x0, d0, h, steps)
+    report = Progress(progress)
+    fwd, looped = _trace(field, x0, d0, h, steps, report.sub(0.0, 0.5))
     lines = [f for f, loop in zip(fwd, looped) if loop]
     open_ = np.flatnonzero(~looped)
-    back, _ = _trace(field, x0[open_], -d0[open_], h, steps)
+    back, _ = _trace(field, x0[open_], -d0[open_], h, steps, report.sub(0.5, 1.0))
     for i, b in zip(open_, back):
         line = np.concatenate([b[::-1], fwd[i][1:]])
         if len(line) > 1:
             lines.append(line)
-    return _thin(lines, 0.5 * separation * field.spacing)
+    return _thin(lines, 0.5 * separation * field.spacing, report)
 
 
-def _thin(lines, gap):
+def _thin(lines, gap, report):
     """Keep lines longest first, dropping one whose points lie mostly (over half) within
     ``gap`` of the lines kept (seeds along one line of curvature trace it again)."""
     kept, tree = [], None
     for line in sorted(lines, key=len, reverse=True):
+        report(1.0, "lines of curvature")
         if tree is not None and np.mean(tree.query(line, k=1)[0] < gap) > 0.5:
             continue
         kept.append(line)

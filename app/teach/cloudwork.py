@@ -17,6 +17,8 @@ from scipy.spatial import cKDTree
 import core
 from core.curvature_lines import SEED_SPACING
 
+from ..estimator import SHUTDOWN_WAIT_S
+
 __all__ = ["CloudMaths", "cloud_maths", "CloudMathsWorker"]
 
 #: lines of curvature are lifted off the surface by this many spacings, so that the point
@@ -55,20 +57,21 @@ def _lift(lines, res, spacing):
 LINE_SEEDS = 200
 
 
-def cloud_maths(res, *, separation: float | None = None) -> CloudMaths:
+def cloud_maths(res, *, separation: float | None = None, progress=None) -> CloudMaths:
     """Point types, lines of curvature (both families) and Gauss-Bonnet of one result (any
-    thread). ``separation``: seed separation in spacings (default: about LINE_SEEDS seeds)."""
+    thread). ``separation``: seed separation in spacings (default: about LINE_SEEDS seeds);
+    ``progress``: :func:`core.curvature_lines`'s (returning False cancels the tracing)."""
     if separation is None:
         separation = max(SEED_SPACING, float(np.sqrt(len(res.points) / LINE_SEEDS)))
     scale = core.curvature_scale(res)
     types = core.point_types(res, scale=scale)
-    gb = core.gauss_bonnet(res)
+    gb = core.gauss_bonnet(res, progress=progress)
     d, _ = cKDTree(res.points).query(res.points[:: max(1, len(res.points) // 2000)], k=2)
     spacing = float(np.mean(d[:, 1])) or 1.0
     lines = {}
     for direction in ("e1", "e2"):
         try:
-            traced = core.curvature_lines(res, direction=direction, separation=separation)
+            traced = core.curvature_lines(res, direction=direction, separation=separation, progress=progress)
         except ValueError:  # no valid point
             traced = []
         lines[direction] = _lift(traced, res, spacing)
@@ -76,7 +79,7 @@ def cloud_maths(res, *, separation: float | None = None) -> CloudMaths:
 
 
 class CloudMathsWorker(QObject):
-    """One job at a time on a Python thread; :meth:`shutdown` joins it (GUI thread API).
+    """One job at a time on a Python thread; :meth:`shutdown` stops it (GUI thread API).
 
     Signals
     -------
@@ -93,6 +96,7 @@ class CloudMathsWorker(QObject):
         self._thread: threading.Thread | None = None
         self._pending = None
         self._lock = threading.Lock()
+        self._closed = False
 
     def submit(self, res) -> int:
         """Compute for ``res``; a newer submit supersedes a pending one (GUI thread)."""
@@ -112,19 +116,48 @@ class CloudMathsWorker(QObject):
                     return
             gen, res = job
             try:
-                maths = cloud_maths(res)
-            except Exception as exc:  # noqa: BLE001 - reported to the GUI
-                self.failed.emit(gen, f"{type(exc).__name__}: {exc}")
+                maths = cloud_maths(res, progress=lambda _f, _s, g=gen: not self._stale(g))
+            except core.Cancelled:  # closed, or a newer result came: its job follows
                 continue
-            self.done.emit(gen, maths)
+            except Exception as exc:  # noqa: BLE001 - reported to the GUI
+                self._emit(self.failed, gen, f"{type(exc).__name__}: {exc}")
+                continue
+            self._emit(self.done, gen, maths)
+
+    def _stale(self, gen: int) -> bool:
+        """The job ``gen`` is no longer wanted: shut down, or a newer one is waiting."""
+        with self._lock:
+            return self._closed or (self._pending is not None and self._pending[0] != gen)
+
+    def _emit(self, signal, *args) -> None:
+        """Deliver unless shut down (the window may be gone: its signals with it)."""
+        with self._lock:
+            if self._closed:
+                return
+        try:
+            signal.emit(*args)
+        except RuntimeError:  # the QObject was deleted after the check
+            pass
 
     def busy(self) -> bool:
         return self._thread is not None and self._thread.is_alive()
 
-    def shutdown(self) -> None:
-        """Drop pending work and wait for the running job (GUI thread)."""
+    def shutdown(self, timeout: float = SHUTDOWN_WAIT_S) -> bool:
+        """Drop pending work, disconnect, and wait up to ``timeout`` s for the running job
+        (GUI thread): the lines of curvature of a 1M-point cloud take minutes and cannot be
+        interrupted, and closing the window waited for them. A job still running after
+        ``timeout`` finishes on its daemon thread and is dropped. True if it had stopped."""
         with self._lock:
             self._pending = None
+            self._closed = True
+        for signal in (self.done, self.failed):
+            try:
+                signal.disconnect()
+            except (RuntimeError, TypeError):  # nothing connected
+                pass
         if self._thread is not None:
-            self._thread.join()
+            self._thread.join(timeout)
+            if self._thread.is_alive():
+                return False
             self._thread = None
+        return True

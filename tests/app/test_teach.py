@@ -119,3 +119,21 @@ def test_teach_settings_refuse_bad_values():
         s.set(colour="red")
     s.set(theta=200)
     assert s.theta == 20.0
+
+
+def test_closing_while_the_cloud_maths_run_returns_at_once(make_window, qtbot):
+    """Closing waited for the lines of curvature of the whole cloud (59 s at 200k points):
+    the job is now told to stop, and close returns within the estimate's own wait."""
+    import time
+
+    from app.source import make_shape
+
+    window = make_window(make_shape("torus", 100_000), k_auto=False, k=15)
+    window.teach.configure(enabled=True)
+    worker = window.teach.controller.worker
+    qtbot.waitUntil(worker.busy, timeout=10_000)
+    thread = worker._thread
+    t = time.perf_counter()
+    window.close()
+    assert time.perf_counter() - t < 2.0
+    qtbot.waitUntil(lambda: not thread.is_alive(), timeout=10_000)  # it stops at its next check
