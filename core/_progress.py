@@ -24,7 +24,8 @@ class Progress:
     def __call__(self, fraction: float, stage: str) -> None:
         if self._callback is None:
             return
-        if self._callback(self._start + self._span * min(max(fraction, 0.0), 1.0), stage) is False:
+        answer = self._callback(self._start + self._span * min(max(fraction, 0.0), 1.0), stage)
+        if answer is not None and not answer:  # False, and numpy's False_ or a 0 alike
             raise Cancelled(f"cancelled during {stage}")
 
     def sub(self, start: float, stop: float) -> "Progress":

@@ -12,7 +12,7 @@ def as_points(points, *, name: str = "points", drop_nonfinite: bool = False):
     (all True unless ``drop_nonfinite`` dropped rows with NaN/inf).
     """
     try:
-        arr = np.asarray(points)
+        arr = masked_as_nan(points)
     except ValueError as exc:  # ragged nested sequences
         raise ValueError(f"{name} must be an array of shape (N, 3): {exc}") from None
     if not (np.issubdtype(arr.dtype, np.integer) or np.issubdtype(arr.dtype, np.floating)):
@@ -25,7 +25,7 @@ def as_points(points, *, name: str = "points", drop_nonfinite: bool = False):
         bad = int((~finite).sum())
         if not drop_nonfinite:
             raise ValueError(
-                f"{name} contains {bad} row(s) with NaN or inf (first at row "
+                f"{name} contains {bad} row(s) with NaN or inf{_MASKED * _is_masked(points)} (first at row "
                 f"{int(np.flatnonzero(~finite)[0])}); clean them or pass drop_nonfinite=True"
             )
         arr = arr[finite]
@@ -38,7 +38,7 @@ def as_normals(normals, n_points: int, *, name: str = "normals", repair: bool = 
     With ``repair`` only the dtype and shape are checked and a float64 copy is returned
     as it is: :mod:`core.normal_repair` then fixes the unusable rows one by one.
     """
-    arr = np.asarray(normals)
+    arr = masked_as_nan(normals)
     if not (np.issubdtype(arr.dtype, np.integer) or np.issubdtype(arr.dtype, np.floating)):
         raise ValueError(f"{name} must be a numeric array (real) of shape ({n_points}, 3), got dtype {arr.dtype}")
     if arr.shape != (n_points, 3):
@@ -47,7 +47,7 @@ def as_normals(normals, n_points: int, *, name: str = "normals", repair: bool = 
     if repair:
         return arr
     if not np.isfinite(arr).all():
-        raise ValueError(f"{name} contains NaN or inf values")
+        raise ValueError(f"{name} contains NaN or inf values{_MASKED * _is_masked(normals)}")
     unit, length = unit_rows(arr)
     tiny = length < 1e-12
     if tiny.any():
@@ -56,6 +56,25 @@ def as_normals(normals, n_points: int, *, name: str = "normals", repair: bool = 
             "pass normals=None to estimate them"
         )
     return unit
+
+
+_MASKED = " (masked entries count as NaN)"
+
+
+def _is_masked(a) -> bool:
+    return isinstance(a, np.ma.MaskedArray)
+
+
+def masked_as_nan(a) -> np.ndarray:
+    """``a`` as an array, a masked array's masked entries NaN (``np.asarray`` would keep the
+    values under the mask, and a masked row would be used as a good one)."""
+    if isinstance(a, np.ma.MaskedArray):
+        if np.ma.getmask(a) is np.ma.nomask or not np.ma.getmaskarray(a).any():
+            return np.asarray(a.data)
+        if not (np.issubdtype(a.dtype, np.integer) or np.issubdtype(a.dtype, np.floating)):
+            return np.asarray(a.data)  # refused as not numeric by the caller
+        return np.ma.filled(a.astype(np.float64), np.nan)
+    return np.asarray(a)
 
 
 def unit_rows(arr):

@@ -13,7 +13,7 @@ import numpy as np
 
 from . import degenerate, interop, stage_cache
 from ._progress import Progress
-from ._validate import as_normals, as_points
+from ._validate import as_normals, as_points, masked_as_nan
 from .duplicates import CopiesNeighbours, Merged, NearCopies, expand, find_duplicates, near_copies
 from .planning import EstimatePlan
 from .result import CurvatureResult
@@ -85,8 +85,8 @@ def estimate(
     options : dict, optional, method options (see ``core.METHODS[name].options``).
     drop_nonfinite : bool. If True rows with NaN/inf are dropped (and counted in
         ``params["dropped"]``) instead of raising.
-    progress : callable(fraction, stage) -> None | False, optional. Returning False
-        cancels: :class:`core.Cancelled` is raised.
+    progress : callable(fraction, stage) -> None | False, optional. Returning False (or
+        any false value but None: numpy's False_, 0) cancels: :class:`core.Cancelled` is raised.
     plan : :class:`core.EstimatePlan`, optional, from :func:`core.plan` for these points
         (after dropping non-finite rows), instead of ``k``, ``method``, ``passes``,
         ``tol``, ``initial``, ``orientation`` and ``options`` (leave those at their
@@ -151,7 +151,7 @@ def _given_rows(normals, kept) -> np.ndarray:
     shape = np.shape(normals)
     if shape != (len(kept), 3):
         raise ValueError(f"normals must have shape ({len(kept)}, 3) to match points, got shape {shape}")
-    return np.asarray(normals)[kept]
+    return masked_as_nan(normals)[kept]
 
 
 def _on_distinct(merged: Merged, pts, kept, normals, asked, *, plan, neighbours, progress, cache) -> CurvatureResult:
@@ -164,7 +164,7 @@ def _on_distinct(merged: Merged, pts, kept, normals, asked, *, plan, neighbours,
     m, extra = len(merged.first), {"duplicates": merged.copies, "dropped": int(np.count_nonzero(~kept))}
     # m >= 3: one or two places are caught before, as identical or collinear points
     given = None if normals is None else _given_rows(normals, kept)[merged.first]
-    if isinstance(asked["k"], int) and asked["k"] > m:
+    if isinstance(asked["k"], (int, np.integer)) and not isinstance(asked["k"], (bool, np.bool_)) and asked["k"] > m:
         raise ValueError(f"k={asked['k']} exceeds the {m} distinct positions of the cloud ({merged.copies} of its "
                          f"{len(pts)} points are copies of others)")
     given_plan, plan = plan, _plan(plan, len(pts), asked, normals is not None)  # the caller's count's candidates, as tiles

@@ -71,9 +71,9 @@ class PassRule:
         if self.plan.adaptive and self.last is not None and change > PASS_DECAY * self.last:
             return False, False
         self.last = change
-        more = p + 1 < self.n_fits and not self.converged
-        self.converged = self.plan.tol is not None and change < self.plan.tol
-        return True, more
+        # converged: a refinement pass (not the first fit, which replaces the initial normals) moved less than tol
+        self.converged = self.plan.tol is not None and p >= 1 and change < self.plan.tol
+        return True, p + 1 < self.n_fits and not self.converged
 
 
 def few_fits(share: float, plan) -> bool:

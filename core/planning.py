@@ -150,10 +150,10 @@ def _auto_defaults(m, n, opts, given, passes):
 
 
 def _tol(tol):
-    if tol is not None and not (isinstance(tol, (int, float)) and not isinstance(tol, bool)
-                                and np.isfinite(tol) and tol > 0):
+    if tol is not None and not (isinstance(tol, (int, float, np.integer, np.floating))
+                                and not isinstance(tol, (bool, np.bool_)) and np.isfinite(tol) and tol > 0):
         raise ValueError(f"tol must be a positive number of degrees or None, got {tol!r}")
-    return tol
+    return None if tol is None else float(tol)
 
 
 def _initial(initial, auto):

@@ -66,7 +66,8 @@ def point_types(res, *, zero: float = ZERO, equal: float = EQUAL, scale: float |
     True
     """
     for name, value in (("zero", zero), ("equal", equal)):
-        if not (isinstance(value, (int, float)) and 0 < value < 1):
+        if not (isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
+                and 0 < value < 1):
             raise ValueError(f"{name}={value!r} is invalid; must be a number in (0, 1)")
     if scale is None:
         scale = curvature_scale(res)
