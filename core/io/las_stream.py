@@ -130,6 +130,37 @@ def quantisation(lo, hi):
     return np.full(3, scale), np.floor(np.asarray(lo, float) / scale) * scale
 
 
+#: LAS 1.4 point formats by the colour fields they hold (RGB: 7, RGB and NIR: 8)
+_FORMATS = ((("red", "nir"), 8), (("red",), 7), ((), 6))
+#: LAS 1.0-1.3's whole-degree scan angle and the 1.4 formats' 0.006-degree steps
+_SCAN_ANGLE_STEPS = 1.0 / 0.006
+
+
+def carried_layout(like):
+    """``(point format, [(output field, input field, factor)], [(extra field, type)])``: what
+    a result written for an input with the laspy header ``like`` (or None) carries over. The
+    output is LAS 1.4 format 6, 7 with colours, 8 with near infrared; every standard field
+    of it the input has (a 1.0-1.3 ``scan_angle_rank`` as ``scan_angle``), and every
+    extra-bytes field of the input whose name the result does not write."""
+    import laspy
+
+    if like is None:
+        return 6, [], []
+    have = set(like.point_format.dimension_names)
+    fmt = next(f for need, f in _FORMATS if all(n in have for n in need))
+    standard = []
+    for name in laspy.PointFormat(fmt).dimension_names:
+        if name in ("X", "Y", "Z"):
+            continue
+        if name in have:
+            standard.append((name, name, 1))
+        elif name == "scan_angle" and "scan_angle_rank" in have:
+            standard.append((name, "scan_angle_rank", _SCAN_ANGLE_STEPS))
+    extra = [(d.name, d.dtype) for d in like.point_format.extra_dimensions
+             if d.name not in RESULT_DIMS and d.num_elements == 1]
+    return fmt, standard, extra
+
+
 def result_columns(res) -> dict:
     """The :data:`RESULT_DIMS` columns of a whole :class:`core.CurvatureResult`, as
     :class:`LasResultWriter` writes them (the tiled run assembles the same from its tiles)."""
@@ -145,27 +176,38 @@ class LasResultWriter:
     """Write points and result columns to a LAS/LAZ file chunk by chunk.
 
     Coordinates keep ``scales``/``offsets`` (those of the input, so the points are the
-    input's); LAZ when the path ends in ``.laz``. Use as a context manager on an open
+    input's); LAZ when the path ends in ``.laz``. With ``like``, the input's laspy header,
+    the input's own point fields are carried over (:func:`carried_layout`): a classified
+    scan keeps its classes, intensity, returns, GPS time and colours. Use as a context manager on an open
     binary file object (e.g. from :func:`core.io.atomic.atomic_write`).
     """
 
-    def __init__(self, fileobj, *, scales, offsets, laz: bool):
+    def __init__(self, fileobj, *, scales, offsets, laz: bool, like=None):
         import laspy
 
-        header = laspy.LasHeader(point_format=6, version="1.4")
+        fmt, self._standard, extra = carried_layout(like)
+        header = laspy.LasHeader(point_format=fmt, version="1.4")
         header.scales = np.asarray(scales, float)
         header.offsets = np.asarray(offsets, float)
-        header.add_extra_dims([laspy.ExtraBytesParams(name=n, type=_TYPES.get(n, np.float64))
-                               for n in RESULT_DIMS])
+        header.add_extra_dims([laspy.ExtraBytesParams(name=n, type=t) for n, t in extra]
+                              + [laspy.ExtraBytesParams(name=n, type=_TYPES.get(n, np.float64)) for n in RESULT_DIMS])
+        self._carried = [n for n, _ in extra]
         self._header = header
         self._writer = laspy.open(fileobj, mode="w", header=header, do_compress=laz, closefd=False)
 
-    def write(self, points: np.ndarray, columns: dict) -> None:
-        """Append points (m, 3) and ``columns``: name -> (m,) array for every RESULT_DIMS name."""
+    def write(self, points: np.ndarray, columns: dict, carried=None) -> None:
+        """Append points (m, 3) and ``columns``: name -> (m,) array for every RESULT_DIMS name;
+        ``carried``: the input's laspy records of the same points (with ``like``)."""
         import laspy
 
         rec = laspy.ScaleAwarePointRecord.zeros(len(points), header=self._header)
         rec.x, rec.y, rec.z = points[:, 0], points[:, 1], points[:, 2]
+        if carried is not None:
+            for out, src, factor in self._standard:
+                values = np.asarray(carried[src])
+                rec[out] = values if factor == 1 else np.round(values * factor).astype(np.int16)
+            for name in self._carried:
+                rec[name] = np.asarray(carried[name])
         for name in RESULT_DIMS:
             rec[name] = np.asarray(columns[name]).astype(_TYPES.get(name, np.float64))
         self._writer.write_points(rec)

@@ -32,12 +32,13 @@ def assemble(store, n_tiles: int, n_points: int, signs, output, source) -> pathl
     output = pathlib.Path(os.fspath(output))
     if output.suffix.lower() in _LAS:
         scales, offsets = _quantisation(store, n_tiles, source)
+        like, records = source.las_records(CHUNK)  # the input's own fields, in step with the rows
         try:
-            with atomic_write(output) as f, LasResultWriter(f, scales=scales, offsets=offsets,
+            with atomic_write(output) as f, LasResultWriter(f, scales=scales, offsets=offsets, like=like,
                                                             laz=output.suffix.lower() == ".laz") as w:
                 for start in range(0, n_points, CHUNK):
                     cols = _gather(store, n_tiles, signs, start, min(n_points, start + CHUNK))
-                    w.write(cols.pop("xyz"), cols)
+                    w.write(cols.pop("xyz"), cols, None if records is None else next(records)[1])
         except OSError as exc:
             raise CloudFileError(output, f"cannot be written: {exc.strerror or exc}") from exc
         return output

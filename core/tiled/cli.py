@@ -90,6 +90,8 @@ def run(args) -> int:
 
 def _whole_to_las(args, orientation) -> int:
     """k="auto" on a cloud that fits in memory, written as LAS/LAZ."""
+    import laspy
+
     import core
     from ..io.atomic import atomic_write
     from ..io.las_stream import LasResultWriter, quantisation, result_columns
@@ -97,15 +99,18 @@ def _whole_to_las(args, orientation) -> int:
     normals = None if args.ignore_normals else cloud.normals
     res = core.estimate(cloud.points, normals, k=args.k, method=args.method, passes=args.passes,
                         orientation=orientation, options=dict(args.option or []))
-    if str(args.input).lower().endswith(_LAS):  # keep the input's quantisation: the same points
+    like = records = None
+    if str(args.input).lower().endswith(_LAS):  # keep the input's quantisation and fields: the same points
         info = open_las(args.input)
         scales, offsets = info.scales, info.offsets
+        las = laspy.read(args.input)
+        records, like = las.points, las.header
     else:
         scales, offsets = quantisation(res.points.min(axis=0), res.points.max(axis=0))
     cols = result_columns(res)
-    with atomic_write(args.output) as f, LasResultWriter(f, scales=scales, offsets=offsets,
+    with atomic_write(args.output) as f, LasResultWriter(f, scales=scales, offsets=offsets, like=like,
                                                          laz=str(args.output).lower().endswith(".laz")) as w:
-        w.write(res.points, cols)
+        w.write(res.points, cols, records)
     if not args.quiet:
         print(f"{args.input}: {len(res)} points, method {res.method}, k {res.k}\nwrote {args.output}")
     return 0

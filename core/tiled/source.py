@@ -14,7 +14,7 @@ import numpy as np
 from .._validate import as_normals, as_points
 from ..io import read_cloud
 from ..io.cloud import CloudFileError
-from ..io.las_stream import CHUNK, iter_las, open_las
+from ..io.las_stream import CHUNK, iter_las, iter_records, open_las
 
 _STREAMED = (".las", ".laz")
 _E57 = (".e57",)
@@ -49,6 +49,17 @@ class Source:
     def is_file(self) -> bool:
         """Read from a file (each pass over it decompresses it again), not an array."""
         return self._path is not None
+
+    def las_records(self, chunk: int = CHUNK):
+        """``(laspy header, iterator of (start, laspy record))`` of a LAS/LAZ source in input
+        order, for its own fields to be carried into a LAS/LAZ output; ``(None, None)`` else."""
+        if self._path is None or not str(self._path).lower().endswith((".las", ".laz")):
+            return None, None
+        import laspy
+
+        with laspy.open(self._path) as reader:
+            header = reader.header
+        return header, iter_records(self._path, chunk=chunk)
 
     def chunks(self, chunk: int = CHUNK):
         """Yield ``(start, points (m, 3), normals (m, 3) or None, viewpoints (m, 3) or None)``
