@@ -135,16 +135,46 @@ def _state_from_args(args, parser) -> ViewerState:
     return state
 
 
-def _check_args(args, parser) -> tuple[int, int]:
+#: ``--size`` bounds, pixels: the 3D view's minimum size (app/window.py) and the largest
+#: frame buffer side OpenGL implementations commonly allow (llvmpipe's among them).
+MIN_SIZE, MAX_SIDE = (320, 240), 16384
+
+
+def _window_size(text: str, parser) -> tuple[int, int]:
+    """``--size WxH``, within :data:`MIN_SIZE` and :data:`MAX_SIDE`."""
+    allowed = (f"allowed: WIDTHxHEIGHT in pixels, from {MIN_SIZE[0]}x{MIN_SIZE[1]} to {MAX_SIDE}x{MAX_SIDE}, "
+               "like 1440x900")
     try:
-        width, height = (int(v) for v in args.size.lower().split("x"))
+        width, height = (int(v) for v in text.lower().split("x"))
     except ValueError:
-        parser.error(f"--size must look like 1440x900, got {args.size!r}")
+        parser.error(f"--size {text!r} is not a size; {allowed}")
+    if not (MIN_SIZE[0] <= width <= MAX_SIDE and MIN_SIZE[1] <= height <= MAX_SIDE):
+        parser.error(f"--size {text!r} is out of range; {allowed}")
+    return width, height
+
+
+def _check_args(args, parser) -> tuple[int, int]:
+    width, height = _window_size(args.size, parser)
     if args.shape and args.shape not in core.shapes.SHAPES:
         parser.error(f"--shape {args.shape!r} is unknown; valid shapes: {', '.join(core.shapes.SHAPES)}")
     if args.points < 10:
         parser.error(f"--points must be at least 10, got {args.points}")
+    if args.pick is not None and not 0 <= args.pick < (args.points if args.shape else math.inf):
+        upper = f" and below --points {args.points} (0 to {args.points - 1})" if args.shape else ""
+        parser.error(f"--pick {args.pick} is out of range; allowed: a point index >= 0{upper}")
+    if not (math.isfinite(args.timeout) and args.timeout > 0):
+        parser.error(f"--timeout {args.timeout:g} is out of range; allowed: a number of seconds > 0")
     return width, height
+
+
+def pick_error(pick: int | None, out) -> str | None:
+    """Why ``--pick`` cannot be used on the cloud of result ``out`` (its index is past the
+    last point: a file's size is known once read), or None."""
+    n = len(out.points)
+    if pick is None or pick < n:
+        return None
+    return (f"--pick {pick} is out of range for {out.request.source.name}; allowed: 0 to {n - 1:,} "
+            f"(it has {n:,} points)")
 
 
 def _quit_on_sigint(app: QApplication, outcome: dict) -> QTimer:
@@ -171,17 +201,23 @@ class _Screenshot:
         self.done = False
         window.result_shown.connect(self.on_result)
         window.estimator.failed.connect(lambda msg: self.fail(f"the estimate failed: {msg}"))
+        # a warning (a field not available, what a reader skipped) reaches stderr through the log
         window.notifier.notified.connect(lambda note: self.fail(note.message) if note.level == "error" else None)
-        QTimer.singleShot(int(args.timeout * 1000), lambda: self.fail(f"no result after {args.timeout:g} s"))
+        QTimer.singleShot(int(min(args.timeout, 2e6) * 1000),  # (a QTimer takes at most ~24 days)
+                          lambda: self.fail(f"no result after {args.timeout:g} s"))
 
-    def fail(self, message: str) -> None:
+    def fail(self, message: str, code: int = 1) -> None:
         if not self.done:
             self.done = True
             print(f"darboux: {message}", file=sys.stderr)
-            self.outcome["code"] = 1
+            self.outcome["code"] = code
             self.window.close()
 
-    def on_result(self, _out) -> None:
+    def on_result(self, out) -> None:
+        problem = pick_error(self.pick, out)
+        if problem:  # refused as a bad argument is (argparse's status 2), once the file's size is known
+            self.fail(f"error: {problem}", code=2)
+            return
         if self.pick is not None and self.window.state.picked is None:
             self.window.state.set(picked=self.pick)
         # let the event loop paint the new frame (and the teaching overlays, if shown)
@@ -221,7 +257,26 @@ def _open_first(window, args, pick, *, example: bool = False) -> None:
     else:
         window.open_default()
     if pick is not None and interactive:
-        window.result_shown.connect(lambda _o: window.state.set(picked=pick) if window.state.picked is None else None)
+        def on_first_result(out):
+            window.result_shown.disconnect(on_first_result)
+            problem = pick_error(pick, out)
+            if problem:
+                window.notifier.warning(problem)
+            elif window.state.picked is None:
+                window.state.set(picked=pick)
+
+        window.result_shown.connect(on_first_result)
+
+
+def _size_note(window, width: int, height: int, view_only: bool) -> None:
+    """Say so when the window could not take ``--size`` (e.g. smaller than its panels allow)."""
+    got = (window.width(), window.height())
+    if got != (width, height):
+        larger = got[0] > width or got[1] > height
+        why = (" (smaller than the window with its panels can be; --view-only hides them)"
+               if larger and not view_only else "")
+        print(f"darboux: note: the window could not be made {width}x{height}; it is {got[0]}x{got[1]}{why}",
+              file=sys.stderr)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -251,6 +306,7 @@ def main(argv: list[str] | None = None) -> int:
             dock.hide()  # a figure: the 3D view(s) get the whole window
     window.resize(width, height)
     window.show()
+    _size_note(window, width, height, args.view_only)
     if teach:
         window.teach.configure(**teach)
     pick = state.picked  # loading a cloud clears the pick: restore it on the first result

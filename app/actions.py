@@ -84,11 +84,11 @@ class WindowActions:
 
     # -- loading (answers arrive in _on_loaded / _on_load_failed) -------------------
     def open_file(self, path, *, remember: bool = True):
-        """Read a file on the loader thread; the current cloud stays until it arrives."""
+        """Read a file on the loader thread; the current cloud, and its estimate, stay until
+        it arrives (a file that cannot be read leaves them as they were)."""
         if big_result.wants(path):  # a stored result larger than the budget: a level-of-detail view
             return big_result.view_of(self).open(path, remember=remember)
         ticket = self.loader.open_file(path, remember=remember)
-        self.estimator.cancel()
         self.status_label.setText(f"reading {ticket.label}…")
         self.progress.set_progress(-1.0, "reading…")
         return ticket
@@ -98,8 +98,8 @@ class WindowActions:
         return self.open_file(DEFAULT_CLOUD, remember=False)
 
     def load_shape(self, name: str, n: int | None = None):
+        """Generate a shape on the loader thread; the current cloud and its estimate stay until it arrives."""
         self.shape_count = n = int(n or self.shape_count)
-        self.estimator.cancel()
         ticket = self.loader.make_shape(name, n)
         self.status_label.setText(f"generating {ticket.label}…")
         self.progress.set_progress(-1.0, "generating…")
@@ -113,6 +113,7 @@ class WindowActions:
             path = Path(ticket.path)
             self.recent_menu.add(path)
             self.settings.setValue("last_dir", safe_text(path.resolve().parent))
+        self.estimator.abandon()  # the cloud it estimates is replaced now, not at the open (a read may fail)
         self.set_source(source)
         for note in source.notes:  # what the reader warned about (e.g. columns not taken for normals)
             self.notifier.warning(note)
@@ -120,6 +121,7 @@ class WindowActions:
             self._message_gen = self.estimator.generation + 1
 
     def _on_load_failed(self, ticket, message: str, detail: str) -> None:
+        """The current cloud stays, with its estimate (running or done) and preview."""
         if self._closed:
             return
         self.notifier.notify("error", f"Could not open the file. {message}", detail)

@@ -176,8 +176,8 @@ class BigResultView(QObject):
 
     def open(self, path, *, remember: bool = False):
         """Read the overview of ``path`` (returns at once; :attr:`shown` follows);
-        ``remember`` lists it in File > Open recent."""
-        self.window.estimator.cancel()
+        ``remember`` lists it in File > Open recent. The cloud on screen, and its estimate,
+        stay until the overview arrives (a file that cannot be read leaves them as they were)."""
         if remember:
             self.window.recent_menu.add(path)
         self.path, self.overview = path, None
@@ -256,8 +256,9 @@ class BigResultView(QObject):
         finally:
             w.state.blockSignals(False)
         if first:
+            w.estimator.abandon()  # the estimate of the cloud this one replaces
             w.presenter.clear()
-            w.scene.set_cloud(out.points, reset_camera="front")
+            w.scene.set_cloud(out.points, reset_camera="front", geometry=src.geometry)  # (from the reading thread)
             w.setWindowTitle(f"Darboux — {display_name(src.path)}")
         w.presenter.show(out)
         region = " in the region in view" if src.box is not None else ""
@@ -274,8 +275,11 @@ class BigResultView(QObject):
     def _on_failed(self, gen, message) -> None:
         if gen != self._gen or self.window._closed:
             return
-        self.window.progress.set_busy(False)
-        self.window.notifier.notify("error", f"Could not read the result. {message.splitlines()[0]}", message)
+        w = self.window
+        w.progress.set_busy(w.estimator.busy or w.loader.pending is not None)
+        w.notifier.notify("error", f"Could not read the result. {message.splitlines()[0]}", message)
+        if not self.active:  # the cloud on screen stays, estimate and all: its status line again
+            w._show_status()
 
     def _on_state(self, name) -> None:
         if name == "source" and not is_stored(self.window.state.source):

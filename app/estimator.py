@@ -90,6 +90,14 @@ class Estimator(QObject):
             self._set_busy(False)
             self.cancelled.emit(self._gen)
 
+    def abandon(self) -> None:
+        """The cloud being estimated is replaced: drop whatever is queued or running, idle
+        at once, without a ``cancelled`` signal (nothing of it is to be restored on screen);
+        its late answers, a cancel included, are of an older generation and dropped."""
+        self.next_gen()
+        self._worker.latest = -1
+        self._set_busy(False)
+
     def shutdown(self, timeout: float = SHUTDOWN_WAIT_S) -> bool:
         """Cancel, stop the job thread and wait up to ``timeout`` s. Safe to call twice."""
         self._worker.latest = -1

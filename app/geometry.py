@@ -2,7 +2,8 @@
 
 Framing a 1M-point cloud needs its bounding box, its point spacing (a KD-tree query)
 and the extreme points along 13 directions; drawing it within a point budget needs a
-random drawing order. Together ~0.9 s of numpy on 1M points: :class:`CloudGeometry`
+random drawing order, and its glyphs within theirs evenly spread positions. Together ~1 s
+of numpy on 1M points: :class:`CloudGeometry`
 computes them once per cloud on the loader thread (:meth:`app.source.CloudSource.geometry`),
 and the GUI thread only reads them. Indices, not coordinates, so one geometry serves
 the noisy copies of the same cloud too (noise moves points by a fraction of the spacing).
@@ -17,6 +18,7 @@ import numpy as np
 from core.degenerate import MAX_COORD
 
 from .framing import FIT_SAMPLE, cloud_spacing
+from .glyphs import even_order
 
 __all__ = ["CloudGeometry"]
 
@@ -42,6 +44,9 @@ class CloudGeometry:
     order : a random permutation of the finite points' indices: any prefix is a uniform
         random subset, so the moving stand-in (a short prefix) is part of the still
         frame's budget (a longer one), and the points do not jump between the two.
+    glyph_order : the glyph positions: at most :data:`app.glyphs.GLYPH_POINTS` indices
+        spread evenly over the cloud, any prefix evenly too (:func:`app.glyphs.even_order`);
+        a glyph density is a fraction of them.
     """
 
     n_points: int
@@ -50,6 +55,7 @@ class CloudGeometry:
     spacing: float
     fit_index: np.ndarray
     order: np.ndarray
+    glyph_order: np.ndarray
 
     @classmethod
     def of(cls, points: np.ndarray, *, seed: int = 0) -> "CloudGeometry":
@@ -62,7 +68,7 @@ class CloudGeometry:
         pts = points[index] if len(index) < len(points) else points
         if len(pts) == 0:
             empty = np.zeros(0, dtype=np.intp)
-            return cls(len(points), np.zeros(3), 1.0, 0.0, empty, empty)
+            return cls(len(points), np.zeros(3), 1.0, 0.0, empty, empty, empty)
         lo, hi = pts.min(axis=0), pts.max(axis=0)
         radius = 0.5 * float(np.linalg.norm(hi - lo)) or 1.0
         rng = np.random.default_rng(seed)
@@ -73,7 +79,7 @@ class CloudGeometry:
             extremes = np.r_[proj.argmin(axis=0), proj.argmax(axis=0)]
             fit = index[np.unique(np.r_[extremes, rng.choice(len(pts), size=FIT_SAMPLE, replace=False)])]
         order = index[rng.permutation(len(index))]
-        return cls(len(points), 0.5 * (lo + hi), radius, cloud_spacing(pts), fit, order)
+        return cls(len(points), 0.5 * (lo + hi), radius, cloud_spacing(pts), fit, order, even_order(points, order))
 
     def subset(self, budget: int) -> np.ndarray:
         """Sorted indices of at most ``budget`` points, a uniform random subset (all if fewer)."""

@@ -42,8 +42,12 @@ class ResultPresenter:
         Set by the window while the compare view is visible.
     """
 
-    def __init__(self, state, scene, *, field_panel, histogram, inspector):
+    def __init__(self, state, scene, *, field_panel, histogram, inspector, notify=None):
         self.state = state
+        #: ``notify(message)``: tells the user the field asked for is not drawn (the window's
+        #: ``notifier.warning``: status bar, and stderr for ``--screenshot``)
+        self.notify = notify
+        self._falling_back = False
         self.scene = scene
         self.compare_scene = None
         self.field_panel = field_panel
@@ -88,10 +92,26 @@ class ResultPresenter:
         self.scene.set_title(f"{method_title(out.request.method)} — preview on {out.preview:,} points\n"
                              f"{out.request.source.name}\ncomputing the full result…")
 
+    def _drawable_field(self, out) -> str:
+        """The state's field if ``out`` has it; otherwise mean curvature H, and the state
+        follows as if H had been chosen in the Field box (which thus names what is drawn),
+        with a notice why. The recolour that change asks for is this one (no loop)."""
+        name = self.state.field
+        if name in out.fields or self._falling_back:
+            return name if name in out.fields else "mean"
+        self._falling_back = True
+        try:
+            self.state.set(field="mean", clim_auto=True)
+        finally:
+            self._falling_back = False
+        if self.notify is not None:
+            self.notify(_unavailable_text(name, out.request.source))
+        return "mean"
+
     def _colour_preview(self) -> None:
         """The preview's colours, colour bar, limit boxes and histogram for the current field."""
         out = self.preview
-        name = self.state.field if self.state.field in out.fields else "mean"
+        name = self._drawable_field(out)
         spec = FIELDS[name]
         values = out.fields[name]
         look = self._look(name, values)
@@ -131,15 +151,16 @@ class ResultPresenter:
         self.pick()
 
     def recolour(self) -> None:
+        if self._falling_back:  # the state's field set back to H by the recolour under way
+            return
         if self.preview is not None:  # a field change during a preview colours the preview
             self._colour_preview()
             return
         out = self.output
         if out is None:
             return
-        s = self.state
         self.field_panel.set_available(out.fields)
-        name = s.field if s.field in out.fields else "mean"
+        name = self._drawable_field(out)
         spec = FIELDS[name]
         pairs = self._pairs()
         # border points (scan rims, holes) are drawn grey and kept out of the colour limits
@@ -181,6 +202,17 @@ class ResultPresenter:
             if scene is not None:
                 scene.set_point_size(size)
         self.pick()
+
+
+def _unavailable_text(name: str, source) -> str:
+    """Why field ``name`` is not drawn for ``source``, and what is."""
+    spec = FIELDS.get(name)
+    why = {"truth": "it has no ground truth (only the synthetic shapes have one)",
+           "reference": "it has no reference normals (the file has none)"}.get(getattr(spec, "needs", None),
+                                                                            "the result has no such field")
+    label = spec.label if spec is not None else repr(name)
+    name = getattr(source, "name", "this cloud")
+    return f"{label} is not available for {name}: {why}; showing {FIELDS['mean'].label}."
 
 
 def _neighbours_of(res, index: int):

@@ -234,7 +234,9 @@ class CloudScene(Picking):
     # -- glyphs -------------------------------------------------------------------
     def set_glyphs(self, kind: str, directions: np.ndarray | None, *, density: float, length: float,
                    normals: np.ndarray | None = None):
-        """± segments along ``directions`` for a subsample of points, or remove them.
+        """± segments along ``directions`` at a ``density`` fraction of the glyph positions
+        (at most :data:`app.glyphs.GLYPH_POINTS`, spread evenly: the cloud's
+        ``geometry.glyph_order``), or remove them.
 
         ``length`` is in mean point spacings. With ``normals``, tangent glyphs are
         lifted off the surface by half a spacing so the point sprites do not hide them.
@@ -247,12 +249,11 @@ class CloudScene(Picking):
                 self._glyph_names.discard(name)
             self._glyph_legend()
             return
-        index = glyphs.subsample(len(self.points), density)
-        base = self.points
+        index = glyphs.glyph_index(self.geometry.glyph_order, density)
+        base = self.points[index]
         if normals is not None:
-            lift = np.nan_to_num(np.asarray(normals, dtype=float)) * (0.6 * self.spacing)
-            base = self.points + lift
-        vertices, lines = glyphs.segments(base, directions, index, length * self.spacing)
+            base = base + np.nan_to_num(np.asarray(normals, dtype=float)[index]) * (0.6 * self.spacing)
+        vertices, lines = glyphs.segments(base, np.asarray(directions)[index], slice(None), length * self.spacing)
         if len(vertices) == 0:
             self.set_glyphs(kind, None, density=0, length=0)
             return

@@ -100,7 +100,7 @@ class ViewerState(QObject):
         "show_e1": _Field(False, bool),
         "show_e2": _Field(False, bool),
         "show_normals": _Field(False, bool),
-        "glyph_density": _Field(0.05, float),  # fraction of points with glyphs
+        "glyph_density": _Field(0.05, float),  # fraction of the glyph positions (app.glyphs.GLYPH_POINTS at most)
         "glyph_length": _Field(3.0, float),  # x mean point spacing
         "eye_dome": _Field(False, bool),  # eye-dome lighting (depth edges, for scans)
         # inspection

@@ -12,7 +12,7 @@ from __future__ import annotations
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QMessageBox
 
-from .presenter import status_line, summary_line
+from .presenter import preview_line, status_line, summary_line
 
 __all__ = ["WindowStatus"]
 
@@ -22,11 +22,16 @@ class WindowStatus:
 
     #: Estimate generation a shown notification is about: a result of a later one clears it.
     _message_gen = 0
+    #: The error the open error box shows, and how many times in a row it came.
+    _box_message, _box_repeats = "", 0
 
     def _show_status(self) -> None:
-        """The status line for what is on screen (the result, or why there is none)."""
-        out, source = self.output, self.state.source
-        if out is not None and out.request.source is source:
+        """The status line for what is on screen (the result or its preview, the estimate
+        under way, or why there is none)."""
+        out, source, preview = self.output, self.state.source, self.presenter.preview
+        if preview is not None and preview.request.source is source and self.estimator.busy:
+            self.status_label.setText(preview_line(preview))
+        elif out is not None and out.request.source is source:
             self.status_label.setText(status_line(out))
             self.summary_label.setText(summary_line(out.summary, out.request.method))
         elif source is not None and not self.estimator.busy:
@@ -37,6 +42,8 @@ class WindowStatus:
             self.render_all()
         elif source is None:
             self.status_label.setText("No cloud")
+        else:  # estimating, nothing of it shown yet
+            self.status_label.setText(f"{source.name}: {source.n_points:,} points — estimating…")
 
     def _on_failed(self, message: str) -> None:
         self.notifier.error(f"The estimate failed: {message}")
@@ -69,14 +76,28 @@ class WindowStatus:
         self.statusBar().showMessage(note.message, 15000 if note.level == "error" else 6000)
         self._message_gen = self.estimator.generation
         if note.level == "error" and self.dialogs:
+            self._error_box(note)
+
+    def _error_box(self, note) -> None:
+        """Show an error in the one error box: opened if none is, otherwise its text becomes
+        this error's, with the count of repeats when it is the same one again (dragging a
+        slider on a cloud the estimate refuses must not stack boxes). Every error stays in
+        ``notifier.history``."""
+        box = next((b for b in self._boxes if b.isVisible()), None)
+        if box is not None and note.message == self._box_message:
+            self._box_repeats += 1
+        else:
+            self._box_message, self._box_repeats = note.message, 1
+        if box is None:
             box = QMessageBox(QMessageBox.Icon.Critical, "Darboux", note.message, QMessageBox.StandardButton.Ok, self)
-            if note.detail:
-                box.setDetailedText(note.detail)
             box.setModal(False)
             box.setAttribute(Qt.WidgetAttribute.WA_DeleteOnClose)
             box.finished.connect(self._forget_boxes)
             self._boxes.append(box)
-            box.show()
+        repeats = f"\n\n(this error {self._box_repeats} times)" if self._box_repeats > 1 else ""
+        box.setText(note.message + repeats)
+        box.setDetailedText(note.detail)
+        box.show()
 
     def _clear_message(self, gen: int | None = None) -> None:
         """Take down a notification about something older: any for a new cloud (``gen`` None),

@@ -106,7 +106,8 @@ class MainWindow(WindowActions, WindowStatus, QMainWindow):
         self._build_views()
         build_controls(self)
         self.presenter = ResultPresenter(self.state, self.scene, field_panel=self.field_panel,
-                                         histogram=self.histogram, inspector=self.inspector)
+                                         histogram=self.histogram, inspector=self.inspector,
+                                         notify=self.notifier.warning)
         # a changed histogram draws in a pass of the event loop after the 3D frame, not with it
         self._frame_due = False
         self.histogram.frame_due = lambda: self._frame_due

@@ -13,6 +13,7 @@ cancelled cooperatively: core calls our progress callback between chunks and we 
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import time
 import traceback
@@ -160,7 +161,7 @@ class EstimateWorker(QObject):
         passes = None if req.k_auto else (req.passes if core.METHODS[req.method].uses_passes else None)
         res = core.estimate(pts, normals, k=max(k, 3), method=req.method, passes=passes, orientation=req.orientation,
                             progress=_sub(callback, 0.0, 0.05, "preview"), cache=self._sub_cache)
-        fields = spread(compute_fields(res), sub)
+        fields = spread(_fields_of(res, req.source, sub.index), sub)
         return EstimateOutput(gen=req.gen, request=req, points=points, result=res, fields=fields,
                               spacing=_spacing(res), elapsed=time.perf_counter() - t0, preview=len(pts))
 
@@ -187,7 +188,7 @@ class EstimateWorker(QObject):
         normals = req.source.normals if req.use_input_normals else None
         runs = [req.method] + ([req.compare_method] if req.compare_method else [])
         # one search serves both runs (and k slider moves within the head room)
-        self._cache.k_max = max(K_MAX_HEADROOM, min(req.k_needed(len(points)), len(points)))
+        self._cache.k_max = max(K_MAX_HEADROOM, min(_k_needed(req, len(points)), len(points)))
         results, kept = [], ()
         for i, method in enumerate(runs):
             t, before = time.perf_counter(), dict(self._cache.reused)
@@ -200,6 +201,30 @@ class EstimateWorker(QObject):
             if i == 0:
                 kept = tuple(stage for stage, n in self._cache.reused.items() if n > before.get(stage, 0))
         return results, kept
+
+
+def _k_needed(req: EstimateRequest, n_points: int) -> int:
+    """Neighbours to search for ``req``, or :data:`K_MAX_HEADROOM` when its plan refuses the
+    cloud: core.estimate then answers itself, with the same plain reason as for automatic
+    k (a 3-point cloud is "fewer than the 4 the method needs for one fit", not a fixed k
+    that "must be at least 4 and at most 3"), or with its own error."""
+    try:
+        return req.k_needed(n_points)
+    except ValueError:
+        return K_MAX_HEADROOM
+
+
+def _fields_of(result, source, index: np.ndarray) -> dict:
+    """The fields of a result on the points ``index`` of ``source``: the same ones the full
+    result has (the errors against the truth and the reference normals' deviation
+    included), so the Field box keeps a field the preview shows as well."""
+    sample, reference = source.sample, None if source.normals is None else source.normals[index]
+    if sample is not None:
+        sample = dataclasses.replace(sample, points=sample.points[index], normals=sample.normals[index],
+                                     k1=sample.k1[index], k2=sample.k2[index], e1=sample.e1[index],
+                                     e2=sample.e2[index], interior=sample.interior[index])
+        reference = sample.normals
+    return compute_fields(result, reference_normals=reference, sample=sample)
 
 
 def _spacing(result) -> float:

@@ -7,6 +7,7 @@ from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QCheckBox, QFormLayout, QHBoxLayout, QWidget
 from superqt import QLabeledDoubleSlider, QLabeledSlider
 
+from ..glyphs import GLYPH_POINTS
 from ..scene import GLYPH_COLOURS
 from ._bind import blocked
 
@@ -17,8 +18,10 @@ _SWITCHES = (("show_e1", "e1", "Max. principal direction"), ("show_e2", "e2", "M
 class GlyphControls(QWidget):
     """e1, e2 and normal glyphs as ± line segments (directions have no sign).
 
-    Density is the fraction of points that get a glyph; length is in units of the
-    mean point spacing, so it means the same on any cloud.
+    Density is the fraction of the glyph positions that get a glyph: every point of a small
+    cloud, at most :data:`app.glyphs.GLYPH_POINTS` spread evenly over a big one (a frame
+    must not grow with the cloud); length is in units of the mean point spacing, so it
+    means the same on any cloud.
     """
 
     def __init__(self, state, parent=None):
@@ -37,7 +40,8 @@ class GlyphControls(QWidget):
         row.addStretch(1)
         self.density = QLabeledSlider(Qt.Orientation.Horizontal)
         self.density.setRange(1, 100)
-        self.density.setToolTip("Percent of the points that get a glyph")
+        self.density.setToolTip(f"Percent of the points that get a glyph (of at most {GLYPH_POINTS:,} "
+                                "evenly spread points on a big cloud)")
         self.length = QLabeledDoubleSlider(Qt.Orientation.Horizontal)
         self.length.setRange(0.5, 10.0)
         self.length.setSingleStep(0.5)

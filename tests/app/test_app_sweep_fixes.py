@@ -85,11 +85,14 @@ def test_cancel_during_a_preview_draws_the_kept_result_again(make_window, qtbot,
     _looks_like(window, kept, values)
     assert "showing the previous result" in window.status_label.text()
 
-    # a failed load cancels the estimate too
+    # a failed load leaves the estimate under way alone (test_app_view_sweep.py): its result comes
     seen = _on_next_preview(window, lambda out: window.open_file(tmp_path / "missing.xyz"))
-    window.state.set(noise=30.0)
-    qtbot.waitUntil(lambda: bool(seen) and window.loader.pending is None, timeout=60_000)
-    _looks_like(window, kept, values)
+    with wait_result(qtbot, window, 60_000) as blocker:
+        window.state.set(noise=30.0)
+    qtbot.waitUntil(lambda: bool(seen) and window.loader.pending is None, timeout=10_000)
+    assert any("missing.xyz" in note.message for note in window.notifier.history)
+    _looks_like(window, blocker.args[0], window.scene._values)
+    assert blocker.args[0].request.noise == 30.0
 
 
 def test_cancel_during_the_first_preview_clears_it(make_window, qtbot, previewing):
