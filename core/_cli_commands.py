@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import glob
 import json
 import os
@@ -17,9 +18,16 @@ import numpy as np
 from . import io as cio
 from .io.formats import READ_FORMATS, WRITE_FORMATS, resolve_format
 from .tiled import cli as tiled_cli
+from .tiled.run import parse_memory
 from .io.atomic import refuse_input_as_output
 
 STDIO = "-"
+#: what -o writes: the in-memory writers' formats, and LAS/LAZ (written as a single input's
+#: is, by :func:`core.tiled.cli.run`: whole, or in tiles)
+OUTPUT_FORMATS = {**WRITE_FORMATS, ".las": "LAS 1.4 lidar", ".laz": "LAZ compressed lidar"}
+LAS_FORMATS = ("las", "laz")
+#: the options that make an estimate run in tiles (core.tiled.cli.wanted)
+TILE_OPTIONS = {"tile_points": "--tile-points", "workers": "--workers", "scheduler": "--scheduler"}
 #: output name in a directory, when several inputs share one -o directory
 DIR_PATTERN = "{stem}_darboux.{ext}"
 SUMMARY_FIELDS = ("mean", "gaussian", "k1", "k2")
@@ -42,15 +50,26 @@ def expand_inputs(patterns) -> list[str]:
 
 
 def plan_outputs(inputs, output: str, out_format) -> list[tuple[str, str]]:
-    """``[(output path or '-', format)]``, one per input, all checked before any estimate."""
+    """``[(output path or '-', format)]``, one per input, all checked before any estimate:
+    the format, the folder, and that no output replaces an input."""
     if output == STDIO:
         if len(inputs) > 1:
             raise ValueError("-o - (standard output) takes a single input")
+        if str(out_format or "").lower().lstrip(".") in LAS_FORMATS:
+            raise ValueError("LAS/LAZ output needs a file name ending in .las or .laz, not -o - (standard output)")
         return [(STDIO, resolve_format(pathlib.Path(STDIO), out_format or "csv", WRITE_FORMATS, "writing"))]
     paths = _output_paths(inputs, output, out_format)
-    for dst in paths:  # no output may replace an input (its name, a symlink or a hard link to it)
-        refuse_input_as_output(inputs, dst)
-    return [(path, resolve_format(pathlib.Path(path), out_format, WRITE_FORMATS, "writing")) for path in paths]
+    planned = []
+    for dst in paths:
+        refuse_input_as_output(inputs, dst)  # not an input (its name, a symlink or a hard link to it)
+        fmt = resolve_format(pathlib.Path(dst), out_format, OUTPUT_FORMATS, "writing")
+        if fmt in LAS_FORMATS and pathlib.Path(dst).suffix.lower() != f".{fmt}":
+            raise ValueError(f"output {dst}: LAS/LAZ output needs a name ending in .{fmt}")
+        folder = pathlib.Path(dst).parent
+        if not folder.is_dir():
+            raise ValueError(f"output {dst}: the folder {folder} does not exist")
+        planned.append((dst, fmt))
+    return planned
 
 
 def _output_paths(inputs, output: str, out_format) -> list[str]:
@@ -61,7 +80,7 @@ def _output_paths(inputs, output: str, out_format) -> list[str]:
     if "{stem}" in output:
         paths = [output.format(stem=_stem(src)) for src in inputs]
     elif os.path.isdir(output):
-        ext = resolve_format(pathlib.Path("x.ply"), out_format, WRITE_FORMATS, "writing")
+        ext = resolve_format(pathlib.Path("x.ply"), out_format, OUTPUT_FORMATS, "writing")
         paths = [os.path.join(output, DIR_PATTERN.format(stem=_stem(src), ext=ext)) for src in inputs]
     else:
         raise ValueError(f"with {len(inputs)} inputs, -o must be an existing directory or a pattern with {{stem}}, "
@@ -79,12 +98,19 @@ def read_input(src: str, input_format: str, drop_nonfinite: bool):
     """The cloud of a file, or of standard input (stored in a temporary file to be parsed)."""
     if src != STDIO:
         return cio.read_cloud(src, drop_nonfinite=drop_nonfinite)
+    with stdin_file(input_format) as path:
+        return cio.read_cloud(path, drop_nonfinite=drop_nonfinite)
+
+
+@contextlib.contextmanager
+def stdin_file(input_format: str):
+    """Standard input stored in a temporary file named for ``input_format`` (removed after)."""
     fmt = resolve_format(pathlib.Path("-"), input_format, READ_FORMATS, "reading")
     with tempfile.TemporaryDirectory(prefix="darboux-stdin-") as tmp:
         path = pathlib.Path(tmp) / f"stdin.{fmt}"
         with open(path, "wb") as f:
             shutil.copyfileobj(sys.stdin.buffer, f)
-        return cio.read_cloud(path, drop_nonfinite=drop_nonfinite)
+        yield path
 
 
 class ProgressBar:
@@ -111,12 +137,10 @@ class ProgressBar:
 
 
 def cmd_estimate(args) -> int:
+    """Each input as it would be alone: in memory, or (LAS/LAZ output, a tile option, a
+    LAS/LAZ input larger than the memory) by :func:`core.tiled.cli.run`."""
+    check_execution_options(args)
     inputs = expand_inputs(args.inputs)
-    if len(inputs) == 1 and inputs[0] != STDIO:
-        refuse_input_as_output(inputs, args.output)  # the tiled and LAS/LAZ paths too
-        one = argparse.Namespace(**vars(args), input=inputs[0])
-        if tiled_cli.wanted(one):  # tiles on Dask (large scans), or a LAS/LAZ output
-            return tiled_cli.run(one)
     plan = plan_outputs(inputs, args.output, args.out_format)  # refuse bad outputs before any work
     options = dict(args.option or [])
     failed = 0
@@ -131,9 +155,41 @@ def cmd_estimate(args) -> int:
     return 2 if failed else 0
 
 
+def check_execution_options(args) -> None:
+    """Options checked whichever path an input takes (--memory also decides whether a
+    LAS/LAZ input fits in memory); tiles cannot write to standard output."""
+    if args.memory is not None:
+        with contextlib.suppress(ImportError):  # without Dask (the [big] extra) there are no tiles to size
+            parse_memory(args.memory)
+    asked = [flag for name, flag in TILE_OPTIONS.items() if getattr(args, name) is not None]
+    if asked and args.output == STDIO:
+        raise ValueError(f"tiles ({', '.join(asked)}) write a file, not -o - (standard output); without them "
+                         "the estimate runs in memory")
+
+
+def _tiled(args, src, dst, fmt) -> bool:
+    """Whether ``src`` is estimated by :func:`core.tiled.cli.run` (as a single input is)."""
+    if dst == STDIO:
+        return False
+    if fmt in LAS_FORMATS or src == STDIO and any(getattr(args, name) is not None for name in TILE_OPTIONS):
+        return True
+    return src != STDIO and tiled_cli.wanted(_one(args, src, dst))
+
+
+def _one(args, src, dst) -> argparse.Namespace:
+    return argparse.Namespace(**{**vars(args), "input": src, "output": dst})
+
+
 def _estimate_one(args, src, dst, fmt, options) -> None:
     import core
 
+    if _tiled(args, src, dst, fmt):
+        if src != STDIO:
+            tiled_cli.run(_one(args, src, dst))
+            return
+        with stdin_file(args.input_format) as path:
+            tiled_cli.run(_one(args, str(path), dst))
+        return
     cloud = read_input(src, args.input_format, args.drop_nonfinite)
     normals = None if args.ignore_normals else cloud.normals
     orientation = args.viewpoint if args.viewpoint is not None else args.orientation

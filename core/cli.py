@@ -17,6 +17,8 @@ BENCHES = ("paper", "perf", "accuracy", "tiled", "stability", "teach", "holdout"
 PROG = "darboux-cli"
 _NONE = ("none", "null")
 _BOOLS = {"true": True, "false": False}
+#: where a MemoryError is Dask's communication failing, not the estimate out of memory
+_DASK_MODULES = ("distributed", "tornado", "msgpack")
 
 
 def _parse_value(text: str):
@@ -65,10 +67,11 @@ def _add_io_arguments(e) -> None:
                    help="point cloud file(s) or glob patterns (PLY, XYZ/PTS/TXT/CSV, PCD, OBJ, STL, VTK/VTP, "
                         "LAS/LAZ); - reads standard input (see --input-format)")
     e.add_argument("-o", "--output", required=True,
-                   help="output file (.ply, .csv, .xyz, .txt); - writes standard output; with several inputs a "
-                        "directory or a pattern with {stem}, e.g. out/{stem}_k.csv")
+                   help="output file (.ply, .csv, .xyz, .txt, .las, .laz); - writes standard output (not LAS/LAZ); "
+                        "with several inputs a directory or a pattern with {stem}, e.g. out/{stem}_k.laz")
     e.add_argument("--format", dest="out_format", default=None,
-                   help="output format when it cannot come from the extension (default: csv for -, ply in a directory)")
+                   help="output format when it cannot come from the extension: ply, csv, xyz, txt, or las/laz "
+                        "in a directory (default: csv for -, ply in a directory)")
     e.add_argument("--input-format", default="xyz", help="format of standard input (default xyz)")
     e.add_argument("--drop-nonfinite", action="store_true", help="drop points with NaN/inf coordinates")
     e.add_argument("--ignore-normals", action="store_true", help="estimate normals even if the file has some")
@@ -104,7 +107,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--version", action="version", version=f"{PROG} {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
 
-    e = sub.add_parser("estimate", help="estimate the Darboux frame of every point and write PLY/CSV")
+    e = sub.add_parser("estimate", help="estimate the Darboux frame of every point and write PLY, CSV, XYZ/TXT or LAS/LAZ")
     _add_io_arguments(e)
     _add_method_arguments(e)
     add_execution_arguments(e)
@@ -143,6 +146,16 @@ def _library_error(exc: BaseException) -> str | None:
     return None
 
 
+def _raised_in_dask(exc: BaseException) -> bool:
+    """Whether ``exc`` was raised in Dask's communication rather than by the estimate."""
+    tb = exc.__traceback__
+    while tb is not None:
+        if tb.tb_frame.f_globals.get("__name__", "").split(".")[0] in _DASK_MODULES:
+            return True
+        tb = tb.tb_next
+    return False
+
+
 def _error(message: str, code: int) -> int:
     print(f"{PROG}: error: {message}", file=sys.stderr)
     return code
@@ -157,7 +170,10 @@ def main(argv=None) -> int:
         return 130
     except BrokenPipeError:  # e.g. `darboux-cli estimate a.ply -o - | head`
         return 141
-    except MemoryError:
+    except MemoryError as exc:
+        if _raised_in_dask(exc):  # e.g. a reply that is not Dask's, read as the length of a message
+            return _error(f"a message from the Dask scheduler could not be read ({type(exc).__name__}: {exc}); "
+                          "is --scheduler the address of a Dask scheduler?", 1)
         return _error("out of memory; try fewer points, a smaller k or --k 15", 1)
     except (ValueError, OSError) as exc:  # bad input: one clear line, no traceback
         return _error(str(exc), 2)

@@ -125,7 +125,7 @@ def expand(res, merged: Merged, points: np.ndarray, params: dict):
                                                       "orientation_confidence")}
     return replace(res, points=points, **rows, params={**res.params, **params, "n_points": len(points)},
                    neighbours=None if res.neighbours is None else CopiesNeighbours(res.neighbours, merged, points), _border=border,
-                   _anisotropy=aniso)
+                   _anisotropy=aniso, _crease_residual=None if res._crease_residual is None else res._crease_residual[inv])
 
 
 class CopiesNeighbours(Neighbours):

@@ -295,5 +295,6 @@ def _result(pts, kept, plan, *, stages, neighbours, repaired) -> CurvatureResult
     return CurvatureResult(
         points=pts, normals=fit.normals, k1=fit.k1, k2=fit.k2, e1=fit.e1, e2=fit.e2, valid=fit.valid, k_point=kc.k_point, degree_point=degree, outlier_score=marks.outlier_score,
         crease=marks.crease, _border=marks.border, orientation_confidence=marks.orientation_confidence,
+        _crease_residual=marks.crease_residual,
         method=plan.method.name, k=plan.k, passes=plan.passes, params=params, neighbours=neighbours,
     )

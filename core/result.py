@@ -68,6 +68,8 @@ class CurvatureResult:
     orientation_confidence: np.ndarray = None
     _border: np.ndarray = field(default=None, repr=False)
     _anisotropy: np.ndarray = field(default=None, repr=False)
+    #: :func:`core.creases.crease_residuals` of the fit creases were judged on (tiles re-judge them)
+    _crease_residual: np.ndarray = field(default=None, repr=False)
 
     def __post_init__(self):
         n = len(self.points)

@@ -20,7 +20,8 @@ from .orientation import orient
 from .patch import Chunk
 from .spatial_order import SpatialOrder, given_in_spatial_order
 from .wide_neighbours import search_in_spatial_order
-from .tuning import CREASE_NOISE, CREASE_RATIO, CREASE_SPREAD, JET_SCORE, OUTLIER_FLOOR, SEARCH_WIDTH
+from .creases import crease_residuals, judge_creases as _creases
+from .tuning import JET_SCORE, OUTLIER_FLOOR, SEARCH_WIDTH
 
 _CHUNK = 32_768
 #: a fit's chunk holds at least _CHUNK centres, more when their neighbourhoods are narrow:
@@ -69,6 +70,7 @@ class Flags(NamedTuple):
     crease_typical: float
     border: np.ndarray | None = None
     orientation_confidence: np.ndarray | None = None
+    crease_residual: np.ndarray | None = None  # see :func:`crease_residuals`
 
 
 def find_neighbours(pts, plan, neighbours, report) -> Neighbours:
@@ -376,23 +378,4 @@ def flags(fit: Fit, scores, plan, reference: Residuals | None, *, nb=None, confi
     if served_by(nb, len(fit.valid)):
         border = border_of_valid(nb.points, fit.normals, fit.valid, nb)
     return Flags(outlier_score=scores, crease=fit.valid & crease, crease_typical=typical, border=border,
-                 orientation_confidence=confidence)
-
-
-def _creases(valid, rms, spread, typical=None):
-    """Points where the neighbours' normals turn a lot but not linearly (a step: a crease).
-
-    On a smooth patch the linear model of eq. 23 explains the turning of the normals and
-    the residual is a small part of it; across a sharp edge the normals jump and a line
-    explains only part of the jump. Noise leaves residuals everywhere: a crease must also
-    stand out against the cloud's typical residual (its median, unless ``typical`` is
-    given: creases are a minority of the points), or a noisy scan would be flagged all
-    over. Returns (crease (N,) bool, the typical residual used).
-    """
-    with np.errstate(invalid="ignore", divide="ignore"):
-        ratio = rms / spread
-    if typical is None:
-        seen = rms[valid & np.isfinite(rms)]  # methods without a normal fit report no residual
-        typical = float(np.median(seen)) if len(seen) else 0.0
-    crease = valid & (spread > CREASE_SPREAD) & (ratio > CREASE_RATIO) & (rms > CREASE_NOISE * typical)
-    return crease, typical
+                 orientation_confidence=confidence, crease_residual=crease_residuals(judged))

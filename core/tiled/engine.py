@@ -12,9 +12,20 @@ reported through ``progress``.
 from __future__ import annotations
 
 import os
+import socket
+import threading
 import time
 
 from .task import run_tile
+
+#: seconds an existing scheduler (``scheduler=ADDRESS``) has to take the connection and
+#: answer Dask's handshake. Dask's own connect timeout does not cover the handshake: a port
+#: that takes the connection and stays silent (a web server, the dashboard's port) hung the
+#: run for good, and one that greets first (SSH, SMTP) had its banner read as the length of
+#: a message (a MemoryError)
+SCHEDULER_TIMEOUT = 15.0
+#: Dask's scheduler port, when an address has none
+_DEFAULT_PORT = 8786
 
 #: Dask settings of the local cluster this module starts (an existing cluster keeps its own).
 #: Dask's defaults watch a worker closely: a statistical profiler samples every task's stack
@@ -74,7 +85,7 @@ def _on_dask(fn, root, tiles, sizes, spec, clock, *, client, scheduler, workers,
     own_cluster = own_client = None
     if client is None:
         if scheduler is not None:
-            client = own_client = Client(scheduler)
+            client = own_client = connect(scheduler)
         else:
             import dask
 
@@ -104,6 +115,84 @@ def _on_dask(fn, root, tiles, sizes, spec, clock, *, client, scheduler, workers,
         if own_cluster is not None:
             own_cluster.close()
     return out
+
+
+def connect(address, timeout: float | None = None):
+    """A ``distributed.Client`` of the scheduler at ``address``, within ``timeout`` seconds
+    (default SCHEDULER_TIMEOUT); else ValueError "cannot connect to the Dask scheduler at
+    ADDRESS: <reason>". A TCP port nobody listens on is told at once; the handshake is
+    tried first on a connection of its own, which a timeout can end (a Client's cannot)."""
+    from distributed import Client
+
+    timeout = SCHEDULER_TIMEOUT if timeout is None else float(timeout)
+    _listening(address, timeout)
+    error = _handshake_error(address, timeout)
+    if error is None:
+        try:
+            return Client(address, timeout=timeout, set_as_default=False)
+        except Exception as exc:  # noqa: BLE001 - every failure to connect is told alike
+            error = exc
+    raise ValueError(f"cannot connect to the Dask scheduler at {address}: {_reason(error, timeout)}") from error
+
+
+def _handshake_error(address, timeout: float):
+    """None when ``address`` answers Dask's handshake within ``timeout``, else the error
+    (in a thread of its own: the caller may be running an event loop)."""
+    import asyncio
+
+    from distributed.comm import connect as dask_connect
+    from distributed.comm.addressing import parse_address
+
+    if parse_address(str(address))[0] == "inproc":  # this process: nothing to wait for
+        return None
+
+    async def shake():
+        comm = await asyncio.wait_for(dask_connect(address, timeout=timeout), timeout)
+        await comm.close()
+
+    box = {"error": TimeoutError()}
+
+    def attempt():
+        try:
+            asyncio.run(shake())
+            box["error"] = None
+        except BaseException as exc:  # noqa: BLE001 - handed to the caller
+            box["error"] = exc
+
+    thread = threading.Thread(target=attempt, name="darboux-dask-handshake", daemon=True)
+    thread.start()
+    thread.join(timeout + 2.0)
+    return box["error"]
+
+
+def _listening(address, timeout: float) -> None:
+    """Raise ValueError at once when a TCP/TLS ``address`` refuses the connection (Dask
+    retries it until its timeout) or does not resolve."""
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    try:
+        scheme, location = parse_address(str(address))
+        host, port = parse_host_port(location, default_port=_DEFAULT_PORT)
+    except (ValueError, TypeError):
+        return  # Dask says what is wrong with it
+    if scheme not in ("tcp", "tls"):
+        return
+    try:
+        socket.create_connection((host, port), timeout=timeout).close()
+    except OSError as exc:
+        raise ValueError(f"cannot connect to the Dask scheduler at {address}: {_reason(exc, timeout)}") from None
+
+
+def _reason(error, timeout: float) -> str:
+    if isinstance(error, (TimeoutError, socket.timeout)):
+        return (f"no answer to Dask's handshake within {timeout:g} s (is it the scheduler's port, not "
+                "its dashboard's or another service's?)")
+    if isinstance(error, MemoryError):
+        return "the answer is not Dask's protocol (it announced a message too large to hold; another service?)"
+    if isinstance(error, OSError) and error.strerror:
+        return error.strerror
+    text = str(error).strip().splitlines()
+    return f"{type(error).__name__}: {text[0]}" if text else type(error).__name__
 
 
 def stage_key(stage: str) -> str:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import pathlib
 import time
@@ -16,7 +17,7 @@ from .._validate import check_int
 from ..methods import check_options, get_method
 from ..io.atomic import refuse_input_as_output
 from ..tuning import DRIFT_POOL, DRIFT_SHARE, MAX_PASSES
-from . import assemble, binning, engine, signs
+from . import assemble, binning, creases, engine, signs
 from .source import open_source
 from .store import TileStore, directory_for
 from . import wholecloud
@@ -49,7 +50,7 @@ DEFAULT_MEMORY = "1.5GB"
 #: pass 1 stepped back where pass 2 drifts (core.drift: 144 bytes of rows a point) and three
 #: passes' fits (~310 bytes): ~4 neighbours a pass more, estimated, not measured
 AUTO_PASS_NEIGHBOURS = 15
-_VERSION = 4  # bumped when the work directory's layout changes: old ones are cleared
+_VERSION = 5  # bumped when the work directory's layout changes: old ones are cleared
 
 
 @dataclass(frozen=True)
@@ -62,7 +63,8 @@ class TiledRun:
     tiles_skipped: int
     agreement: float  # share of halo points whose orientations agree across tiles
     seconds: float
-    params: dict = field(default_factory=dict)  # k="auto": the whole cloud's noise, crease_typical, passes_run
+    #: the whole cloud's crease_typical; with k="auto" also its noise, fold_typical, passes_run
+    params: dict = field(default_factory=dict)
     #: CPU seconds of this process per stage (plan, bin, tiles: the scheduler and the
     #: waiting, signs, assemble) and "tile tasks": of the tasks, summed over the workers
     cpu: dict = field(default_factory=dict)
@@ -162,7 +164,9 @@ def estimate_tiled(source, output, *, normals=None, k="auto", method="nr", passe
         gives every point the in-memory choice of k, model and fit: a pre-pass fixes the
         whole cloud's medians (:mod:`.wholecloud`), each tile runs every refinement pass
         and the pass kept is chosen for the whole cloud (:mod:`.auto`); ``params`` of the
-        result reports the noise, crease_typical and passes_run used.
+        result reports the noise, crease_typical and passes_run used. With an integer k the
+        creases are judged against the whole cloud's median residual once every tile has
+        fitted (:mod:`.creases`; ``params["crease_typical"]``).
     orientation : as for :func:`core.estimate`: "auto", "outward", "propagate", "keep" or a
         (3,) viewpoint (scanner position).
     tile_points : points per tile; default from ``memory`` and k.
@@ -185,14 +189,21 @@ def estimate_tiled(source, output, *, normals=None, k="auto", method="nr", passe
         source, normals, k, method=method, passes=passes, orientation=orientation, options=options,
         tile_points=tile_points, workers=workers, memory=memory, ignore_normals=ignore_normals)
     output = _output(output)
-    store = TileStore(workdir or directory_for(output))
-    same_run = {**spec.__dict__, "threads": None}  # any number of workers may resume a run
-    resumed = store.open({"input": list(map(str, src.identity)), "spec": repr(same_run), "rule": rule,
-                          "tile_points": tile_points, "version": _VERSION, "auto": _auto_rules(spec)})
-    cpu = _StageCPU()
-    plan, sizes = _binned(src, store, tile_points, report, cpu)
-    tasks = dict(client=client, scheduler=scheduler, workers=workers, memory=budget, label=src.name)
-    spec, results, params = _estimate(store, plan, sizes, spec, tasks, report.sub(0.15, 0.9))
+    own_client = engine.connect(scheduler) if client is None and scheduler is not None else None
+    try:  # a scheduler that cannot be reached is told before the input is binned
+        store = TileStore(workdir or directory_for(output))
+        same_run = {**spec.__dict__, "threads": None}  # any number of workers may resume a run
+        resumed = store.open({"input": list(map(str, src.identity)), "spec": repr(same_run), "rule": rule,
+                              "tile_points": tile_points, "version": _VERSION, "auto": _auto_rules(spec)})
+        cpu = _StageCPU()
+        with _kept_only_to_resume(store):
+            plan, sizes = _binned(src, store, tile_points, report, cpu)
+            tasks = dict(client=own_client or client, scheduler=None if own_client else scheduler, workers=workers,
+                         memory=budget, label=src.name)
+            spec, results, params = _estimate(store, plan, sizes, spec, tasks, report.sub(0.15, 0.9))
+    finally:
+        if own_client is not None:
+            own_client.close()
     cpu.mark("tiles")
     report(0.9, "orientation across tiles")
     tile_signs, agreement = signs.tile_signs(results, plan.n_tiles, rule)
@@ -243,7 +254,9 @@ def _estimate(store, plan, sizes, spec, tasks, report):
     done = engine.run_tasks(store.root, todo, sizes, spec, fn=run_auto_tile if auto else None,
                             progress=report.sub(0.1 if auto else 0.0, 1.0), **tasks)
     params = {"todo": len(todo), "tile cpu": sum(s.get("cpu", 0.0) for s in done + (before if auto else []))}
-    if not auto:
+    if not auto:  # the crease threshold is the whole cloud's median residual, as in memory
+        params["crease_typical"] = wholecloud.median_of(creases.samples(store, plan.n_tiles))
+        creases.rejudge(store, plan.n_tiles, params["crease_typical"])
         return spec, store, params
     whole = auto_plan(spec)
     kept, back = pass_choice(store, plan.n_tiles, whole)
@@ -261,14 +274,21 @@ def _output(output) -> pathlib.Path:
 
 
 def _binned(src, store, tile_points, report, cpu):
-    """Plan the tiles and bin the points; a failure here (an unreadable or truncated input,
-    Ctrl-C) leaves no work directory behind, unless it holds finished tiles to resume."""
+    """Plan the tiles and bin the points."""
+    plan = binning.plan_tiles(src, store, tile_points, report.sub(0.0, 0.05))
+    cpu.mark("plan")
+    sizes = binning.bin_points(src, store, plan, report.sub(0.05, 0.15))
+    cpu.mark("bin")
+    return plan, sizes
+
+
+@contextlib.contextmanager
+def _kept_only_to_resume(store):
+    """A failure inside (an unreadable or truncated input, a local cluster that does not
+    start, a failing tile, Ctrl-C) leaves no work directory behind (the binned copy of the
+    input), unless it holds finished tiles to resume."""
     try:
-        plan = binning.plan_tiles(src, store, tile_points, report.sub(0.0, 0.05))
-        cpu.mark("plan")
-        sizes = binning.bin_points(src, store, plan, report.sub(0.05, 0.15))
-        cpu.mark("bin")
-        return plan, sizes
+        yield
     except BaseException:
         if not any(store.root.glob("results/*.done")):
             store.remove()

@@ -37,7 +37,8 @@ def tile_signs(store: TileStore, n_tiles: int, rule: str):
     u, v, w = _votes(store, nodes, offset)
     graph = coo_matrix((w, (u, v)), shape=(n_nodes, n_nodes)).tocsr()
     parity = _spanning_parity(graph, n_nodes)
-    agree = float(np.sum(np.abs(w)[(w * parity[u] * parity[v]) > 0])) / max(float(np.abs(w).sum()), 1.0)
+    votes = float(np.abs(w).sum())  # none with one tile, or tiles whose halos hold no oriented point
+    agree = float(np.sum(np.abs(w)[(w * parity[u] * parity[v]) > 0])) / votes if votes else 1.0
     _, part = connected_components(graph, directed=False)
     flat = np.concatenate(nodes)
     if rule == "outward":

@@ -135,7 +135,7 @@ class TileStore:
 
     @staticmethod
     def _write_bytes(path, data: bytes) -> None:
-        with atomic_write(path) as f:
+        with atomic_write(path, sweep=False) as f:  # its own folder: no sweep per file
             f.write(data)
 
 

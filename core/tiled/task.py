@@ -17,6 +17,7 @@ from ..neighbours import build_neighbours
 from ..normals import pca_normals
 from ..orientation import ORIENT_K
 from ..planning import EstimatePlan
+from . import creases
 from .halo import chain_rings, first_margin, gather, grown, shortfall
 from .plan import TilePlan
 from .store import TileStore
@@ -75,6 +76,7 @@ def run_tile(root, tile: int, spec: TileSpec) -> dict:
     plan = TilePlan.load(store.plan_path)
     own_n = len(store.read_bin(tile))
     if own_n == 0:
+        creases.save(store, tile, np.zeros(0), np.zeros(0))
         store.save_result(tile, np.zeros(0, ROW_DTYPE), np.zeros(0, LINK_DTYPE), np.zeros(0, NODE_DTYPE))
         return {"tile": tile, "skipped": False, "points": 0, "loaded": 0}
     rec, owner, nb, needed = _load_with_halo(store, plan, tile, spec)
@@ -98,7 +100,9 @@ def run_tile(root, tile: int, spec: TileSpec) -> dict:
     links["index"], links["owner"] = rec["index"][halo], owner[halo]
     links["comp"], links["n"] = comp[halo], res.normals[halo]
     loaded = len(pts)
+    crease = creases.tile_parts(res, own, nb)  # re-judged against the whole cloud's typical residual
     del res, nb, rec, pts  # the tile's largest arrays: what is left needs only the rows (peak memory)
+    creases.save(store, tile, *crease)
     store.save_result(tile, rows, links, _nodes(rows))
     return {"tile": tile, "skipped": False, "points": int(own.sum()), "loaded": loaded}
 

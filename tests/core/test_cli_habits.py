@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 import core
+from cli_testutils import one_line_error
 from core import cli
 
 
@@ -22,13 +23,6 @@ def clouds(tmp_path_factory):
     for name, radius in (("a", 1.0), ("b", 2.0)):
         np.savetxt(d / f"{name}.xyz", core.shapes.sphere(300, radius=radius, seed=1).points)
     return d
-
-
-def _one_line_error(capsys, *parts):
-    err = capsys.readouterr().err
-    assert err.startswith("darboux-cli: error: ") and err.count("\n") == 1 and "Traceback" not in err, err
-    for part in parts:
-        assert part in err, err
 
 
 def test_version(capsys):
@@ -53,12 +47,12 @@ def test_several_files_with_stem_pattern(clouds, tmp_path):
 def test_several_files_need_directory_or_pattern(clouds, tmp_path, capsys):
     code = cli.main(["estimate", str(clouds / "a.xyz"), str(clouds / "b.xyz"), "-o", str(tmp_path / "x.csv")])
     assert code == 2
-    _one_line_error(capsys, "directory or a pattern with {stem}")
+    one_line_error(capsys, "directory or a pattern with {stem}")
 
 
 def test_unmatched_glob_refused(clouds, capsys):
     assert cli.main(["info", str(clouds / "*.nothing")]) == 2
-    _one_line_error(capsys, "no file matches")
+    one_line_error(capsys, "no file matches")
 
 
 def test_unsupported_output_refused_before_estimate(clouds, tmp_path, capsys, monkeypatch):
@@ -67,7 +61,7 @@ def test_unsupported_output_refused_before_estimate(clouds, tmp_path, capsys, mo
 
     monkeypatch.setattr(core, "estimate", never)
     assert cli.main(["estimate", str(clouds / "a.xyz"), "-o", str(tmp_path / "out.vtk")]) == 2
-    _one_line_error(capsys, "unknown file extension '.vtk' for writing")
+    one_line_error(capsys, "unknown file extension '.vtk' for writing")
     assert list(tmp_path.iterdir()) == []
 
 
@@ -135,7 +129,7 @@ def test_failures_are_one_line(clouds, tmp_path, capsys, monkeypatch, exc, code,
 
     monkeypatch.setattr(core, "estimate", fail)
     assert cli.main(["estimate", str(clouds / "a.xyz"), "-o", str(tmp_path / "o.ply")]) == code
-    _one_line_error(capsys, part)
+    one_line_error(capsys, part)
 
 
 def test_numba_and_lazrs_errors_are_one_line(clouds, tmp_path, capsys, monkeypatch):
@@ -146,11 +140,11 @@ def test_numba_and_lazrs_errors_are_one_line(clouds, tmp_path, capsys, monkeypat
 
     monkeypatch.setattr(core, "estimate", fail)
     assert cli.main(["estimate", str(clouds / "a.xyz"), "-o", str(tmp_path / "o.ply")]) == 1
-    _one_line_error(capsys, "compiled kernel failed (TypingError)", "nopython")
+    one_line_error(capsys, "compiled kernel failed (TypingError)", "nopython")
     lazrs_error = type("LazrsError", (RuntimeError,), {"__module__": "lazrs"})
     monkeypatch.setattr(core.io, "read_cloud", lambda *a, **k: (_ for _ in ()).throw(lazrs_error("bad chunk")))
     assert cli.main(["estimate", str(clouds / "a.xyz"), "-o", str(tmp_path / "o.ply")]) == 1
-    _one_line_error(capsys, "LAZ decompression failed: bad chunk")
+    one_line_error(capsys, "LAZ decompression failed: bad chunk")
 
 
 def test_other_exceptions_keep_their_traceback(clouds, tmp_path, monkeypatch):
