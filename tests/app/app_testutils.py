@@ -3,6 +3,10 @@
 from __future__ import annotations
 
 import contextlib
+import os
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 
@@ -68,3 +72,27 @@ def wait_result(qtbot, window, timeout: int = 60_000):
         window.estimator.failed.disconnect(on_failed)
     if got.out is None:
         pytest.fail(f"the estimate failed: {got.failure}")
+
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def run_app_cli(*args, timeout=240):
+    """``python -m app ARGS`` in a process of its own, on the X server pytest-xvfb started."""
+    env = dict(os.environ)
+    env.pop("QT_QPA_PLATFORM", None)  # DISPLAY is inherited
+    env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
+    return subprocess.run([sys.executable, "-m", "app", *args], cwd=ROOT, env=env, capture_output=True,
+                          text=True, timeout=timeout)
+
+
+def on_next_preview(window, action):
+    """Run ``action(out)`` inside the next preview's signal (before its full result can come)."""
+    seen = []
+
+    def slot(out):
+        window.preview_shown.disconnect(slot)
+        seen.append(action(out))
+
+    window.preview_shown.connect(slot)
+    return seen

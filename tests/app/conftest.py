@@ -113,3 +113,14 @@ def make_window(qtbot, settings):
     assert not leaked, f"threads leaked: {leaked}"
     left = set(pv_plotter._ALL_PLOTTERS) - plotters_before
     assert not left, f"plotters leaked: {left}"
+
+
+@pytest.fixture
+def previewing(monkeypatch):
+    """Previews on small clouds (as test_preview_comes_first_then_the_full_result)."""
+    import app.preview
+    from app.source import make_shape
+
+    monkeypatch.setattr(app.preview, "PREVIEW_POINTS", 800)
+    monkeypatch.setattr(app.preview, "PREVIEW_AUTO_MIN", 800)
+    return make_shape("torus", 3000)

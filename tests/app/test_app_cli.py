@@ -7,24 +7,16 @@ import subprocess
 import sys
 from pathlib import Path
 
-from app_testutils import colour_stats, image_array
+from app_testutils import colour_stats, image_array, run_app_cli
 
 ROOT = Path(__file__).resolve().parents[2]
-
-
-def _run(*args, timeout=240):
-    env = dict(os.environ)
-    env.pop("QT_QPA_PLATFORM", None)  # the X server pytest-xvfb started (DISPLAY is inherited)
-    env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
-    return subprocess.run([sys.executable, "-m", "app", *args], cwd=ROOT, env=env, capture_output=True,
-                          text=True, timeout=timeout)
 
 
 def test_screenshot_of_a_shape_with_glyphs_and_pick(tmp_path, qapp):
     from PySide6.QtGui import QImage
 
     out = tmp_path / "torus.png"
-    proc = _run("--shape", "torus", "--points", "2000", "--field", "K", "--glyphs", "e1", "--pick", "5",
+    proc = run_app_cli("--shape", "torus", "--points", "2000", "--field", "K", "--glyphs", "e1", "--pick", "5",
                 "--size", "1100x700", "--screenshot", str(out))
     assert proc.returncode == 0, proc.stderr
     image = QImage(str(out))
@@ -37,7 +29,7 @@ def test_screenshot_of_a_bad_file_fails_with_a_message(tmp_path):
     bad = tmp_path / "garbage.ply"
     bad.write_bytes(b"\x00\x01 not a ply")
     out = tmp_path / "never.png"
-    proc = _run(str(bad), "--screenshot", str(out))
+    proc = run_app_cli(str(bad), "--screenshot", str(out))
     assert proc.returncode == 1
     assert "garbage.ply" in proc.stderr
     assert not out.exists()

@@ -6,7 +6,7 @@ import warnings
 
 import numpy as np
 import pytest
-from app_testutils import wait_result
+from app_testutils import on_next_preview, wait_result
 
 import core.shapes
 from app.source import CloudSource, load_file, make_shape
@@ -14,28 +14,6 @@ from app.source import CloudSource, load_file, make_shape
 
 def _identical():
     return CloudSource(name="identical", points=np.ones((200, 3)))
-
-
-@pytest.fixture
-def previewing(monkeypatch):
-    """Previews on small clouds (as test_preview_comes_first_then_the_full_result)."""
-    import app.preview
-
-    monkeypatch.setattr(app.preview, "PREVIEW_POINTS", 800)
-    monkeypatch.setattr(app.preview, "PREVIEW_AUTO_MIN", 800)
-    return make_shape("torus", 3000)
-
-
-def _on_next_preview(window, action):
-    """Run ``action(out)`` inside the next preview's signal (before its full result can come)."""
-    seen = []
-
-    def slot(out):
-        window.preview_shown.disconnect(slot)
-        seen.append(action(out))
-
-    window.preview_shown.connect(slot)
-    return seen
 
 
 def _caption(window) -> str:
@@ -74,7 +52,7 @@ def _looks_like(window, out, values):
 def test_cancel_during_a_preview_draws_the_kept_result_again(make_window, qtbot, previewing, tmp_path):
     window = make_window(previewing)
     kept, values = window.output, window.scene._values.copy()
-    seen = _on_next_preview(window, lambda out: (window.shown["clim"],
+    seen = on_next_preview(window, lambda out: (window.shown["clim"],
                                                  (window.field_panel.lo.value(), window.field_panel.hi.value())))
     window.state.set(noise=50.0)
     qtbot.waitUntil(lambda: bool(seen), timeout=60_000)
@@ -86,7 +64,7 @@ def test_cancel_during_a_preview_draws_the_kept_result_again(make_window, qtbot,
     assert "showing the previous result" in window.status_label.text()
 
     # a failed load leaves the estimate under way alone (test_app_view_sweep.py): its result comes
-    seen = _on_next_preview(window, lambda out: window.open_file(tmp_path / "missing.xyz"))
+    seen = on_next_preview(window, lambda out: window.open_file(tmp_path / "missing.xyz"))
     with wait_result(qtbot, window, 60_000) as blocker:
         window.state.set(noise=30.0)
     qtbot.waitUntil(lambda: bool(seen) and window.loader.pending is None, timeout=10_000)
@@ -97,7 +75,7 @@ def test_cancel_during_a_preview_draws_the_kept_result_again(make_window, qtbot,
 
 def test_cancel_during_the_first_preview_clears_it(make_window, qtbot, previewing):
     window = make_window()
-    seen = _on_next_preview(window, lambda out: window.cancel())
+    seen = on_next_preview(window, lambda out: window.cancel())
     window.set_source(previewing)
     qtbot.waitUntil(lambda: bool(seen), timeout=60_000)
     assert window.output is None
@@ -113,7 +91,7 @@ def test_export_during_a_preview_says_which_result_it_wrote(make_window, qtbot, 
 
     window = make_window(previewing)
     kept = window.output
-    seen = _on_next_preview(window, lambda out: window.export_result(tmp_path / "x.ply"))
+    seen = on_next_preview(window, lambda out: window.export_result(tmp_path / "x.ply"))
     window.state.set(noise=50.0)
     qtbot.waitUntil(lambda: bool(seen), timeout=60_000)
     note = window.notifier.last

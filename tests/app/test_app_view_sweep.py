@@ -3,42 +3,14 @@ driven through the real window (or, for the command line, the real parser and pr
 
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
-from app_testutils import wait_result
+from app_testutils import on_next_preview, run_app_cli, wait_result
 from PySide6.QtWidgets import QMessageBox
 from scipy.spatial import cKDTree
 
 from app.source import CloudSource, make_shape
 
-ROOT = Path(__file__).resolve().parents[2]
-
-
-@pytest.fixture
-def previewing(monkeypatch):
-    """Previews on small clouds (as in test_app_sweep_fixes.py)."""
-    import app.preview
-
-    monkeypatch.setattr(app.preview, "PREVIEW_POINTS", 800)
-    monkeypatch.setattr(app.preview, "PREVIEW_AUTO_MIN", 800)
-    return make_shape("torus", 3000)
-
-
-def _on_next_preview(window, action):
-    """Run ``action(out)`` inside the next preview's signal (before its full result can come)."""
-    seen = []
-
-    def slot(out):
-        window.preview_shown.disconnect(slot)
-        seen.append(action(out))
-
-    window.preview_shown.connect(slot)
-    return seen
 
 
 def _glyph_centres(window, kind: str) -> np.ndarray:
@@ -103,7 +75,7 @@ def test_field_box_follows_a_fallback_to_mean_curvature(make_window, qtbot, toru
 
 def test_a_preview_draws_the_field_the_box_names(make_window, qtbot, previewing):
     window = make_window(previewing, field="err_mean", k_auto=False, k=12)
-    seen = _on_next_preview(window, lambda out: (dict(window.shown), window.field_panel.combo.currentData()))
+    seen = on_next_preview(window, lambda out: (dict(window.shown), window.field_panel.combo.currentData()))
     with wait_result(qtbot, window, 60_000):
         window.state.set(noise=20.0)
     qtbot.waitUntil(lambda: bool(seen), timeout=10_000)
@@ -113,21 +85,13 @@ def test_a_preview_draws_the_field_the_box_names(make_window, qtbot, previewing)
     assert not [n for n in window.notifier.history if n.level == "warning"]
 
 
-def _run_cli(*args, timeout=240):
-    env = dict(os.environ)
-    env.pop("QT_QPA_PLATFORM", None)  # the X server pytest-xvfb started (DISPLAY is inherited)
-    env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
-    return subprocess.run([sys.executable, "-m", "app", *args], cwd=ROOT, env=env, capture_output=True,
-                          text=True, timeout=timeout)
-
-
 def test_cli_field_on_a_plain_file_says_it_fell_back(tmp_path):
     import core.io
 
     plain = tmp_path / "plain.xyz"
     core.io.write_cloud(plain, make_shape("torus", 1000).points)
     out = tmp_path / "shot.png"
-    proc = _run_cli(str(plain), "--field", "err_mean", "--screenshot", str(out))
+    proc = run_app_cli(str(plain), "--field", "err_mean", "--screenshot", str(out))
     assert proc.returncode == 0, proc.stderr
     assert "Error of H is not available for plain.xyz" in proc.stderr and "Mean curvature H" in proc.stderr
     assert out.exists()
@@ -145,7 +109,7 @@ def test_a_file_that_fails_to_open_leaves_the_estimate_under_way(make_window, qt
         kept.append(window.presenter.preview)
         return out
 
-    seen = _on_next_preview(window, open_bad)
+    seen = on_next_preview(window, open_bad)
     with wait_result(qtbot, window, 60_000) as blocker:
         window.state.set(noise=25.0)
         qtbot.waitUntil(lambda: bool(seen) and window.loader.pending is None, timeout=30_000)
@@ -159,7 +123,7 @@ def test_a_file_that_fails_to_open_leaves_the_estimate_under_way(make_window, qt
 
 def test_a_shape_replaces_the_cloud_and_its_estimate_only_when_it_arrives(make_window, qtbot, previewing):
     window = make_window(previewing, k_auto=False, k=12)
-    seen = _on_next_preview(window, lambda out: (window.load_shape("sphere", 700), window.estimator.busy)[1])
+    seen = on_next_preview(window, lambda out: (window.load_shape("sphere", 700), window.estimator.busy)[1])
     window.state.set(noise=25.0)
     qtbot.waitUntil(lambda: bool(seen), timeout=60_000)
     assert seen[0] is True  # the torus is still being estimated while the sphere is generated
@@ -239,7 +203,7 @@ def test_cli_pick_past_the_last_point_of_a_file_is_refused(tmp_path):
     cloud = tmp_path / "small.xyz"
     core.io.write_cloud(cloud, make_shape("sphere", 300).points)
     out = tmp_path / "shot.png"
-    proc = _run_cli(str(cloud), "--pick", "99999999", "--screenshot", str(out))
+    proc = run_app_cli(str(cloud), "--pick", "99999999", "--screenshot", str(out))
     assert proc.returncode == 2, proc.stderr
     assert "--pick 99999999 is out of range for small.xyz; allowed: 0 to 299" in proc.stderr
     assert not out.exists()
