@@ -33,8 +33,8 @@ class Estimator(QObject):
     failed(str)                 the latest request failed (message for the user)
     progress(float, str)        progress of the latest request
     busy_changed(int)           1 while the latest request is pending, then 0
-    dropped(int)                a result came back stale and was dropped
-    cancelled(int)              a request was cancelled or skipped
+    dropped(int)                a stale answer (result, failure, late cancel) was dropped
+    cancelled(int)              the estimate under way was cancelled (once per request)
     """
 
     result = Signal(object)
@@ -146,9 +146,14 @@ class Estimator(QObject):
 
     @Slot(int)
     def _on_cancelled(self, gen: int) -> None:
-        if gen == self._gen:
+        """The job thread gave up ``gen``. Announced as ``cancelled`` only if it is the
+        estimate under way; after :meth:`cancel` (which announced it already) or for a stale
+        job it is a ``dropped`` answer, so the window does not redo its cancel twice."""
+        if gen == self._gen and self._busy:
             self._set_busy(False)
-        self.cancelled.emit(gen)
+            self.cancelled.emit(gen)
+        else:
+            self.dropped.emit(gen)
 
     @Slot(int, float, str)
     def _on_progress(self, gen: int, fraction: float, stage: str) -> None:

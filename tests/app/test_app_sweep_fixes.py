@@ -7,6 +7,7 @@ import warnings
 import numpy as np
 import pytest
 from app_testutils import on_next_preview, wait_result
+from PySide6.QtCore import Qt
 
 import core.shapes
 from app.source import CloudSource, load_file, make_shape
@@ -75,9 +76,12 @@ def test_cancel_during_a_preview_draws_the_kept_result_again(make_window, qtbot,
 
 def test_cancel_during_the_first_preview_clears_it(make_window, qtbot, previewing):
     window = make_window()
+    late = []  # the job thread's own word that it stopped comes after cancel() announced it
+    window.estimator._worker.cancelled.connect(late.append, Qt.ConnectionType.DirectConnection)
     seen = on_next_preview(window, lambda out: window.cancel())
     window.set_source(previewing)
-    qtbot.waitUntil(lambda: bool(seen), timeout=60_000)
+    qtbot.waitUntil(lambda: bool(seen) and bool(late), timeout=60_000)
+    qtbot.wait(50)  # its queued signal reaches the GUI thread
     assert window.output is None
     assert np.isnan(window.scene._values).all() if window.scene._values is not None else True
     assert not window.scene._bar.GetVisibility() and window.histogram.counts.sum() == 0
