@@ -224,7 +224,8 @@ def test_the_next_write_removes_what_killed_writes_left(tmp_path):
 
 
 SLOW_WRITER = """
-import sys, time
+import signal, sys, time
+signal.signal(signal.SIGHUP, signal.SIG_DFL)  # as from a terminal: the test may run under nohup
 from core.io.atomic import atomic_write
 with atomic_write(sys.argv[1]) as f:
     f.write(b"x,y,z\\n"); f.flush()
