@@ -104,7 +104,14 @@ def check_int(value, *, name: str, low: int, high: int | None = None) -> int:
     return value
 
 
+def word(value):
+    """A keyword argument's string in its canonical spelling (stripped, lower case), as
+    MeshLab and CloudCompare users type "NR" or "Auto"; anything else unchanged."""
+    return value.strip().lower() if isinstance(value, str) else value
+
+
 def check_choice(value, *, name: str, choices) -> str:
+    value = word(value)
     if not isinstance(value, str) or value not in choices:
         raise ValueError(f"{name} {value!r} is invalid; must be one of {sorted(choices)}")
     return value

@@ -167,7 +167,7 @@ def curvature_lines(res, *, direction: str = "e1", seeds=None, separation: float
     >>> len(lines) > 0
     True
     """
-    check_choice(direction, name="direction", choices=("e1", "e2"))
+    direction = check_choice(direction, name="direction", choices=("e1", "e2"))
     if not (np.isscalar(step) and 0 < step <= 2):
         raise ValueError(f"step={step!r} is invalid; must be a number in (0, 2] (spacings)")
     if not (np.isscalar(separation) and separation > 0):

@@ -13,7 +13,7 @@ import numpy as np
 
 from . import degenerate, interop, stage_cache
 from ._progress import Progress
-from ._validate import as_normals, as_points, masked_as_nan
+from ._validate import as_normals, as_points, masked_as_nan, word
 from .duplicates import CopiesNeighbours, Merged, NearCopies, expand, find_duplicates, near_copies
 from .planning import EstimatePlan
 from .result import CurvatureResult
@@ -113,8 +113,9 @@ def estimate(
     pts, kept = as_points(points, drop_nonfinite=drop_nonfinite)
     if len(pts) < 3:
         raise ValueError(f"points must hold at least 3 points, got {len(pts)}")
-    asked = dict(k=k, method=method, passes=passes, tol=tol, initial=initial, orientation=orientation,
-                 options=options)
+    # "Auto", "NR", "Outward": keywords in any case (the result reports them in lower case)
+    asked = dict(k=word(k), method=method, passes=passes, tol=tol, initial=word(initial),
+                 orientation=word(orientation), options=options)
     # harden: every argument checked alike on every cloud, degenerate or not, before any work
     checked = degenerate.checked_plan(len(pts), asked, lambda n, ask: _plan(plan, n, ask, normals is not None),
                                       planned=plan is not None)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._validate import as_normals, as_points
+from ._validate import as_normals, as_points, word
 from .spacing import mean_spacing
 
 _DIRECTIONS = ("isotropic", "normal")
@@ -27,6 +27,7 @@ def add_noise(points, sigma, *, normals=None, direction="isotropic", relative=Tr
     sigma = float(sigma)
     if not np.isfinite(sigma) or sigma < 0:
         raise ValueError(f"sigma must be a finite number >= 0, got {sigma}")
+    direction = word(direction)
     if direction not in _DIRECTIONS:
         raise ValueError(f"direction {direction!r} is invalid; must be one of {list(_DIRECTIONS)}")
     if relative:

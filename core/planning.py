@@ -16,7 +16,7 @@ from typing import Mapping
 import numpy as np
 
 from . import scale
-from ._validate import check_int
+from ._validate import check_int, word
 from .methods import METHODS, Method, check_options, get_method
 from .tuning import AUTO_PASSES, MAX_PASSES, PCA_K
 
@@ -104,7 +104,8 @@ class EstimatePlan:
         n = check_int(n_points, name="n_points", low=3)
         m = get_method(method)
         opts = check_options(m, options)
-        auto = isinstance(k, str) and k == "auto"
+        k = word(k)
+        auto = k == "auto"
         if auto:
             ks, passes = _auto_defaults(m, n, opts, options or {}, passes)
             k_initial = min(PCA_K, ks[-1])
@@ -157,6 +158,7 @@ def _tol(tol):
 
 
 def _initial(initial, auto):
+    initial = word(initial)
     if not isinstance(initial, str) or initial not in _INITIAL:
         raise ValueError(f"initial {initial!r} is invalid; must be one of {list(_INITIAL)}")
     if initial == "auto":
@@ -166,6 +168,7 @@ def _initial(initial, auto):
 
 def _orientation(orientation, normals_given):
     """(mode, label): "auto" keeps given normals and orients estimated ones outward."""
+    orientation = word(orientation)
     if isinstance(orientation, str):
         if orientation not in _ORIENTATIONS:
             raise ValueError(

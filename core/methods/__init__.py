@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Callable
 
+from .._validate import word
 from . import cubic, jet, normal_fit, quadric, tensor
 from ._result import MethodFit
 
@@ -81,8 +82,8 @@ def get_method(method) -> Method:
     """Look a method up by name (case-insensitive); unknown names list the valid ones."""
     if isinstance(method, Method):
         return method
-    if isinstance(method, str) and method.lower() in METHODS:
-        return METHODS[method.lower()]
+    if isinstance(method, str) and word(method) in METHODS:
+        return METHODS[word(method)]
     raise ValueError(f"method {method!r} is unknown; valid methods are: {', '.join(METHODS)}")
 
 
@@ -98,7 +99,7 @@ def check_options(method: Method, options) -> dict:
         raise ValueError(
             f"option(s) {unknown} do not apply to method {method.name!r}; its options are: {allowed}"
         )
-    merged = {**method.options, **options}
+    merged = {**method.options, **{key: word(value) for key, value in options.items()}}
     if method.check is not None:
         method.check(**merged)
     return merged

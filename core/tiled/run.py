@@ -13,7 +13,7 @@ import numba
 import numpy as np
 
 from .._progress import Progress
-from .._validate import check_int
+from .._validate import check_int, word
 from ..methods import check_options, get_method
 from ..io.atomic import refuse_input_as_output
 from ..tuning import DRIFT_POOL, DRIFT_SHARE, MAX_PASSES
@@ -299,8 +299,8 @@ def _spec(k, method, passes, orientation, options, normals_given, in_process, vi
     """The tile parameters (validated as :func:`core.estimate` does) and the sign rule."""
     m = get_method(method)
     opts = check_options(m, options)
-    k, passes = _k_passes(k, passes, m, opts)
-    tile_orient, rule = _orientation(orientation, normals_given, views)
+    k, passes = _k_passes(word(k), passes, m, opts)
+    tile_orient, rule = _orientation(word(orientation), normals_given, views)
     spec = TileSpec(k=k, method=m.name, passes=passes, orientation=tile_orient, options=options or {},
                     normals_given=normals_given,
                     threads=numba.config.NUMBA_NUM_THREADS if in_process else 1)

@@ -79,6 +79,20 @@ def test_bad_plan_arguments_name_themselves(kwargs, match):
         core.plan(1000, **kwargs)
 
 
+def test_keywords_are_read_in_any_case_and_reported_in_lower_case(sample):
+    """Users type "Auto", "NR", "Outward" (as in MeshLab's and CloudCompare's dialogs)."""
+    assert core.plan(1000, k=" Auto ", method="NR", initial="JET", orientation="Outward",
+                     options={"robust": "Huber", "weights": "THETA"}) == core.plan(
+        1000, k="auto", method="nr", initial="jet", orientation="outward",
+        options={"robust": "huber", "weights": "theta"})
+    a = core.estimate(sample.points, k="AUTO", orientation="OUTWARD")
+    b = core.estimate(sample.points)
+    assert a.k == "auto" and a.params["orientation"] == "outward"
+    np.testing.assert_array_equal(a.k1, b.k1)
+    with pytest.raises(ValueError, match="robust 'cauchy' is invalid"):
+        core.plan(1000, options={"robust": "Cauchy"})
+
+
 def test_estimate_refuses_a_degree_7_with_automatic_k(sample):
     with pytest.raises(ValueError, match=r"degree 7 is invalid"):
         core.estimate(sample.points, options={"degree": 7})
