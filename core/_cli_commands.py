@@ -187,8 +187,8 @@ def _estimate_one(args, src, dst, fmt, options) -> None:
         if src != STDIO:
             tiled_cli.run(_one(args, src, dst))
             return
-        with stdin_file(args.input_format) as path:
-            tiled_cli.run(_one(args, str(path), dst))
+        with stdin_file(args.input_format) as path:  # read from a temporary copy, named "stdin" in the summary
+            tiled_cli.run(argparse.Namespace(**{**vars(_one(args, str(path), dst)), "label": "stdin"}))
         return
     cloud = read_input(src, args.input_format, args.drop_nonfinite)
     normals = None if args.ignore_normals else cloud.normals

@@ -79,7 +79,7 @@ def run(args) -> int:
     finally:
         bar.close()
     if not args.quiet:
-        print(f"{args.input}: {res.n_points} points in {res.n_tiles} tiles ({res.tiles_skipped} finished "
+        print(f"{_label(args)}: {res.n_points} points in {res.n_tiles} tiles ({res.tiles_skipped} finished "
               f"before), method {args.method}, k {args.k}, {res.seconds:.2f} s")
         if res.params:
             print("whole cloud: " + ", ".join(f"{name} {value:.6g}" for name, value in res.params.items()))
@@ -112,8 +112,13 @@ def _whole_to_las(args, orientation) -> int:
                                                          laz=str(args.output).lower().endswith(".laz")) as w:
         w.write(res.points, cols, records)
     if not args.quiet:
-        print(f"{args.input}: {len(res)} points, method {res.method}, k {res.k}\nwrote {args.output}")
+        print(f"{_label(args)}: {len(res)} points, method {res.method}, k {res.k}\nwrote {args.output}")
     return 0
+
+
+def _label(args) -> str:
+    """The input as the summary names it ("stdin" for the temporary copy of standard input)."""
+    return getattr(args, "label", None) or str(args.input)
 
 
 class _Bar:

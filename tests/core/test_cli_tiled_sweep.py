@@ -172,6 +172,15 @@ def test_las_output_from_standard_input(clouds, tmp_path, monkeypatch):
     np.testing.assert_allclose(laspy.read(out).xyz, np.loadtxt(clouds / "a.xyz"), atol=1e-3)
 
 
+@pytest.mark.parametrize("k", ["15", "auto"])  # in tiles, and whole into LAS
+def test_the_summary_of_standard_input_names_stdin_not_its_temporary_copy(clouds, tmp_path, monkeypatch, capsys, k):
+    monkeypatch.setattr(sys, "stdin", io.TextIOWrapper(io.BytesIO((clouds / "a.xyz").read_bytes())))
+    assert cli.main(["estimate", "-", "-o", str(tmp_path / "s.las"), "--k", k, "--workers", "0"]
+                    if k == "15" else ["estimate", "-", "-o", str(tmp_path / "s.las")]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("stdin: ") and "darboux-stdin-" not in out
+
+
 def test_las_output_in_a_directory_by_format(clouds, tmp_path):
     argv = ["estimate", str(clouds / "a.xyz"), str(clouds / "b.xyz"), "-o", str(tmp_path), "--format", "laz",
             "--k", "15", "--workers", "0", "-q"]
