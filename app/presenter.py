@@ -201,6 +201,7 @@ class ResultPresenter:
         for scene in (self.scene, self.compare_scene):
             if scene is not None:
                 scene.set_point_size(size)
+        self.glyphs()  # they float over the sprites' tops: bigger sprites, higher glyphs
         self.pick()
 
 

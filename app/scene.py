@@ -239,7 +239,7 @@ class CloudScene(Picking):
         ``geometry.glyph_order``), or remove them.
 
         ``length`` is in mean point spacings. With ``normals``, tangent glyphs are
-        lifted off the surface by half a spacing so the point sprites do not hide them.
+        lifted off the surface (:meth:`overlay_lift`) so the point sprites do not hide them.
         """
         name = f"glyph-{kind}"
         if directions is None or self.points is None or density <= 0:
@@ -252,7 +252,7 @@ class CloudScene(Picking):
         index = glyphs.glyph_index(self.geometry.glyph_order, density)
         base = self.points[index]
         if normals is not None:
-            base = base + np.nan_to_num(np.asarray(normals, dtype=float)[index]) * (0.6 * self.spacing)
+            base = base + np.nan_to_num(np.asarray(normals, dtype=float)[index]) * self.overlay_lift()
         vertices, lines = glyphs.segments(base, np.asarray(directions)[index], slice(None), length * self.spacing)
         if len(vertices) == 0:
             self.set_glyphs(kind, None, density=0, length=0)
@@ -266,6 +266,10 @@ class CloudScene(Picking):
                                   reset_camera=False, render=False, lighting=False)
         self._glyph_names.add(name)
         self._glyph_legend()
+
+    def overlay_lift(self) -> float:
+        """World distance along the normal that clears the point sprites (app/framing.py)."""
+        return framing.overlay_lift(self._sprite_spacing or self.spacing, self.point_size)
 
     def _glyph_legend(self) -> None:
         """A legend of the glyphs shown, in the lower-left corner (app/legend.py)."""

@@ -21,35 +21,32 @@ from ..estimator import SHUTDOWN_WAIT_S
 
 __all__ = ["CloudMaths", "cloud_maths", "CloudMathsWorker"]
 
-#: lines of curvature are lifted off the surface by this many spacings, so that the point
-#: sprites (about one spacing wide) do not hide them
-LINE_LIFT = 0.7
-
-
 @dataclass(frozen=True)
 class CloudMaths:
-    """What the teaching overlays need about the whole cloud (numpy only)."""
+    """What the teaching overlays need about the whole cloud (numpy only): the lines of
+    curvature on the surface, with the normal of each vertex's nearest point to lift them
+    over the point sprites when drawn (their size is the view's: app/framing.overlay_lift)."""
 
     scale: float
     types: np.ndarray
     lines: dict  # "e1" / "e2" -> list of (m, 3) polylines
     gauss_bonnet: core.GaussBonnet
     spacing: float
+    line_normals: dict = None  # "e1" / "e2" -> list of (m, 3) unit normals, one per vertex
+
+    def lifted(self, key: str, lift: float) -> list:
+        """The lines of ``key`` moved ``lift`` (world units) along their vertices' normals."""
+        return [line + lift * n for line, n in zip(self.lines[key], self.line_normals[key])]
 
 
-def _lift(lines, res, spacing):
-    """Move every vertex along the normal of its nearest point by LINE_LIFT spacings."""
+def _vertex_normals(lines, res) -> list:
+    """The normal of each vertex's nearest valid point."""
     if not lines:
-        return lines
+        return []
     ok = res.valid & np.isfinite(res.normals).all(axis=1)
-    tree = cKDTree(res.points[ok])
-    _, idx = tree.query(np.concatenate(lines))
-    shift = res.normals[ok][idx] * (LINE_LIFT * spacing)
-    out, start = [], 0
-    for line in lines:
-        out.append(line + shift[start:start + len(line)])
-        start += len(line)
-    return out
+    _, idx = cKDTree(res.points[ok]).query(np.concatenate(lines))
+    normals = res.normals[ok][idx]
+    return np.split(normals, np.cumsum([len(line) for line in lines])[:-1])
 
 
 #: about this many seeds per family of lines: enough to cover a shape, few enough to read
@@ -68,14 +65,14 @@ def cloud_maths(res, *, separation: float | None = None, progress=None) -> Cloud
     gb = core.gauss_bonnet(res, progress=progress)
     d, _ = cKDTree(res.points).query(res.points[:: max(1, len(res.points) // 2000)], k=2)
     spacing = float(np.mean(d[:, 1])) or 1.0
-    lines = {}
+    lines, normals = {}, {}
     for direction in ("e1", "e2"):
         try:
-            traced = core.curvature_lines(res, direction=direction, separation=separation, progress=progress)
+            lines[direction] = core.curvature_lines(res, direction=direction, separation=separation, progress=progress)
         except ValueError:  # no valid point
-            traced = []
-        lines[direction] = _lift(traced, res, spacing)
-    return CloudMaths(scale=scale, types=types, lines=lines, gauss_bonnet=gb, spacing=spacing)
+            lines[direction] = []
+        normals[direction] = _vertex_normals(lines[direction], res)
+    return CloudMaths(scale=scale, types=types, lines=lines, gauss_bonnet=gb, spacing=spacing, line_normals=normals)
 
 
 class CloudMathsWorker(QObject):

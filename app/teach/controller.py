@@ -102,6 +102,9 @@ class TeachController(QObject):
             self._draw_local()
             self._draw_gauss_map()
             self.window.render_all()
+        elif name == "point_size" and self.settings.enabled and not self._closed:
+            self._draw_cloud()  # the lines float over the sprites' tops: bigger sprites, higher lines
+            self.window.render_all()
         elif name == "source":
             self._result, self.maths, self.fit = None, None, None
             self.layer.clear()
@@ -211,7 +214,8 @@ class TeachController(QObject):
         maths, res, on = self.maths, self.result, self.settings.overlays
         self.panel.cloud_label.setText(cloud_text(maths))
         for key in ("e1", "e2"):
-            mesh = lines_mesh(maths.lines[key]) if maths is not None and "lines" in on else None
+            lift = self.window.scene.overlay_lift()
+            mesh = lines_mesh(maths.lifted(key, lift)) if maths is not None and "lines" in on else None
             style = dict(color=self._colour(key), line_width=2.5, render_lines_as_tubes=False)
             self.layer.show(f"lines-{key}", mesh, style)
         if maths is not None and "types" in on and res is not None:

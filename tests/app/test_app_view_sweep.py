@@ -113,7 +113,9 @@ def test_a_file_that_fails_to_open_leaves_the_estimate_under_way(make_window, qt
     with wait_result(qtbot, window, 60_000) as blocker:
         window.state.set(noise=25.0)
         qtbot.waitUntil(lambda: bool(seen) and window.loader.pending is None, timeout=30_000)
-        assert window.presenter.preview is seen[0] is kept[0]  # the preview is still the one on screen
+        assert kept[0] is seen[0]  # opening the file left the preview on screen
+        # and its failure did too, unless the full result has replaced it since (a race: both are quick)
+        assert window.presenter.preview is seen[0] or window.output.request.noise == 25.0
         assert window.notifier.last.level == "error" and "broken.ply" in window.notifier.last.message
         assert window.estimator.busy or window.output.request.noise == 25.0  # not cancelled
         assert "not estimated" not in window.status_label.text()
