@@ -236,10 +236,8 @@ class CloudScene(Picking):
                    normals: np.ndarray | None = None):
         """± segments along ``directions`` at a ``density`` fraction of the glyph positions
         (at most :data:`app.glyphs.GLYPH_POINTS`, spread evenly: the cloud's
-        ``geometry.glyph_order``), or remove them.
-
-        ``length`` is in mean point spacings. With ``normals``, tangent glyphs are
-        lifted off the surface (:meth:`overlay_lift`) so the point sprites do not hide them.
+        ``geometry.glyph_order``), or remove them. ``length`` is in mean point spacings. With
+        ``normals``, tangent glyphs are lifted (:meth:`overlay_lift`) over the point sprites.
         """
         name = f"glyph-{kind}"
         if directions is None or self.points is None or density <= 0:
