@@ -31,8 +31,7 @@ class CloudMaths:
     types: np.ndarray
     lines: dict  # "e1" / "e2" -> list of (m, 3) polylines
     gauss_bonnet: core.GaussBonnet
-    spacing: float
-    line_normals: dict = None  # "e1" / "e2" -> list of (m, 3) unit normals, one per vertex
+    line_normals: dict  # "e1" / "e2" -> list of (m, 3) unit normals, one per vertex
 
     def lifted(self, key: str, lift: float) -> list:
         """The lines of ``key`` moved ``lift`` (world units) along their vertices' normals."""
@@ -63,8 +62,6 @@ def cloud_maths(res, *, separation: float | None = None, progress=None) -> Cloud
     scale = core.curvature_scale(res)
     types = core.point_types(res, scale=scale)
     gb = core.gauss_bonnet(res, progress=progress)
-    d, _ = cKDTree(res.points).query(res.points[:: max(1, len(res.points) // 2000)], k=2)
-    spacing = float(np.mean(d[:, 1])) or 1.0
     lines, normals = {}, {}
     for direction in ("e1", "e2"):
         try:
@@ -72,7 +69,7 @@ def cloud_maths(res, *, separation: float | None = None, progress=None) -> Cloud
         except ValueError:  # no valid point
             lines[direction] = []
         normals[direction] = _vertex_normals(lines[direction], res)
-    return CloudMaths(scale=scale, types=types, lines=lines, gauss_bonnet=gb, spacing=spacing, line_normals=normals)
+    return CloudMaths(scale=scale, types=types, lines=lines, gauss_bonnet=gb, line_normals=normals)
 
 
 class CloudMathsWorker(QObject):

@@ -213,8 +213,8 @@ class TeachController(QObject):
     def _draw_cloud(self) -> None:
         maths, res, on = self.maths, self.result, self.settings.overlays
         self.panel.cloud_label.setText(cloud_text(maths))
+        lift = self.window.scene.overlay_lift()
         for key in ("e1", "e2"):
-            lift = self.window.scene.overlay_lift()
             mesh = lines_mesh(maths.lifted(key, lift)) if maths is not None and "lines" in on else None
             style = dict(color=self._colour(key), line_width=2.5, render_lines_as_tubes=False)
             self.layer.show(f"lines-{key}", mesh, style)

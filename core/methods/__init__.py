@@ -82,8 +82,9 @@ def get_method(method) -> Method:
     """Look a method up by name (case-insensitive); unknown names list the valid ones."""
     if isinstance(method, Method):
         return method
-    if isinstance(method, str) and word(method) in METHODS:
-        return METHODS[word(method)]
+    name = word(method)
+    if isinstance(name, str) and name in METHODS:
+        return METHODS[name]
     raise ValueError(f"method {method!r} is unknown; valid methods are: {', '.join(METHODS)}")
 
 
