@@ -16,6 +16,9 @@ never deallocated anyway, so nothing else changes. The viewer's own code also
 avoids the patterns (names, not values, through signals; no None item data).
 
 GUI thread; call once a QCoreApplication exists (idempotent).
+
+:func:`pinned_children` guards against a second fault, in the teardown of a widget tree:
+see there.
 """
 
 from __future__ import annotations
@@ -23,9 +26,10 @@ from __future__ import annotations
 import ctypes
 import sys
 
+import shiboken6
 from PySide6.QtCore import QObject, QTimer, Signal
 
-__all__ = ["probe", "guard"]
+__all__ = ["probe", "guard", "pinned_children"]
 
 _EXTRA = 1 << 40
 _done: dict = {}
@@ -77,3 +81,18 @@ def guard() -> dict:
         applied = all(_add(obj, _EXTRA) for obj in (None, True, False))
     _done.update(lost, applied=applied)
     return dict(_done)
+
+
+def pinned_children(owner: QObject) -> list:
+    """Strong references to the Python wrappers of every object created from Python under
+    ``owner``; keep them until ``owner``'s wrapper goes, and Qt may delete the tree.
+
+    PySide keeps such a wrapper alive by its own record of parents, which is not Qt's tree
+    (the controls' group boxes, laid out in a panel inside a scroll area inside a dock, are
+    recorded as children of the main window). When Qt deletes the tree it drops that
+    record's reference, and a wrapper nothing else holds can be freed in the middle of its
+    own ``Shiboken::Object::destroy``, which then reads it: the test suite's teardown
+    segfaulted there (``BindingManager::releaseWrapper`` on a freed ``QGroupBox`` wrapper,
+    reference count 0) in 2 of 5 runs of ``tests/app`` on a busy machine. With the wrappers
+    pinned, ``destroy`` only ever lowers a count that stays above zero."""
+    return [o for o in owner.findChildren(QObject) if shiboken6.createdByPython(o)]

@@ -351,3 +351,4 @@ class MainWindow(WindowActions, WindowStatus, QMainWindow):
             self.compare.close_view()
         self.scene.close()
         self.plotter.close()
+        self._pinned = _refguard.pinned_children(self)  # Qt may now delete the widgets safely
