@@ -14,7 +14,7 @@ from .frame import turned_over
 from .orientation import resettle
 from .passes import PassRule, few_fits
 from .stages import Fit, Initial, Scale, _empty_fit, _Fitter
-from .tuning import DRIFT_POOL, HOLD_TURN, PASS_DECAY, RESETTLE_K
+from .tuning import DRIFT_POOL, HOLD_TURN, IRLS_LATER, PASS_DECAY, RESETTLE_K
 from .wide_neighbours import rows_at_least
 
 
@@ -82,11 +82,21 @@ def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n
         complete = _Rest(fitter, fit, nrm, None if first is None else centres & ~first, sub.sub(share, 1.0), held)
         yield p, fit, nrm, complete
         complete()
+        if p == 0:
+            fitter = _refining(fitter)
         new = np.where(fit.valid[:, None], fit.normals, nrm)
         if plan.robust and p == 0:  # outliers leave their neighbours' fits (and are not estimated)
             has_normal = has_normal & ~outlier
             new[outlier] = np.nan
         nrm = new
+
+
+def _refining(fitter: _Fitter) -> _Fitter:
+    """The fitter of the refinement passes: a robust fit reweights :data:`~core.tuning.IRLS_LATER`
+    times (its input normals are the previous fit's, cleaned by that fit's weights)."""
+    if not fitter.options.get("robust"):
+        return fitter
+    return fitter._replace(options={**fitter.options, "reweightings": IRLS_LATER})
 
 
 def finish(best: Refined, sc: Scale, outlier, plan) -> Refined:

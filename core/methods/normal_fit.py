@@ -51,8 +51,11 @@ def min_k(degree=1, **_):
     return (degree + 1) * (degree + 2) // 2 + 1
 
 
-def fit(chunk, *, weights="uniform", constraint="project", robust=None, degree=1):
+def fit(chunk, *, weights="uniform", constraint="project", robust=None, degree=1, reweightings=IRLS_ITERATIONS):
     """Fit (mu, W) per point of a :class:`core.patch.Chunk`; see :data:`NF_DOC`.
+
+    ``reweightings`` (internal, not a user option): IRLS iterations when ``robust``; the
+    refinement passes use fewer (:data:`core.tuning.IRLS_LATER`).
 
     Returns a :class:`MethodFit` whose ``diag`` holds the least-squares variances of
     W11, (W12 + W21)/2, W22 ("var", units of 1/h^2), the RMS residual of the normal components ("rms") and
@@ -67,6 +70,6 @@ def fit(chunk, *, weights="uniform", constraint="project", robust=None, degree=1
     spread = np.full(m, np.nan)
     ok = np.empty(m, dtype=bool)
     settings = kernels.Settings(THETA_REACH, _WEIGHTS.index(weights), _CONSTRAINTS.index(constraint),
-                                _ROBUST.index(robust), IRLS_ITERATIONS, degree, RCOND)
+                                _ROBUST.index(robust), reweightings, degree, RCOND)
     kernels.normal_fit(chunk.frames(), settings, kernels.Fits(mu, W, var, rms, spread, ok), chunk.kernel_rows())
     return MethodFit(mu, W, ok, {"var": var, "rms": rms, "spread": spread})

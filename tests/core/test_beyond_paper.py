@@ -98,6 +98,36 @@ def test_robust_fit_keeps_inliers_accurate_with_outliers():
     assert np.isnan(rob.k1[is_out & rob.outlier]).all()
 
 
+def test_refinement_passes_reweight_fewer_times_than_the_first_fit(monkeypatch):
+    """The first robust fit reweights IRLS_ITERATIONS times, each refinement pass IRLS_LATER
+    times (its input normals are already cleaned); the accuracy with outliers is kept."""
+    from core import kernels, refinement, tuning
+
+    seen = []
+    real = kernels.Settings
+
+    def spy(*args):  # the NF kernel's settings: args[3] robust code, args[4] reweightings
+        if args[3]:
+            seen.append(args[4])
+        return real(*args)
+
+    monkeypatch.setattr(kernels, "Settings", spy)
+    s = core.shapes.torus(4000, seed=7)
+    dirty, is_out = core.noise.add_outliers(core.noise.add_noise(s.points, 0.2, seed=8), 0.03, seed=9)
+    res = core.estimate(dirty, k=40, passes=3, method="nr", options={"robust": "tukey", "degree": 3})
+    assert res.params["passes_run"] >= 2
+    assert seen[0] == tuning.IRLS_ITERATIONS and set(seen[1:]) == {tuning.IRLS_LATER}
+    assert tuning.IRLS_LATER < tuning.IRLS_ITERATIONS
+    monkeypatch.setattr(kernels, "Settings", real)
+    errors = {}
+    for later in (tuning.IRLS_ITERATIONS, tuning.IRLS_LATER):
+        monkeypatch.setattr(refinement, "IRLS_LATER", later)
+        r = core.estimate(dirty, k=40, passes=3, method="nr", options={"robust": "tukey", "degree": 3})
+        errors[later] = core.metrics.summary(r, s, mask=~is_out)
+    for key in ("mean", "gaussian", "direction_deg"):
+        assert errors[tuning.IRLS_LATER][key] < 1.05 * errors[tuning.IRLS_ITERATIONS][key], key
+
+
 @pytest.mark.parametrize("k, caught", [(15, 0.4), ("auto", 0.8)])
 def test_crease_flags_cube_edges_not_faces_or_smooth_shapes(k, caught):
     cube = core.shapes.cube(20000, seed=1)
