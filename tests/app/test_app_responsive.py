@@ -221,6 +221,22 @@ def test_closed_windows_are_freed(qtbot, settings):
     qtbot.waitUntil(lambda: not Estimator.running_threads(), timeout=10_000)
 
 
+def test_a_closed_window_pins_the_wrappers_qt_will_delete(make_window):
+    """Closing pins every wrapper created from Python under the window (app._refguard.pinned_children):
+    PySide's own record of parents alone held the controls' group boxes, and Qt's deletion of the
+    tree freed one inside Shiboken's destroy (a segfault in the tests' teardown)."""
+    import shiboken6
+    from PySide6.QtCore import QObject
+    from PySide6.QtWidgets import QGroupBox
+
+    window = make_window()
+    assert {b.title() for b in window.findChildren(QGroupBox)} >= {"Estimate", "Colour", "Glyphs"}
+    window.close()
+    pinned = {id(o) for o in window._pinned}
+    made = [o for o in window.findChildren(QObject) if shiboken6.createdByPython(o)]
+    assert made and all(id(o) in pinned for o in made)
+
+
 def test_compile_watch_reports_a_numba_compile(qtbot):
     """The status bar's "compiling kernels" comes from numba's compile event."""
     from numba import njit
