@@ -177,13 +177,18 @@ def _orientation(orientation, normals_given):
         if orientation == "auto":
             return ("keep" if normals_given else "outward"), orientation
         return orientation, orientation
+    return viewpoint(orientation), "viewpoint"
+
+
+def viewpoint(orientation) -> tuple:
+    """``orientation`` given as a viewpoint: 3 finite numbers, else a ValueError that says so."""
     try:
         view = np.asarray(orientation, dtype=float)
     except (TypeError, ValueError):
         view = np.empty(0)
     if view.shape != (3,) or not np.isfinite(view).all():
         raise ValueError(f"orientation as a viewpoint must be 3 finite numbers, got {orientation!r}")
-    return tuple(float(v) for v in view), "viewpoint"
+    return tuple(float(v) for v in view)
 
 
 def _measure(name, value):

@@ -15,6 +15,7 @@ import numpy as np
 from .._progress import Progress
 from .._validate import check_int, word
 from ..methods import check_options, get_method
+from ..planning import viewpoint
 from ..io.atomic import refuse_input_as_output
 from ..tuning import DRIFT_POOL, DRIFT_SHARE, MAX_PASSES
 from . import assemble, binning, creases, engine, signs
@@ -329,7 +330,4 @@ def _orientation(orientation, normals_given, views):
         if orientation == "auto" and views:  # each normal faces the scanner that saw its point
             return "scanner", "none"
         return "propagate", "outward" if orientation in ("auto", "outward") else "propagate"
-    view = np.asarray(orientation, dtype=float)
-    if view.shape != (3,) or not np.isfinite(view).all():
-        raise ValueError(f"orientation as a viewpoint must be 3 finite numbers, got {orientation!r}")
-    return tuple(float(v) for v in view), "none"
+    return viewpoint(orientation), "none"

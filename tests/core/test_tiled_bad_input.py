@@ -72,3 +72,17 @@ def test_a_tile_failing_on_dask_is_named_with_the_file_and_nothing_is_written(sc
             estimate_tiled(scan, out, k=15, tile_points=1000, client=client)
     assert not out.exists()
     assert (tmp_path / ".out.laz.tiles").is_dir()  # the finished tiles are kept: a rerun resumes
+
+
+@pytest.mark.parametrize("orientation", [{"x": 1}, [1, "a", 2], [1.0, 2.0], [0.0, np.nan, 1.0], object()])
+def test_a_viewpoint_that_is_not_three_numbers_is_refused_as_in_memory(tmp_path, orientation):
+    """The tiles check a viewpoint as core.estimate does (a dict raised a bare TypeError)."""
+    import core
+
+    pts = shapes.sphere(400, seed=0).points
+    message = r"orientation as a viewpoint must be 3 finite numbers"
+    with pytest.raises(ValueError, match=message):
+        core.estimate(pts, orientation=orientation)
+    with pytest.raises(ValueError, match=message):
+        estimate_tiled(pts, tmp_path / "out.npz", orientation=orientation)
+    assert not (tmp_path / "out.npz").exists()
