@@ -115,7 +115,7 @@ class EstimatePlan:
             k = check_int(k, name="k", low=m.min_k_for(opts), high=n)
             ks, k_initial = (k,), k
         passes = m.default_passes if passes is None else check_int(passes, name="passes", low=0, high=MAX_PASSES)
-        view, label = _orientation(orientation, normals_given)
+        view, label = orientation_mode(orientation, normals_given)
         return cls(
             n_points=n, method=m, options=_Options(opts), auto=auto, k="auto" if auto else k,
             candidates=ks, k_search=ks[-1], k_initial=k_initial, passes=passes, adaptive=auto,
@@ -166,8 +166,9 @@ def _initial(initial, auto):
     return initial
 
 
-def _orientation(orientation, normals_given):
-    """(mode, label): "auto" keeps given normals and orients estimated ones outward."""
+def orientation_mode(orientation, normals_given):
+    """(mode, label) of a valid ``orientation``: "auto" keeps given normals and orients
+    estimated ones outward; a viewpoint is (x, y, z), "viewpoint". Else a ValueError."""
     orientation = word(orientation)
     if isinstance(orientation, str):
         if orientation not in _ORIENTATIONS:
@@ -177,18 +178,13 @@ def _orientation(orientation, normals_given):
         if orientation == "auto":
             return ("keep" if normals_given else "outward"), orientation
         return orientation, orientation
-    return viewpoint(orientation), "viewpoint"
-
-
-def viewpoint(orientation) -> tuple:
-    """``orientation`` given as a viewpoint: 3 finite numbers, else a ValueError that says so."""
     try:
         view = np.asarray(orientation, dtype=float)
     except (TypeError, ValueError):
         view = np.empty(0)
     if view.shape != (3,) or not np.isfinite(view).all():
         raise ValueError(f"orientation as a viewpoint must be 3 finite numbers, got {orientation!r}")
-    return tuple(float(v) for v in view)
+    return tuple(float(v) for v in view), "viewpoint"
 
 
 def _measure(name, value):

@@ -15,7 +15,7 @@ import numpy as np
 from .._progress import Progress
 from .._validate import check_int, word
 from ..methods import check_options, get_method
-from ..planning import viewpoint
+from ..planning import orientation_mode
 from ..io.atomic import refuse_input_as_output
 from ..tuning import DRIFT_POOL, DRIFT_SHARE, MAX_PASSES
 from . import assemble, binning, creases, engine, signs
@@ -301,7 +301,7 @@ def _spec(k, method, passes, orientation, options, normals_given, in_process, vi
     m = get_method(method)
     opts = check_options(m, options)
     k, passes = _k_passes(word(k), passes, m, opts)
-    tile_orient, rule = _orientation(word(orientation), normals_given, views)
+    tile_orient, rule = _orientation(orientation, normals_given, views)
     spec = TileSpec(k=k, method=m.name, passes=passes, orientation=tile_orient, options=options or {},
                     normals_given=normals_given,
                     threads=numba.config.NUMBA_NUM_THREADS if in_process else 1)
@@ -320,14 +320,11 @@ def _k_passes(k, passes, m, opts):
 
 
 def _orientation(orientation, normals_given, views):
-    """(how each tile orients, how the tiles' signs are then fixed: none/outward/propagate)."""
-    if isinstance(orientation, str):
-        if orientation not in ("auto", "propagate", "outward", "keep"):
-            raise ValueError(f"orientation {orientation!r} is invalid; must be one of ['auto', 'propagate', "
-                             "'outward', 'keep'] or a (3,) viewpoint")
-        if orientation == "keep" or (orientation == "auto" and normals_given):
-            return "keep", "none"
-        if orientation == "auto" and views:  # each normal faces the scanner that saw its point
-            return "scanner", "none"
-        return "propagate", "outward" if orientation in ("auto", "outward") else "propagate"
-    return viewpoint(orientation), "none"
+    """(how each tile orients, how the tiles' signs are then fixed: none/outward/propagate),
+    from the orientation as :func:`core.planning.orientation_mode` checks and reads it."""
+    mode, label = orientation_mode(orientation, normals_given)
+    if mode == "keep" or label == "viewpoint":
+        return mode, "none"
+    if label == "auto" and views:  # each normal faces the scanner that saw its point
+        return "scanner", "none"
+    return "propagate", "outward" if label in ("auto", "outward") else "propagate"
