@@ -176,8 +176,8 @@ def _tiled(args, src, dst, fmt) -> bool:
     return src != STDIO and tiled_cli.wanted(_one(args, src, dst))
 
 
-def _one(args, src, dst) -> argparse.Namespace:
-    return argparse.Namespace(**{**vars(args), "input": src, "output": dst})
+def _one(args, src, dst, **extra) -> argparse.Namespace:
+    return argparse.Namespace(**{**vars(args), "input": src, "output": dst, **extra})
 
 
 def _estimate_one(args, src, dst, fmt, options) -> None:
@@ -188,7 +188,7 @@ def _estimate_one(args, src, dst, fmt, options) -> None:
             tiled_cli.run(_one(args, src, dst))
             return
         with stdin_file(args.input_format) as path:  # read from a temporary copy, named "stdin" in the summary
-            tiled_cli.run(argparse.Namespace(**{**vars(_one(args, str(path), dst)), "label": "stdin"}))
+            tiled_cli.run(_one(args, str(path), dst, label="stdin"))
         return
     cloud = read_input(src, args.input_format, args.drop_nonfinite)
     normals = None if args.ignore_normals else cloud.normals
