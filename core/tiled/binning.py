@@ -15,13 +15,16 @@ import contextlib
 import numpy as np
 
 from ..io.las_stream import CHUNK
+from . import wholechecks
 from .plan import SAMPLE, TilePlan, make_plan
 from .store import TileStore, bin_dtype
 
 
-def plan_tiles(source, store: TileStore, tile_points: int, progress) -> TilePlan:
+def plan_tiles(source, store: TileStore, tile_points: int, progress, min_k: int = 1) -> TilePlan:
     """Load the saved plan, or sample every n-th point of ``source`` and make one (spilling
-    the records of a file for :func:`bin_points`)."""
+    the records of a file for :func:`bin_points`). A cloud no estimate can be made on
+    (fewer than ``min_k`` points, all at one place, ...) is refused first
+    (:mod:`core.tiled.wholechecks`)."""
     if store.plan_path.exists():
         return TilePlan.load(store.plan_path)
     stride = max(1, source.count // SAMPLE)
@@ -41,7 +44,8 @@ def plan_tiles(source, store: TileStore, tile_points: int, progress) -> TilePlan
     if spill:
         spill.replace(store.spill_path)
     sample = np.concatenate(parts)
-    plan = make_plan(sample, seen, tile_points)  # E57 invalid points are only known once read
+    wholechecks.refuse_degenerate(sample, seen, min_k, source.name)
+    plan = make_plan(sample, seen, tile_points, wholechecks.distinct_count(sample, seen))  # E57: seen, once read
     tmp = store.plan_path.with_name("plan.tmp.npz")
     plan.save(tmp)
     tmp.replace(store.plan_path)

@@ -28,6 +28,8 @@ class TilePlan:
     axis, value, left, right : the split tree (internal nodes; a child < 0 is leaf ``~child``).
     bounds : (2, 3) the cloud's bounds (min, max) as sampled.
     n_points : points in the cloud.
+    distinct : its distinct positions where the sample is the whole cloud, else ``n_points``
+        (:func:`core.tiled.wholechecks.distinct_count`).
     """
 
     lo: np.ndarray
@@ -38,6 +40,7 @@ class TilePlan:
     right: np.ndarray
     bounds: np.ndarray
     n_points: int
+    distinct: int = -1
 
     @property
     def n_tiles(self) -> int:
@@ -67,17 +70,18 @@ class TilePlan:
 
     def save(self, path) -> None:
         np.savez(path, lo=self.lo, hi=self.hi, axis=self.axis, value=self.value, left=self.left,
-                 right=self.right, bounds=self.bounds, n_points=self.n_points)
+                 right=self.right, bounds=self.bounds, n_points=self.n_points, distinct=self.distinct)
 
     @classmethod
     def load(cls, path) -> "TilePlan":
         with np.load(path) as f:
             return cls(f["lo"], f["hi"], f["axis"], f["value"], f["left"], f["right"], f["bounds"],
-                       int(f["n_points"]))
+                       int(f["n_points"]), int(f["distinct"]))
 
 
-def make_plan(sample: np.ndarray, n_points: int, tile_points: int) -> TilePlan:
-    """Split the space of ``sample`` (m, 3) into ceil(n_points / tile_points) tiles.
+def make_plan(sample: np.ndarray, n_points: int, tile_points: int, distinct: int | None = None) -> TilePlan:
+    """Split the space of ``sample`` (m, 3) into ceil(n_points / tile_points) tiles
+    (``distinct``: the cloud's distinct positions, default ``n_points``).
 
     Examples
     --------
@@ -116,4 +120,5 @@ def make_plan(sample: np.ndarray, n_points: int, tile_points: int) -> TilePlan:
     split(np.arange(len(sample)), np.full(3, -np.inf), np.full(3, np.inf), n_tiles)
     bounds = np.stack([sample.min(axis=0), sample.max(axis=0)])
     return TilePlan(np.array(lo), np.array(hi), np.array(axis, dtype=np.int64), np.array(value, dtype=float),
-                    np.array(left, dtype=np.int64), np.array(right, dtype=np.int64), bounds, int(n_points))
+                    np.array(left, dtype=np.int64), np.array(right, dtype=np.int64), bounds, int(n_points),
+                    int(n_points if distinct is None else distinct))

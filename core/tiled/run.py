@@ -21,7 +21,7 @@ from ..tuning import DRIFT_POOL, DRIFT_SHARE, MAX_PASSES
 from . import assemble, binning, creases, engine, signs
 from .source import open_source
 from .store import TileStore, directory_for
-from . import wholecloud
+from . import wholecloud, wholechecks
 from .auto import PassView, pass_choice, run_auto_tile
 from .task import TileSpec, auto_plan
 
@@ -51,7 +51,7 @@ DEFAULT_MEMORY = "1.5GB"
 #: pass 1 stepped back where pass 2 drifts (core.drift: 144 bytes of rows a point) and three
 #: passes' fits (~310 bytes): ~4 neighbours a pass more, estimated, not measured
 AUTO_PASS_NEIGHBOURS = 15
-_VERSION = 5  # bumped when the work directory's layout changes: old ones are cleared
+_VERSION = 6  # bumped when the work directory's layout changes: old ones are cleared
 
 
 @dataclass(frozen=True)
@@ -151,7 +151,8 @@ def estimate_tiled(source, output, *, normals=None, k="auto", method="nr", passe
     Every point gets the answer of :func:`core.estimate` on the whole cloud (the same
     neighbours and fits; the halo holds the whole dependency chain, see
     :mod:`core.tiled.halo`); normal signs agree across tiles by their overlaps
-    (:mod:`core.tiled.signs`). Resumable: finished tiles are kept in ``workdir`` (by
+    (:mod:`core.tiled.signs`). A cloud :func:`core.estimate` makes no fit on (too few points,
+    one place, a line, ...: :mod:`core.tiled.wholechecks`) is refused with the reason. Resumable: finished tiles are kept in ``workdir`` (by
     default ``.<output name>.tiles`` next to the output) until the output is written.
 
     Parameters
@@ -198,7 +199,7 @@ def estimate_tiled(source, output, *, normals=None, k="auto", method="nr", passe
                               "tile_points": tile_points, "version": _VERSION, "auto": _auto_rules(spec)})
         cpu = _StageCPU()
         with _kept_only_to_resume(store):
-            plan, sizes = _binned(src, store, tile_points, report, cpu)
+            plan, sizes = _binned(src, store, tile_points, report, cpu, _min_k(spec))
             tasks = dict(client=own_client or client, scheduler=None if own_client else scheduler, workers=workers,
                          memory=budget, label=src.name)
             spec, results, params = _estimate(store, plan, sizes, spec, tasks, report.sub(0.15, 0.9))
@@ -239,8 +240,10 @@ def _estimate(store, plan, sizes, spec, tasks, report):
     pass every tile reports is chosen for the whole cloud (:mod:`.auto`). Returns the spec
     run, the store to read the results from, and the whole-cloud params."""
     auto = spec.k == "auto"
+    n_points = wholechecks.planned_count(spec.k, plan.n_points, plan.distinct,
+                                         lambda n: auto_plan(dataclasses.replace(spec, n_points=n)).k_search)
     if auto:
-        spec = dataclasses.replace(spec, n_points=plan.n_points)
+        spec = dataclasses.replace(spec, n_points=n_points)
         before = []
         for when, fn, span in (("before", wholecloud.run_before, (0.0, 0.05)),
                                ("initial", wholecloud.run_initial, (0.05, 0.1))):
@@ -274,9 +277,17 @@ def _output(output) -> pathlib.Path:
     return output
 
 
-def _binned(src, store, tile_points, report, cpu):
-    """Plan the tiles and bin the points."""
-    plan = binning.plan_tiles(src, store, tile_points, report.sub(0.0, 0.05))
+def _min_k(spec) -> int:
+    """The fewest points the run's method fits (its options as the whole cloud's plan resolves them)."""
+    m = get_method(spec.method)
+    options = dict(auto_plan(spec).options) if spec.k == "auto" else check_options(m, spec.options)
+    return m.min_k_for(options)
+
+
+def _binned(src, store, tile_points, report, cpu, min_k):
+    """Plan the tiles and bin the points (a cloud with fewer than ``min_k`` points, or
+    none can be estimated on, is refused before)."""
+    plan = binning.plan_tiles(src, store, tile_points, report.sub(0.0, 0.05), min_k)
     cpu.mark("plan")
     sizes = binning.bin_points(src, store, plan, report.sub(0.05, 0.15))
     cpu.mark("bin")
