@@ -152,8 +152,9 @@ def estimate_tiled(source, output, *, normals=None, k="auto", method="nr", passe
     neighbours and fits; the halo holds the whole dependency chain, see
     :mod:`core.tiled.halo`); normal signs agree across tiles by their overlaps
     (:mod:`core.tiled.signs`). A cloud :func:`core.estimate` makes no fit on (too few points,
-    one place, a line, ...: :mod:`core.tiled.wholechecks`) is refused with the reason. Resumable: finished tiles are kept in ``workdir`` (by
-    default ``.<output name>.tiles`` next to the output) until the output is written.
+    one place, a line, ...: :mod:`core.tiled.wholechecks`) is refused with the reason.
+    Resumable: finished tiles are kept in ``workdir`` (by default ``.<output name>.tiles``
+    next to the output) until the output is written.
 
     Parameters
     ----------
