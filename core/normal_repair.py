@@ -38,12 +38,22 @@ def split_normals(normals):
     finite = np.isfinite(arr).all(axis=1)
     arr[~finite] = 0.0
     unit, length = unit_rows(arr)
-    typical = np.median(length[length > 0]) if (length > 0).any() else 0.0
+    typical = _lower_median(length[length > 0])
     usable = finite & (length > 0) & (length > MIN_LENGTH * typical)
     unscaled = usable & (np.abs(length - 1.0) > UNIT_TOL)
     unit = np.where(usable[:, None], unit, np.nan)
     counts = {"unusable": int(np.count_nonzero(~usable)), "renormalised": int(np.count_nonzero(unscaled))}
     return unit, usable, counts
+
+
+def _lower_median(a: np.ndarray) -> float:
+    """The lower middle value of ``a`` (0 when empty): a median without the mean of the two
+    middle values, which overflows for lengths near 1e308 (normals written at that scale
+    are merely unscaled)."""
+    if not len(a):
+        return 0.0
+    mid = (len(a) - 1) // 2
+    return float(np.partition(a, mid)[mid])
 
 
 def repair_normals(points, normals, idx, dist, *, orientation=None, trust=False):

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from core import build_neighbours, shapes
@@ -17,6 +19,15 @@ def test_split_renormalises_and_marks_unusable():
     np.testing.assert_allclose(unit[[0, 3]], [[0, 0, 1.0], [0, 1.0, 0]])
     assert np.isnan(unit[~usable]).all()
     assert counts == {"unusable": 4, "renormalised": 1}
+
+
+def test_normals_near_the_float_limit_are_unscaled_not_unusable():
+    unit = shapes.sphere(300, seed=1).normals
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the median of two lengths near 1e308 overflowed (a warning) to inf
+        got, usable, counts = split_normals(unit * 1e308)
+    assert usable.all() and counts == {"unusable": 0, "renormalised": 300}  # was: all unusable, re-estimated
+    np.testing.assert_allclose(got, unit, atol=1e-15)
 
 
 def test_repair_estimates_unusable_rows_with_the_neighbours_sign():
