@@ -11,6 +11,7 @@ def as_points(points, *, name: str = "points", drop_nonfinite: bool = False):
     Returns ``(array, kept)`` where ``kept`` is the boolean mask of rows kept
     (all True unless ``drop_nonfinite`` dropped rows with NaN/inf).
     """
+    drop_nonfinite = check_bool(drop_nonfinite, name="drop_nonfinite")
     try:
         arr = masked_as_nan(points)
     except ValueError as exc:  # ragged nested sequences
@@ -102,6 +103,27 @@ def check_int(value, *, name: str, low: int, high: int | None = None) -> int:
         allowed = f">= {low}" if high is None else f"in [{low}, {high}]"
         raise ValueError(f"{name}={value} is out of range; allowed: {allowed}")
     return value
+
+
+def check_bool(value, *, name: str) -> bool:
+    """``value`` as a bool: True or False only (a string such as "no" is truthy)."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"{name} must be True or False, got {value!r}")
+    return bool(value)
+
+
+#: what a curvature result has, for the functions that read one (:func:`check_result`)
+RESULT_ATTRIBUTES = ("points", "normals", "k1", "k2", "e1", "e2", "valid")
+
+
+def check_result(res, *, name: str = "res"):
+    """``res`` itself when it has the attributes of a :class:`core.CurvatureResult`, else a
+    TypeError naming the argument (an array passed for a result raised a bare AttributeError)."""
+    missing = [a for a in RESULT_ATTRIBUTES if not hasattr(res, a)]
+    if missing:
+        raise TypeError(f"{name} must be a curvature result (core.estimate's CurvatureResult), got "
+                        f"{type(res).__name__}, which has no {', '.join(missing)}")
+    return res
 
 
 def word(value):

@@ -14,7 +14,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ._progress import Progress
-from ._validate import check_choice
+from ._validate import check_choice, check_result
 from .point_types import curvature_scale
 
 #: neighbours interpolating the field at a point of a line (6: the first ring of a sample)
@@ -172,7 +172,7 @@ def curvature_lines(res, *, direction: str = "e1", seeds=None, separation: float
         raise ValueError(f"step={step!r} is invalid; must be a number in (0, 2] (spacings)")
     if not (np.isscalar(separation) and separation > 0):
         raise ValueError(f"separation={separation!r} is invalid; must be a number > 0 (spacings)")
-    field = _Field(res, direction)
+    field = _Field(check_result(res), direction)
     h = step * field.spacing
     if max_length is None:
         max_length = 3.0 * float(np.linalg.norm(np.ptp(field.pts, axis=0)))

@@ -8,6 +8,7 @@ Each point's area is its Voronoi cell among its neighbours, projected on its tan
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -15,7 +16,7 @@ from numba import njit, prange
 from scipy.spatial import cKDTree
 
 from ._progress import Progress
-from ._validate import as_normals, as_points, check_int
+from ._validate import as_normals, as_points, check_int, check_result
 
 #: neighbours around each point whose bisectors bound its cell. Random (Poisson) samples have
 #: 6 Voronoi neighbours on average, but a cell can be cut by a far one: against scipy's exact
@@ -36,7 +37,7 @@ class GaussBonnet:
 
     Attributes
     ----------
-    total : float, sum of K_i A_i over the valid points (integral of K dA).
+    total : float, sum of K_i A_i over the valid points (integral of K dA); NaN without any.
     chi : float, total / (2 pi); an integer (2 - 2 genus) for a closed surface.
     area : float, the sum of the per-point areas.
     areas : (N,) per-point areas (Voronoi cells in the tangent plane).
@@ -171,11 +172,11 @@ def gauss_bonnet(res, *, k: int = VORONOI_NEIGHBOURS, progress=None) -> GaussBon
     >>> round(core.gauss_bonnet(res).chi, 1)
     2.0
     """
-    normals = np.where(np.isfinite(res.normals), res.normals, [[0.0, 0.0, 1.0]])
+    normals = np.where(np.isfinite(check_result(res).normals), res.normals, [[0.0, 0.0, 1.0]])
     areas, boundary = point_areas(res.points, normals, k=k, progress=progress)
     K = res.gaussian
     ok = res.valid & np.isfinite(K)
-    total = float(np.sum(K[ok] * areas[ok]))
+    total = float(np.sum(K[ok] * areas[ok])) if ok.any() else math.nan  # nothing to integrate: not 0
     return GaussBonnet(total=total, chi=total / (2 * np.pi), area=float(areas.sum()),
                        areas=areas, boundary=boundary, closed=not bool(boundary.any()),
                        n_invalid=int(np.count_nonzero(~ok)))
@@ -185,6 +186,7 @@ def total_curvature(res, *, k: int = VORONOI_NEIGHBOURS) -> float:
     """The integral of the Gaussian curvature over the cloud, sum of K_i A_i (a float).
 
     2 pi chi for a closed surface (Gauss-Bonnet): 4 pi on a sphere, 0 on a torus. The
-    per-point areas come from :func:`point_areas` (or :func:`gauss_bonnet`).
+    per-point areas come from :func:`point_areas` (or :func:`gauss_bonnet`). NaN when no
+    point is valid (its ``n_invalid`` counts them).
     """
     return gauss_bonnet(res, k=k).total

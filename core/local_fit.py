@@ -10,6 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ._validate import check_result
 from .point_types import TYPE_NAMES, ZERO, classify, curvature_scale
 
 #: neighbours used when the result carries no neighbourhood (the paper's k)
@@ -171,7 +172,7 @@ def local_fit(res, index: int, *, scale: float | None = None) -> LocalFit:
     pass would fit. ``scale`` is the cloud's curvature scale (computed when not given; pass
     it to avoid an O(N) pass per pick).
     """
-    n = len(res.points)
+    n = len(check_result(res).points)
     if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or not 0 <= index < n:
         raise ValueError(f"index={index!r} is invalid; must be an integer in [0, {n - 1}]")
     index = int(index)

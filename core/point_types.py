@@ -11,6 +11,8 @@ import math
 
 import numpy as np
 
+from ._validate import check_result
+
 #: type codes, in the order of :data:`TYPE_NAMES`; -1 marks invalid points
 ELLIPTIC, HYPERBOLIC, PARABOLIC, PLANAR, UMBILIC = range(5)
 INVALID = -1
@@ -33,12 +35,14 @@ EQUAL = 0.1
 
 def curvature_scale(res) -> float:
     """The cloud's curvature scale: the median curvedness of its valid points, but at least
-    1 / (the cloud's bounding-box diagonal), so that a plane's noise is not its scale."""
-    ok = res.valid & np.isfinite(res.k1) & np.isfinite(res.k2)
+    1 / (the cloud's bounding-box diagonal), so that a plane's noise is not its scale. NaN
+    when no point is valid: there is no curvature to scale (a cloud of identical points
+    gave 1 / the smallest float, 4.5e307)."""
+    ok = check_result(res).valid & np.isfinite(res.k1) & np.isfinite(res.k2)
+    if not ok.any():
+        return math.nan
     extent = np.ptp(res.points, axis=0)
     floor = 1.0 / max(math.hypot(*extent), np.finfo(float).tiny)  # hypot: no overflow at 1e300
-    if not ok.any():
-        return floor
     return max(float(np.median(res.curvedness[ok])), floor)
 
 
@@ -65,6 +69,7 @@ def point_types(res, *, zero: float = ZERO, equal: float = EQUAL, scale: float |
     >>> float((types[s.interior] == core.PARABOLIC).mean()) > 0.95
     True
     """
+    check_result(res)
     for name, value in (("zero", zero), ("equal", equal)):
         if not (isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
                 and 0 < value < 1):

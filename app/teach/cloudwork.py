@@ -60,7 +60,7 @@ def cloud_maths(res, *, separation: float | None = None, progress=None) -> Cloud
     if separation is None:
         separation = max(SEED_SPACING, float(np.sqrt(len(res.points) / LINE_SEEDS)))
     scale = core.curvature_scale(res)
-    types = core.point_types(res, scale=scale)
+    types = core.point_types(res, scale=scale if np.isfinite(scale) else None)  # NaN: no valid point
     gb = core.gauss_bonnet(res, progress=progress)
     lines, normals = {}, {}
     for direction in ("e1", "e2"):

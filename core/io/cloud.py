@@ -13,6 +13,16 @@ import numpy as np
 from .._memory import available_memory
 
 
+def file_path(path, *, name: str = "path") -> pathlib.Path:
+    """``path`` (str, bytes or os.PathLike) as a :class:`pathlib.Path`; anything else is a
+    TypeError naming the argument (``None`` raised os.fspath's message, which names none)."""
+    if isinstance(path, bytes):
+        path = os.fsdecode(path)
+    if not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"{name} must be a file path (str or os.PathLike), got {type(path).__name__}")
+    return pathlib.Path(os.fspath(path))
+
+
 class CloudFileError(ValueError):
     """A point-cloud file cannot be read or written; the message names the file and the problem.
 

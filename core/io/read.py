@@ -9,7 +9,8 @@ import struct
 import numpy as np
 
 from . import las, mesh, pcd, ply, text, vtk
-from .cloud import Cloud, CloudFileError, RawCloud, finalize
+from .._validate import check_bool
+from .cloud import Cloud, CloudFileError, RawCloud, file_path, finalize
 from .formats import READ_FORMATS, resolve_format
 
 _READERS = {
@@ -40,7 +41,7 @@ def read_cloud(path: str | os.PathLike, *, format: str | None = None, drop_nonfi
         by default chosen from the file extension (case-insensitive).
     drop_nonfinite : bool, default False
         Drop points with NaN/inf coordinates (with a warning saying how many) instead of
-        raising.
+        raising (True or False only).
 
     Returns
     -------
@@ -52,6 +53,7 @@ def read_cloud(path: str | os.PathLike, *, format: str | None = None, drop_nonfi
         Missing, empty, truncated or malformed file, unknown format, no points, or
         non-finite coordinates; the message names the file and the problem.
     """
+    drop_nonfinite = check_bool(drop_nonfinite, name="drop_nonfinite")
     path, fmt = _path_and_format(path, format)
     return finalize(_read_raw(path, fmt), path, fmt, drop_nonfinite=drop_nonfinite)
 
@@ -89,7 +91,7 @@ def describe(path: str | os.PathLike, *, format: str | None = None) -> dict:
 
 
 def _path_and_format(path, format):
-    path = pathlib.Path(os.fspath(path))
+    path = file_path(path)
     if not path.exists():
         raise CloudFileError(path, "no such file")
     if path.is_dir():

@@ -14,7 +14,7 @@ from numpy.typing import ArrayLike
 
 from . import ply, text
 from .atomic import atomic_write
-from .cloud import CloudFileError
+from .cloud import CloudFileError, file_path
 from .formats import WRITE_FORMATS, resolve_format
 
 _WRITERS = {
@@ -77,7 +77,7 @@ def write_cloud(path: str | os.PathLike | BinaryIO, points: ArrayLike, *, normal
         fmt = resolve_format(pathlib.Path("<stream>"), format, WRITE_FORMATS, "writing")
         _WRITERS[fmt](path, _columns(points, normals, fields))
         return path
-    path = pathlib.Path(os.fspath(path))
+    path = file_path(path)
     fmt = resolve_format(path, format, WRITE_FORMATS, "writing")
     columns = _columns(points, normals, fields)
     try:
