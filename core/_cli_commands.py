@@ -9,6 +9,7 @@ import json
 import os
 import pathlib
 import shutil
+import string
 import sys
 import tempfile
 import time
@@ -18,7 +19,6 @@ import numpy as np
 from . import io as cio
 from .io.formats import READ_FORMATS, WRITE_FORMATS, resolve_format
 from .tiled import cli as tiled_cli
-from .tiled.run import parse_memory
 from .io.atomic import refuse_input_as_output
 
 STDIO = "-"
@@ -30,6 +30,8 @@ LAS_FORMATS = ("las", "laz")
 TILE_OPTIONS = {"tile_points": "--tile-points", "workers": "--workers", "scheduler": "--scheduler"}
 #: output name in a directory, when several inputs share one -o directory
 DIR_PATTERN = "{stem}_darboux.{ext}"
+#: what marks -o as a pattern, filled with each input's name (one input or several)
+STEM = "{stem}"
 SUMMARY_FIELDS = ("mean", "gaussian", "k1", "k2")
 
 
@@ -73,12 +75,12 @@ def plan_outputs(inputs, output: str, out_format) -> list[tuple[str, str]]:
 
 
 def _output_paths(inputs, output: str, out_format) -> list[str]:
-    """One output path per input: ``output`` itself, a ``{stem}`` pattern filled in, or
+    """One output path per input: a ``{stem}`` pattern filled in, ``output`` itself, or
     names in a directory."""
-    if len(inputs) == 1 and not os.path.isdir(output):
+    if STEM in output:
+        paths = [fill_pattern(output, _stem(src)) for src in inputs]
+    elif len(inputs) == 1 and not os.path.isdir(output):
         return [output]
-    if "{stem}" in output:
-        paths = [output.format(stem=_stem(src)) for src in inputs]
     elif os.path.isdir(output):
         ext = resolve_format(pathlib.Path("x.ply"), out_format, OUTPUT_FORMATS, "writing")
         paths = [os.path.join(output, DIR_PATTERN.format(stem=_stem(src), ext=ext)) for src in inputs]
@@ -88,6 +90,19 @@ def _output_paths(inputs, output: str, out_format) -> list[str]:
     if len(set(paths)) != len(paths):
         raise ValueError(f"the outputs {output!r} would collide (inputs with the same name); use a {{stem}} pattern")
     return paths
+
+
+def fill_pattern(output: str, stem: str) -> str:
+    """``output`` with ``{stem}`` replaced by ``stem``; a pattern that str.format cannot fill
+    (an unclosed brace, another placeholder) is refused naming -o and the pattern."""
+    try:
+        fields = {name for _, name, _, _ in string.Formatter().parse(output) if name is not None}
+        if fields - {"stem"}:
+            raise ValueError(f"{{{sorted(fields - {'stem'})[0]}}} is not a placeholder; only {{stem}} is")
+        return output.format(stem=stem)
+    except (ValueError, IndexError, KeyError) as exc:  # {stem!z}, {stem:d}, {stem:{}}
+        raise ValueError(f"-o {output!r} is not a valid output pattern: {exc}; write {{stem}} for the input's name "
+                         "and {{ or }} for a literal brace") from None
 
 
 def _stem(src: str) -> str:
@@ -160,7 +175,7 @@ def check_execution_options(args) -> None:
     LAS/LAZ input fits in memory); tiles cannot write to standard output."""
     if args.memory is not None:
         with contextlib.suppress(ImportError):  # without Dask (the [big] extra) there are no tiles to size
-            parse_memory(args.memory)
+            tiled_cli.parse_memory(args.memory)
     asked = [flag for name, flag in TILE_OPTIONS.items() if getattr(args, name) is not None]
     if asked and args.output == STDIO:
         raise ValueError(f"tiles ({', '.join(asked)}) write a file, not -o - (standard output); without them "
@@ -191,6 +206,7 @@ def _estimate_one(args, src, dst, fmt, options) -> None:
             tiled_cli.run(_one(args, str(path), dst, label="stdin"))
         return
     cloud = read_input(src, args.input_format, args.drop_nonfinite)
+    tiled_cli.require_points(cloud, "stdin" if src == STDIO else src)
     normals = None if args.ignore_normals else cloud.normals
     orientation = args.viewpoint if args.viewpoint is not None else args.orientation
     bar = ProgressBar(not args.quiet and (sys.stderr.isatty() or args.progress), _stem(src))

@@ -11,6 +11,7 @@ import argparse
 import sys
 
 from . import __version__, _cli_commands
+from ._validate import word
 from .tiled import cli as tiled_cli
 
 BENCHES = ("paper", "perf", "accuracy", "tiled", "stability", "teach", "holdout")
@@ -44,8 +45,8 @@ def _parse_option(text):
 
 
 def _k(text):
-    if text == "auto":
-        return text
+    if word(text) == "auto":  # "AUTO", "Auto": keywords in any case, as the Python API takes them
+        return "auto"
     try:
         return int(text)
     except ValueError:
@@ -68,7 +69,8 @@ def _add_io_arguments(e) -> None:
                         "LAS/LAZ); - reads standard input (see --input-format)")
     e.add_argument("-o", "--output", required=True,
                    help="output file (.ply, .csv, .xyz, .txt, .las, .laz); - writes standard output (not LAS/LAZ); "
-                        "with several inputs a directory or a pattern with {stem}, e.g. out/{stem}_k.laz")
+                        "with several inputs a directory or a pattern with {stem} (filled for one input too), "
+                        "e.g. out/{stem}_k.laz")
     e.add_argument("--format", dest="out_format", default=None,
                    help="output format when it cannot come from the extension: ply, csv, xyz, txt, or las/laz "
                         "in a directory (default: csv for -, ply in a directory)")
@@ -82,9 +84,9 @@ def _add_method_arguments(e) -> None:
 
     e.add_argument("--k", type=_k, default="auto",
                    help="neighbours per point, itself included, or auto (default; chosen per point, NF/NR)")
-    e.add_argument("--method", default="nr", choices=list(METHODS), help="estimator (default nr)")
+    e.add_argument("--method", type=word, default="nr", choices=list(METHODS), help="estimator (default nr)")
     e.add_argument("--passes", type=int, default=None, help="normal refinement passes (default: method's)")
-    e.add_argument("--orientation", default="auto", choices=["auto", "propagate", "outward", "keep"])
+    e.add_argument("--orientation", type=word, default="auto", choices=["auto", "propagate", "outward", "keep"])
     e.add_argument("--viewpoint", type=_viewpoint, default=None, help="orient normals towards x,y,z")
     e.add_argument("--option", type=_parse_option, action="append",
                    help="method option key=value; values None, true/false, numbers (e.g. robust=None, degree=3)")

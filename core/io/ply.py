@@ -114,18 +114,19 @@ def _declared(elements) -> str:
 
 
 def _check_ascii_rows(f, header, path) -> None:
-    """Refuse an ASCII body with more non-blank lines than the header declares rows (one
-    line per row); blank lines are fine, and too few rows are left to the readers."""
-    start, declared = f.tell(), sum(el.count for el in header.elements)
-    newlines, last = 0, b"\n"
-    for block in iter(lambda: f.read(1 << 20), b""):
-        newlines, last = newlines + block.count(b"\n"), block[-1:]
-    if newlines + (last != b"\n") > declared:  # at most this many lines: count the non-blank ones
-        f.seek(start)
-        found = _nonblank_lines(f)
-        if found > declared:
-            rows = "vertex rows" if len(header.elements) == 1 else f"data lines (one per row: {declared} declared)"
-            raise CloudFileError(path, f"the header declares {_declared(header.elements)} but {found} {rows} follow")
+    """Refuse an ASCII body with more or fewer non-blank lines (one per row) than the header
+    declares rows; a short body is named by the first element short of its rows."""
+    start, elements, declared = f.tell(), header.elements, sum(el.count for el in header.elements)
+    found = left = _nonblank_lines(f)
+    if found > declared:
+        rows = "vertex rows" if len(elements) == 1 else f"data lines (one per row: {declared} declared)"
+        raise CloudFileError(path, f"the header declares {_declared(elements)} but {found} {rows} follow")
+    for element in (el for el in elements if el.properties):  # rows of no properties may be blank lines
+        if left < element.count:
+            lines = f" ({found} data lines for {_declared(elements)}, one per row)" if len(elements) > 1 else ""
+            raise CloudFileError(path, f"truncated: the header declares {element.count} {_plural(element.name)} "
+                                       f"but only {left} {element.name} rows follow{lines}")
+        left -= element.count
     f.seek(start)
 
 

@@ -135,13 +135,15 @@ def _header_line(path, lineno: int, text: str, tokens: list[str]) -> tuple[bool,
     return (False, text, lineno)
 
 
-def _refuse_data_like(path, header, ncols: int) -> None:
-    """Refuse a header line with the data's column count made mostly of number-like tokens
-    ("1.5 2.5 3.5e"): a data line the parser cannot take, named as on any later line."""
+def _refuse_data_like(path, header, ncols: int | None) -> None:
+    """Refuse a header line with the data's column count (``None``, no data line: 3 or more)
+    made mostly of number-like tokens ("1.5 2.5 3.5e", "1.5D+00 ...", "0x1.8p+0 ..."): a data
+    line the parser cannot take, named as on any later line."""
     for is_comment, text, lineno in header:
         tokens = _split(text, _guess_delimiter(text))
         numberish = sum(bool(_is_number(t) or _NUMBERISH.fullmatch(t)) for t in tokens)
-        if not is_comment and len(tokens) == ncols and 2 * numberish > ncols:
+        shaped = len(tokens) == ncols if ncols is not None else len(tokens) >= 3
+        if not is_comment and shaped and 2 * numberish > len(tokens):
             bad = next(t for t in tokens if not _is_number(t))
             raise CloudFileError(path, f"line {lineno}: cannot parse {bad!r} as a number")
 
@@ -153,6 +155,7 @@ def _scan_head(path, encoding) -> dict:
     with open(path, encoding=encoding, errors="replace", newline=None) as f:
         for lineno, line in enumerate(f, start=1):
             if lineno > _MAX_HEADER_LINES:
+                _refuse_data_like(path, header, None)
                 raise CloudFileError(path, f"no numeric data in the first {_MAX_HEADER_LINES} lines")
             text = line.strip()
             if not text:
@@ -178,6 +181,7 @@ def _scan_head(path, encoding) -> dict:
             trailing = delimiter is not None and text.endswith(delimiter)
             return dict(skip=lineno - 1, first=lineno, delimiter=delimiter, ncols=len(tokens), names=names,
                         count=count, count_line=count_line, usecols=range(len(tokens)) if trailing else None)
+    _refuse_data_like(path, header, None)  # every line numbers in a style not taken (1.5D+00, 0x1.8p+0)
     raise CloudFileError(path, "contains no points (no numeric data lines)")
 
 

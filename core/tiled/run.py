@@ -76,14 +76,22 @@ def bytes_per_point(k: int) -> int:
     return BASE_BYTES + BYTES_PER_NEIGHBOUR * int(k)
 
 
+#: the largest memory budget taken: a byte count that fits an int64, as Dask and numpy hold
+#: it (about 9200 PB; a larger value is a typo such as 1e300 or a unit given twice)
+MAX_MEMORY = 2**63 - 1
+
+
 def parse_memory(memory) -> int:
-    """Bytes from 2_000_000_000, "2GB", "1.5 GiB", "500MB"."""
+    """Bytes from 2_000_000_000, "2GB", "1.5 GiB", "500MB" (at most :data:`MAX_MEMORY`)."""
     from dask.utils import parse_bytes
 
     try:
         value = int(memory) if isinstance(memory, (int, np.integer)) else parse_bytes(str(memory))
-    except (ValueError, TypeError):
-        raise ValueError(f"memory {memory!r} is invalid; give bytes or a size such as '2GB' or '1.5GiB'") from None
+    except (ValueError, TypeError, OverflowError):  # OverflowError: "1e400GB" is int(inf) in Dask
+        value = None
+    if value is None or value > MAX_MEMORY:
+        raise ValueError(f"memory {memory!r} is invalid; give bytes or a size such as '2GB' or '1.5GiB', "
+                         "at most 2**63 - 1 bytes (about 9200PB)")
     if value <= 0:
         raise ValueError(f"memory {memory!r} is invalid; it must be positive")
     return value
