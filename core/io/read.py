@@ -96,6 +96,9 @@ def _path_and_format(path, format):
         raise CloudFileError(path, "no such file")
     if path.is_dir():
         raise CloudFileError(path, "is a directory, not a file")
+    if not path.is_file():  # a FIFO or device has no size to check: it was reported "empty (0 bytes)"
+        raise CloudFileError(path, "is not a regular file (a pipe or device); save it to a file first, or pipe it "
+                                   "to darboux-cli's standard input (-)")
     fmt = resolve_format(path, format, READ_FORMATS, "reading")
     if path.stat().st_size == 0:
         raise CloudFileError(path, "is empty (0 bytes)")

@@ -5,6 +5,7 @@ not a made-up number (cases from a hostile-input sweep)."""
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 import pytest
@@ -49,3 +50,10 @@ def test_a_result_without_a_valid_point_has_no_scale_and_no_total():
     assert math.isnan(core.curvature_scale(res))  # was 1 / the smallest float, 4.5e307
     assert math.isnan(core.total_curvature(res))  # was 0.0, as if the integral were known
     assert (core.point_types(res) == -1).all()
+
+
+def test_a_pipe_is_not_read_as_an_empty_file(tmp_path):
+    fifo = tmp_path / "p.xyz"
+    os.mkfifo(fifo)  # nothing writes into it: reading would block
+    with pytest.raises(core.io.CloudFileError, match=r"p\.xyz.*not a regular file"):  # was "is empty (0 bytes)"
+        read_cloud(fifo)
