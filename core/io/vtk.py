@@ -10,8 +10,11 @@ becomes a :class:`CloudFileError` instead of a message on stderr.
 
 from __future__ import annotations
 
+import json
 import mmap
+import os
 import re
+from xml.parsers import expat
 
 import numpy as np
 
@@ -171,19 +174,125 @@ def _cell_runs_problem(ids, n_cells: int, size: int) -> str | None:
     return None
 
 
-_XML_COUNT = re.compile(rb'\bNumberOf(Points|Verts|Lines|Strips|Polys|Cells|Tuples|Components)="\s*(\d+)\s*"')
+_CHUNK = 1 << 20  # bytes of XML given to expat at a time
+_MAX_MARKUP = 1 << 24  # a longer tag is refused: VTK writes none, and expat 2.5 rescans it per chunk
+_COUNT = re.compile(r"[ \t\r\n]*([0-9]+)[ \t\r\n]*")  # a count, with the white space XML allows
+_LARGEST = 2**63 - 1  # VTK's counts are vtkIdType
 
 
 def check_xml_sizes(path) -> None:
     """VTK allocates what an XML file's NumberOf... attributes declare before reading any
-    data, and a failed allocation aborts the process (std::bad_alloc, not an exception);
-    NumberOfComponents="1000000000000" made it run for minutes. Counts whose arrays would
-    not fit in memory are refused first (from the XML before any appended data)."""
-    with open(path, "rb") as f:
-        head = f.read(1 << 20).split(b"<AppendedData", 1)[0]
-    counts = [(name.decode(), int(value)) for name, value in _XML_COUNT.findall(head)]
-    components = max([value for name, value in counts if name == "Components"] + [3])
-    name, value = max([(name, value) for name, value in counts if name != "Components"] + [("Points", 0)],
-                      key=lambda item: item[1])
-    check_memory(path, 8 * value * components,
-                 f"declares NumberOf{name}=\"{value}\" with arrays of up to {components} components:")
+    data, and a failed allocation aborts the process (std::bad_alloc, not an exception); a
+    huge NumberOfComponents kept it busy for minutes, and it read NumberOfPoints="1e12" as 1.
+    The XML VTK parses is parsed here first, by expat as in VTK (any quotes, spaces, character
+    references, comments): each NumberOf... must be decimal digits, and the arrays they
+    declare must fit in memory and, when not compressed, in the file."""
+    if os.path.getsize(path) == 0:
+        return
+    with open(path, "rb") as f, mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as data:
+        sizes = _Sizes(path, len(data))
+        _parse_xml(data, sizes.start, path)
+    sizes.check()
+
+
+def _parse_xml(data, start_element, path) -> None:
+    """Give expat the XML before the first '<AppendedData' (where VTK stops parsing), a chunk at
+    a time, calling ``start_element(name, attributes)`` at each start tag. A document type is
+    refused (its entities could spell what is checked); at a syntax error parsing stops
+    quietly (VTK's parser stops there too, and names the error)."""
+    end = data.find(b"<AppendedData")
+    end = len(data) if end < 0 else end
+    parser = expat.ParserCreate()
+    parser.StartElementHandler = start_element
+    parser.StartDoctypeDeclHandler = lambda *_: _refuse(path, "its XML has a document type (<!DOCTYPE>); allowed: none")
+    pos, skipped = 0, 0
+    with memoryview(data) as view:
+        try:
+            while pos < end:
+                stop = min(pos + _CHUNK, end)
+                parser.Parse(view[pos:stop], False)
+                token = parser.CurrentByteIndex  # where the markup expat waits to complete starts
+                pos = stop if token < 0 else _resume(data, token + skipped, stop, end, path)
+                skipped += pos - stop
+        except expat.ExpatError:
+            return
+
+
+def _resume(data, token: int, stop: int, end: int, path) -> int:
+    """Where to go on after giving expat the bytes up to ``stop``, ``token`` being where the
+    markup it waits to complete starts. expat 2.5 scans an open token again with every chunk
+    (quadratic): the rest of a long comment is skipped (up to its '--', which expat then
+    checks), and a longer tag than ``_MAX_MARKUP`` is refused."""
+    if stop - token <= _CHUNK or stop == end:
+        return stop
+    if data[token : token + 4] == b"<!--":
+        close = data.find(b"--", token + 4, end)
+        return max(stop, end if close < 0 else close)
+    if stop - token > _MAX_MARKUP:
+        _refuse(path, f"its XML has a tag (or other markup but a comment) of more than {_MAX_MARKUP} bytes at "
+                      f"byte {token}; allowed: at most {_MAX_MARKUP}")
+    return stop
+
+
+def _refuse(path, problem: str):
+    raise CloudFileError(path, problem)
+
+
+class _Sizes:
+    """The sizes an XML file declares, read from each start tag expat reports (see check_xml_sizes)."""
+
+    def __init__(self, path, file_size: int):
+        self.path, self.file_size = path, file_size
+        self.largest = ("NumberOfPoints", 0)  # the largest count but NumberOfComponents
+        self.components = 3  # the most components of an array (or 3, the points')
+        self.compressed = False  # binary data are compressed: they can take less than a byte a value
+        self.points = 0  # the current piece's NumberOfPoints
+        self.unheld = None  # why the file cannot hold the first array that it cannot
+
+    def start(self, element: str, attrs: dict) -> None:
+        counts = {name: self._count(element, name, value) for name, value in attrs.items()
+                  if name.startswith("NumberOf")}
+        for name, value in counts.items():
+            if name == "NumberOfComponents":
+                self.components = max(self.components, value)
+            elif value > self.largest[1]:
+                self.largest = (name, value)
+        if element == "VTKFile":
+            self.compressed = bool(attrs.get("compressor"))
+        elif element == "Piece":
+            self.points = counts.get("NumberOfPoints", 0)
+        elif element in ("DataArray", "Array") and self.unheld is None:
+            self.unheld = self._unheld(element, attrs, counts)
+
+    def _count(self, element: str, name: str, value: str) -> int:
+        match = _COUNT.fullmatch(value)
+        digits = (match.group(1).lstrip("0") or "0") if match else ""
+        if 0 < len(digits) <= 19 and int(digits) <= _LARGEST:
+            return int(digits)
+        shown = json.dumps(value if len(value) <= 40 else value[:40] + "...", ensure_ascii=False)
+        raise CloudFileError(self.path, f"<{element}> declares {name}={shown}; allowed: a count in decimal digits "
+                                        f"(no sign, point or exponent) of at most {_LARGEST}")
+
+    def _unheld(self, element: str, attrs: dict, counts: dict) -> str | None:
+        """Why the file cannot hold the array, or None: uncompressed, a value takes a byte (a bit
+        for type Bit) or more; compressed (binary data with a compressor), any size."""
+        if self.compressed and attrs.get("format") != "ascii":
+            return None
+        tuples = max(counts.get("NumberOfTuples", 0), self.points)
+        components = counts.get("NumberOfComponents", 1)
+        held = self.file_size * (8 if attrs.get("type") == "Bit" else 1)
+        if tuples * components <= held:
+            return None
+        source = "NumberOfTuples" if tuples == counts.get("NumberOfTuples") else "NumberOfPoints"
+        return (f"<{element}> {json.dumps(attrs.get('Name', '(unnamed)'))} declares {tuples * components} values "
+                f'({source}="{tuples}" x NumberOfComponents="{components}"), uncompressed; allowed: at most '
+                f"{held}, what the file's {self.file_size} bytes can hold")
+
+    def check(self) -> None:
+        """Refuse arrays that would not fit in memory, then one that does not fit in the file."""
+        (name, value), components = self.largest, self.components
+        declared = f' (NumberOfComponents="{components}")' if components > 3 else ""
+        check_memory(self.path, 8 * value * components,
+                     f'declares {name}="{value}" with arrays of up to {components} components{declared}:')
+        if self.unheld:
+            raise CloudFileError(self.path, self.unheld)
