@@ -14,7 +14,6 @@ import json
 import mmap
 import os
 import re
-from xml.parsers import expat
 
 import numpy as np
 
@@ -22,6 +21,7 @@ from .._memory import available_memory
 from .cloud import CloudFileError, RawCloud, check_memory, split_components
 from .vtp_blocks import check_binary_headers
 from .vtp_points import points_only
+from .xml_scan import scan_xml
 
 
 def read_vtk(path) -> RawCloud:
@@ -174,8 +174,6 @@ def _cell_runs_problem(ids, n_cells: int, size: int) -> str | None:
     return None
 
 
-_CHUNK = 1 << 20  # bytes of XML given to expat at a time
-_MAX_MARKUP = 1 << 24  # a longer tag is refused: VTK writes none, and expat 2.5 rescans it per chunk
 _COUNT = re.compile(r"[ \t\r\n]*([0-9]+)[ \t\r\n]*")  # a count, with the white space XML allows
 _LARGEST = 2**63 - 1  # VTK's counts are vtkIdType
 
@@ -191,51 +189,8 @@ def check_xml_sizes(path) -> None:
         return
     with open(path, "rb") as f, mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as data:
         sizes = _Sizes(path, len(data))
-        _parse_xml(data, sizes.start, path)
+        scan_xml(data, sizes, path)
     sizes.check()
-
-
-def _parse_xml(data, start_element, path) -> None:
-    """Give expat the XML before the first '<AppendedData' (where VTK stops parsing), a chunk at
-    a time, calling ``start_element(name, attributes)`` at each start tag. A document type is
-    refused (its entities could spell what is checked); at a syntax error parsing stops
-    quietly (VTK's parser stops there too, and names the error)."""
-    end = data.find(b"<AppendedData")
-    end = len(data) if end < 0 else end
-    parser = expat.ParserCreate()
-    parser.StartElementHandler = start_element
-    parser.StartDoctypeDeclHandler = lambda *_: _refuse(path, "its XML has a document type (<!DOCTYPE>); allowed: none")
-    pos, skipped = 0, 0
-    with memoryview(data) as view:
-        try:
-            while pos < end:
-                stop = min(pos + _CHUNK, end)
-                parser.Parse(view[pos:stop], False)
-                token = parser.CurrentByteIndex  # where the markup expat waits to complete starts
-                pos = stop if token < 0 else _resume(data, token + skipped, stop, end, path)
-                skipped += pos - stop
-        except expat.ExpatError:
-            return
-
-
-def _resume(data, token: int, stop: int, end: int, path) -> int:
-    """Where to go on after giving expat the bytes up to ``stop``, ``token`` being where the
-    markup it waits to complete starts. expat 2.5 scans an open token again with every chunk
-    (quadratic): the rest of a long comment is skipped (up to its '--', which expat then
-    checks), and a longer tag than ``_MAX_MARKUP`` is refused."""
-    if stop - token <= _CHUNK or stop == end:
-        return stop
-    if data[token : token + 4] == b"<!--":
-        close = data.find(b"--", token + 4, end)
-        return max(stop, end if close < 0 else close)
-    if stop - token > _MAX_MARKUP:
-        _refuse(path, f"its XML has a tag (or other markup but a comment) of more than {_MAX_MARKUP} bytes at "
-                      f"byte {token}; allowed: at most {_MAX_MARKUP}")
-    return stop
-
-
-def _refuse(path, problem: str):
-    raise CloudFileError(path, problem)
 
 
 class _Sizes:
@@ -249,7 +204,7 @@ class _Sizes:
         self.points = 0  # the current piece's NumberOfPoints
         self.unheld = None  # why the file cannot hold the first array that it cannot
 
-    def start(self, element: str, attrs: dict) -> None:
+    def start(self, element: str, attrs: dict, pos: int) -> None:
         counts = {name: self._count(element, name, value) for name, value in attrs.items()
                   if name.startswith("NumberOf")}
         for name, value in counts.items():

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import base64
 import binascii
+import html
 import mmap
 import os
 import re
@@ -24,10 +25,10 @@ import sys
 from dataclasses import dataclass
 
 from .cloud import CloudFileError
+from .xml_scan import scan_xml
 
 _TAG = re.compile(rb"<(/?)([A-Za-z][\w.:-]*)((?:[^<>\"']|\"[^\"<]*\"|'[^'<]*')*)>")
-_ATTR = re.compile(rb"([\w.:-]+)\s*=\s*\"([^\"]*)\"")
-_VTKFILE = re.compile(rb"<VTKFile\b([^<>]*)>")
+_ATTR = re.compile(rb"([\w.:-]+)\s*=\s*(?:\"([^\"]*)\"|'([^']*)')")
 _APPENDED = re.compile(rb"<AppendedData\b([^<>]*)>")
 _COMPRESSORS = {"vtkZLibDataCompressor", "vtkLZ4DataCompressor", "vtkLZMADataCompressor"}
 _TYPE_SIZES = {"Int8": 1, "UInt8": 1, "Int16": 2, "UInt16": 2, "Int32": 4, "UInt32": 4, "Int64": 8,
@@ -64,23 +65,54 @@ class _Array:
 
 def check_binary_headers(path, available: int) -> None:
     """Raise :class:`CloudFileError` when a binary DataArray's header is one that VTK would
-    act on to its harm (see the module docstring); ``available`` is the memory available."""
+    act on to its harm (see the module docstring); ``available`` is the memory available.
+    The tags and their attributes are read by expat, as VTK reads them (:mod:`core.io.xml_scan`)."""
     if os.path.getsize(path) == 0:
         return
     with open(path, "rb") as f, mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as data:
         end = data.find(b"<AppendedData")
         end = len(data) if end < 0 else end
-        layout = _layout(data, end, available)
+        tags = _Tags()
+        scan_xml(data, tags, path)
+        layout = _layout(data, end, available, tags.vtkfile)
         if layout is None:
             return  # no VTKFile element, or a header type / byte order that VTK refuses itself
-        for array in _arrays(data, end):
-            problem = _problem(layout, array)
+        for pos, attrs, where, counts in tags.arrays:
+            problem = _problem(layout, _array(data, pos, attrs, where, counts))
             if problem:
-                raise CloudFileError(path, f"{array.label}: {problem}")
+                raise CloudFileError(path, f"{_label(attrs, where)}: {problem}")
+
+
+class _Tags:
+    """What :func:`check_binary_headers` reads of the XML: the VTKFile element's attributes,
+    and each DataArray's (position of its '<', attributes, section and piece, the piece's
+    attributes)."""
+
+    def __init__(self):
+        self.vtkfile, self.arrays = None, []
+        self.section, self.piece, self.counts = "", -1, {}
+
+    def start(self, name: str, attrs: dict, pos: int) -> None:
+        if name == "VTKFile" and self.vtkfile is None:
+            self.vtkfile = attrs
+        elif name == "Piece":
+            self.piece, self.counts = self.piece + 1, attrs
+        elif name in _SECTIONS:
+            self.section = name
+        elif name == "DataArray":
+            self.arrays.append((pos, attrs, f"{self.section or 'the file'} of piece {max(self.piece, 0)}", self.counts))
+
+    def end(self, name: str) -> None:
+        self.section = "" if name == self.section else self.section
+
+
+def _label(attrs: dict, where: str) -> str:
+    return f"array {attrs.get('Name', '(unnamed)')!r} in {where}"
 
 
 def _attrs(text: bytes) -> dict:
-    return {k.decode("latin-1"): v.decode("latin-1") for k, v in _ATTR.findall(text)}
+    """The attributes of a tag's text (either quotes, references unescaped as XML does)."""
+    return {k.decode("latin-1"): html.unescape((a or b).decode("latin-1")) for k, a, b in _ATTR.findall(text)}
 
 
 def _int(text) -> int | None:
@@ -89,11 +121,9 @@ def _int(text) -> int | None:
     return int(match.group(1)) if match else None
 
 
-def _layout(data, end: int, available: int) -> _Layout | None:
-    match = _VTKFILE.search(data, 0, min(end, 1 << 16))
-    if match is None:
+def _layout(data, end: int, available: int, attrs) -> _Layout | None:
+    if attrs is None:
         return None
-    attrs = _attrs(match.group(1))
     native = "LittleEndian" if sys.byteorder == "little" else "BigEndian"
     order = {"LittleEndian": "<", "BigEndian": ">"}.get(attrs.get("byte_order", native))
     word = {"UInt32": "I", "UInt64": "Q"}.get(attrs.get("header_type", "UInt32"))
@@ -109,31 +139,16 @@ def _layout(data, end: int, available: int) -> _Layout | None:
                    available)
 
 
-def _arrays(data, end: int):
-    """Each DataArray before ``end`` (the appended data), with the section and piece it is in."""
-    counts, section, piece = {}, "", -1
-    for match in _TAG.finditer(data, 0, end):
-        closing, name, attrs = match.group(1), match.group(2).decode("latin-1"), match.group(3)
-        if closing:
-            section = "" if name == section else section
-        elif name == "Piece":
-            piece, counts = piece + 1, _attrs(attrs)
-        elif name in _SECTIONS and not attrs.rstrip().endswith(b"/"):
-            section = name
-        elif name == "DataArray":
-            yield _array(data, match, _attrs(attrs), f"{section or 'the file'} of piece {max(piece, 0)}", counts)
-
-
-def _array(data, match, attrs: dict, where: str, counts: dict) -> _Array:
+def _array(data, pos: int, attrs: dict, where: str, counts: dict) -> _Array:
     section = where.split(" of ")[0]
     expected, why = _expected(attrs, section, counts)
-    start = match.end()
+    tag = _TAG.match(data, pos)  # expat read the tag: this finds its end, whichever quotes it has
+    start = tag.end() if tag else data.find(b">", pos) + 1
     stop = data.find(b"<", start)
     stop = len(data) if stop < 0 else stop
     while start < stop and data[start : start + 1].isspace():
         start += 1
-    label = f"array {attrs.get('Name', '(unnamed)')!r} in {where}"
-    return _Array(label, attrs.get("format", "ascii"), _int(attrs.get("offset")), (start, stop), expected, why)
+    return _Array(_label(attrs, where), attrs.get("format", "ascii"), _int(attrs.get("offset")), (start, stop), expected, why)
 
 
 def _expected(attrs: dict, section: str, counts: dict) -> tuple[int | None, str]:

@@ -19,7 +19,7 @@ import pytest
 
 import core
 from core.io import CloudFileError
-from core.io import vtk as vtk_io
+from core.io import vtk as vtk_io, xml_scan
 
 pytest.importorskip("vtkmodules.vtkIOXML")
 
@@ -103,7 +103,7 @@ def test_vtp_document_types_refused(tmp_path, doctype):
 def test_vtp_long_comment_skipped_not_rescanned(tmp_path, monkeypatch):
     """expat 2.5 scans an unfinished comment again with each chunk it is given: a comment of
     2,000 chunks took minutes. Its rest is skipped, and the sizes after it are still read."""
-    monkeypatch.setattr(vtk_io, "_CHUNK", 4096)
+    monkeypatch.setattr(xml_scan, "_CHUNK", 4096)
     path = tmp_path / "c.vtp"
     path.write_text(_vtp(f"NumberOfPoints='{HUGE}'", before="<!--" + "x- " * ((8 << 20) // 3) + "-->"))
     t0 = time.perf_counter()
@@ -117,8 +117,8 @@ def test_vtp_long_comment_skipped_not_rescanned(tmp_path, monkeypatch):
 
 
 def test_vtp_long_tag_refused(tmp_path, monkeypatch):
-    monkeypatch.setattr(vtk_io, "_CHUNK", 4096)
-    monkeypatch.setattr(vtk_io, "_MAX_MARKUP", 1 << 16)
+    monkeypatch.setattr(xml_scan, "_CHUNK", 4096)
+    monkeypatch.setattr(xml_scan, "_MAX_MARKUP", 1 << 16)
     path = tmp_path / "t.vtp"
     text = _vtp(f'a="{"x" * (1 << 20)}" NumberOfPoints="4"')
     path.write_text(text)

@@ -1,0 +1,60 @@
+"""The XML of a VTK XML file, parsed as VTK parses it (expat), for the checks made before VTK
+reads it (:mod:`core.io.vtk`, :mod:`core.io.vtp_blocks`): quotes of either kind, spaces
+around '=', character references and comments are read as VTK reads them, where byte
+patterns saw only one spelling (``NumberOfPoints='1000000000000'`` aborted the process)."""
+
+from __future__ import annotations
+
+from xml.parsers import expat
+
+from .cloud import CloudFileError
+
+_CHUNK = 1 << 20  # bytes of XML given to expat at a time
+_MAX_MARKUP = 1 << 24  # a longer tag is refused: VTK writes none, and expat 2.5 rescans it per chunk
+
+
+def scan_xml(data, handler, path) -> None:
+    """Give expat the XML before the first '<AppendedData' (where VTK stops parsing), a chunk at
+    a time, calling ``handler.start(name, attributes, position)`` at each start tag (the byte
+    of its '<' in ``data``) and ``handler.end(name)``, if it has one, at each end tag. A
+    document type is refused (its entities could spell what is checked); at a syntax error
+    parsing stops quietly (VTK's parser stops there too, and names the error)."""
+    end = data.find(b"<AppendedData")
+    end = len(data) if end < 0 else end
+    parser = expat.ParserCreate()
+    skipped = [0]  # bytes of long comments not given to expat (:func:`_resume`), before the current chunk
+    parser.StartElementHandler = lambda name, attrs: handler.start(name, attrs, parser.CurrentByteIndex + skipped[0])
+    if hasattr(handler, "end"):
+        parser.EndElementHandler = handler.end
+    parser.StartDoctypeDeclHandler = lambda *_: _refuse(path, "its XML has a document type (<!DOCTYPE>); allowed: none")
+    pos = 0
+    with memoryview(data) as view:
+        try:
+            while pos < end:
+                stop = min(pos + _CHUNK, end)
+                parser.Parse(view[pos:stop], False)
+                token = parser.CurrentByteIndex  # where the markup expat waits to complete starts
+                pos = stop if token < 0 else _resume(data, token + skipped[0], stop, end, path)
+                skipped[0] += pos - stop
+        except expat.ExpatError:
+            return
+
+
+def _resume(data, token: int, stop: int, end: int, path) -> int:
+    """Where to go on after giving expat the bytes up to ``stop``, ``token`` being where the
+    markup it waits to complete starts. expat 2.5 scans an open token again with every chunk
+    (quadratic): the rest of a long comment is skipped (up to its '--', which expat then
+    checks), and a longer tag than ``_MAX_MARKUP`` is refused."""
+    if stop - token <= _CHUNK or stop == end:
+        return stop
+    if data[token : token + 4] == b"<!--":
+        close = data.find(b"--", token + 4, end)
+        return max(stop, end if close < 0 else close)
+    if stop - token > _MAX_MARKUP:
+        _refuse(path, f"its XML has a tag (or other markup but a comment) of more than {_MAX_MARKUP} bytes at "
+                      f"byte {token}; allowed: at most {_MAX_MARKUP}")
+    return stop
+
+
+def _refuse(path, problem: str):
+    raise CloudFileError(path, problem)
