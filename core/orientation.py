@@ -34,11 +34,14 @@ from .tuning import FOLD_TRUST, PATCH_COS, PATCH_MAX, PATCH_ROUNDS, PATCH_TILT, 
 #: test needs the graph to reach across a thin part's edges; measured on the thin shapes
 #: (tests/test_orientation.py) at noise 0.2 spacing.
 ORIENT_K = 10
-#: the points of a component that vote on its sign: those at least this many times its
-#: RMS distance from the cloud's centre (the outer part, where the surface faces away from
-#: it). Relative to the RMS, not the largest distance: with the largest, a single outlier
-#: far from a torus was the only voter and set the sign of the whole torus.
-FAR_SHARE = 1.0
+#: the points of a component that vote on its sign: its outer half by distance from the
+#: cloud's centre (where the surface faces away from it), read from a histogram of the
+#: distances in units of the component's RMS distance, VOTE_BINS bins over [0, 2) (a tiled
+#: run sums the tiles' histograms: :func:`outer_reach`). Not "beyond the RMS distance": a
+#: noise-free sphere's points all lie at it, so two stray points 10 radii off raised it past
+#: every one of them and were the only voters (the sphere faced inward, H = -1); not "beyond
+#: the largest": a single outlier far from a torus was then the only voter.
+VOTE_BINS = 64
 #: an offset along a normal counts in the chord test only beyond this many times the
 #: pair's spread (median offset of their neighbours from their planes): below it, it is noise
 GATE = 2.0
@@ -223,8 +226,8 @@ def orient_normals(points, normals, idx, mode, *, ok=None):
 def _global_signs(points, normals, parts, mode, sign, rank):
     """Flip whole groups of components (in ``sign``; ``parts`` = (component label per point,
     group per component), :func:`core.part_joins.join_parts`): "outward" by the sum of its
-    components' votes, each by its points beyond its RMS distance from the cloud's centre
-    (:data:`FAR_SHARE`) (weighted by how squarely they face away), "propagate" by the sign
+    components' votes, each by its outer half by distance from the cloud's centre
+    (:data:`VOTE_BINS`) (weighted by how squarely they face away), "propagate" by the sign
     of the group's highest point's normal z (of equally high ones, the lowest ``rank``)."""
     labels, group = parts
     have = np.flatnonzero(labels >= 0)
@@ -245,19 +248,39 @@ def _global_signs(points, normals, parts, mode, sign, rank):
         rel = pts - pts.mean(axis=0)
         square = np.einsum("ij,ij->i", rel, rel)
         rms = np.sqrt(np.bincount(lab, square, n_comp) / np.maximum(np.bincount(lab, minlength=n_comp), 1))
-        far, facing = far_facing(rel, normals[rows], rms[lab])
+        reach = outer_reach(reach_histogram(np.sqrt(square), rms, lab, n_comp)) * rms
+        far, facing = far_facing(rel, normals[rows], reach[lab])
         vote = np.bincount(group, np.bincount(lab[far], facing, n_comp), n_comp)
         lab = group[lab]
     sign[have[vote[lab] < 0]] *= -1.0
 
 
-def far_facing(rel, normals, rms):
-    """The outward vote's voters and their votes: which points lie beyond FAR_SHARE x their
-    component's RMS distance ``rms`` from the cloud's centre (``rel``: positions relative to
-    it), and how squarely each one's normal faces away from the centre (cosine, NaN-free).
-    Shared by :func:`orient` and the tiled engine (:mod:`core.tiled.signs`)."""
+def reach_histogram(dist, rms, lab, n_comp) -> np.ndarray:
+    """(n_comp, VOTE_BINS) counts of the points' distances ``dist`` from the cloud's centre in
+    units of their component's RMS distance ``rms`` (``lab``: component per point), over [0, 2)
+    (farther: the last bin); summed over tiles in a tiled run."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        unit = np.nan_to_num(dist / rms[lab], nan=0.0, posinf=2.0)
+    b = np.minimum((unit * (VOTE_BINS / 2.0)).astype(np.int64), VOTE_BINS - 1)
+    return np.bincount(lab * VOTE_BINS + b, minlength=n_comp * VOTE_BINS).reshape(n_comp, VOTE_BINS)
+
+
+def outer_reach(hist) -> np.ndarray:
+    """Per component, the distance (in units of its RMS distance) from which its outer half
+    lies: the lower edge of the bin of :func:`reach_histogram` where the count from the
+    farthest bin down reaches half the component's points (:data:`VOTE_BINS`)."""
+    from_top = np.cumsum(hist[:, ::-1], axis=1)
+    first = np.argmax(2 * from_top >= from_top[:, -1:], axis=1)  # bins from the top to cover half
+    return (VOTE_BINS - 1 - first) * (2.0 / VOTE_BINS)
+
+
+def far_facing(rel, normals, reach):
+    """The outward vote's voters and their votes: which points lie at least ``reach`` (their
+    component's, :func:`outer_reach` x its RMS distance) from the cloud's centre (``rel``:
+    positions relative to it), and how squarely each one's normal faces away from the centre
+    (cosine, NaN-free). Shared by :func:`orient` and the tiled engine (:mod:`core.tiled.signs`)."""
     dist = np.linalg.norm(rel, axis=1)
-    far = dist >= FAR_SHARE * rms
+    far = dist >= reach
     with np.errstate(invalid="ignore", divide="ignore"):
         facing = np.einsum("ij,ij->i", normals[far], rel[far]) / dist[far]
     return far, np.nan_to_num(facing)

@@ -16,7 +16,7 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import breadth_first_order, connected_components, minimum_spanning_tree
 
-from ..orientation import far_facing
+from ..orientation import VOTE_BINS, far_facing, outer_reach, reach_histogram
 from .store import TileStore
 
 _CHUNK = 1_000_000
@@ -115,14 +115,18 @@ def _upward(flat, part, parity) -> np.ndarray:
 
 def _outward(store, nodes, offset, flat, part, parity) -> np.ndarray:
     """Flip each part as :func:`core.orientation.orient` does in memory: a vote of its
-    points farthest from the cloud's centre (:func:`core.orientation.far_facing`), each
+    outer half by distance from the cloud's centre (:func:`core.orientation.far_facing`), each
     weighted by how squarely its normal faces away from the centre."""
     n_parts = int(part.max()) + 1
     centre = flat["sum"].sum(axis=0) / max(float(flat["count"].sum()), 1.0)
     square = np.zeros(n_parts)
     for chunk, node in _own_chunks(store, nodes, offset):
         square += np.bincount(part[node], np.sum((chunk["xyz"] - centre) ** 2, axis=1), n_parts)
-    reach = np.sqrt(square / np.maximum(np.bincount(part, flat["count"], n_parts), 1))
+    rms = np.sqrt(square / np.maximum(np.bincount(part, flat["count"], n_parts), 1))
+    hist = np.zeros((n_parts, VOTE_BINS), dtype=np.int64)
+    for chunk, node in _own_chunks(store, nodes, offset):
+        hist += reach_histogram(np.linalg.norm(chunk["xyz"] - centre, axis=1), rms, part[node], n_parts)
+    reach = outer_reach(hist) * rms
     vote = np.zeros(n_parts)
     for chunk, node in _own_chunks(store, nodes, offset):
         far, facing = far_facing(chunk["xyz"] - centre, chunk["n"], reach[part[node]])
