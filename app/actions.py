@@ -14,6 +14,7 @@ from PySide6.QtWidgets import QFileDialog, QMessageBox
 
 import core.io
 import core.shapes
+from core.io.atomic import refuse_input_as_output
 
 from . import DEFAULT_CLOUD, big_result
 from .presenter import result_parameters
@@ -152,7 +153,9 @@ class WindowActions:
             self.notifier.warning("Nothing to export yet: wait for the estimate to finish"
                                   + (" (a preview is not exported)." if self.presenter.preview is not None else "."))
             return None
-        try:
+        source = self.state.source
+        try:  # never over the file the cloud came from (a symlink or hard link to it included), as the CLI
+            refuse_input_as_output([source.path] if source is not None and source.path is not None else [], path)
             written = core.io.write_result(path, out.result)
         except Exception as exc:  # noqa: BLE001
             text = str(exc) if str(path) in str(exc) else f"{path}: {exc}"  # core's messages name the file

@@ -17,6 +17,7 @@ import numpy as np
 
 import core.io
 import core.shapes
+from core.degenerate import MAX_COORD
 
 from .geometry import CloudGeometry
 from .text import display_name
@@ -98,9 +99,25 @@ def load_file(path) -> CloudSource:
         if w not in ours:
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno, source=w.source)
     notes = tuple(dict.fromkeys(str(w.message) for w in ours))
+    _refuse_undrawable(path, cloud.points)
     points = np.array(cloud.points, dtype=float, copy=True)
     normals = None if cloud.normals is None else np.array(cloud.normals, dtype=float, copy=True)
     return CloudSource(name=display_name(path), points=points, normals=normals, path=path, notes=notes)
+
+
+def _refuse_undrawable(path, points) -> None:
+    """A file whose cloud the window can neither estimate nor draw is refused as unreadable
+    ones are (the previous cloud stays): fewer than 3 points (core.estimate's least; the
+    estimate failed with an API message and a hint to change a parameter), or no point within
+    ``MAX_COORD`` (nothing to draw: an empty mesh raised inside a Qt slot and no estimate ran)."""
+    n = len(points)
+    if n < 3:
+        raise core.io.CloudFileError(path, f"has {n} point{'s' * (n != 1)}; an estimate needs at least 3")
+    with np.errstate(invalid="ignore"):
+        if not (np.abs(points) <= MAX_COORD).all(axis=1).any():
+            raise core.io.CloudFileError(path, f"every point has a coordinate beyond {MAX_COORD:g} (up to "
+                                               f"{float(np.abs(points).max()):.3g}): nothing can be drawn or "
+                                               "estimated; rescale the cloud")
 
 
 def make_shape(name: str, n: int = 5000, *, seed: int = 0) -> CloudSource:
