@@ -92,7 +92,7 @@ from .linalg import tangent_basis
 from .patch import Chunk
 from .tuning import (AUTO_DEGREE, AUTO_KS, FOLD_COS, FOLD_FRACTION, FOLD_MIN_BAD, FOLD_NOISE, GAMMA,
                      INITIAL_K0, INITIAL_SHARE, JET_DEGREE, JET_GAMMA, JET_DEGREES, JET_KS, JET_QUIET, JET_REACH, JET_SCORE,
-                     NEIGHBOUR_BUDGET, NOISE_KS, NOISE_POOL, RCOND, JET_RCOND, JET_TILT, WIDEN_SHARE)
+                     NEIGHBOUR_BUDGET, NOISE_KS, NOISE_POOL, RCOND, JET_RCOND, JET_TILT, ROUNDING_NOISE, WIDEN_SHARE)
 
 __all__ = ["AUTO_DEGREE", "AUTO_KS", "GAMMA", "INITIAL_K0", "NEIGHBOUR_BUDGET", "JET_KS", "JET_DEGREE", "JET_SCORE",
            "candidates", "choose_k", "noise_ratio", "initial_k", "jet_candidates", "noise_variance", "choose_jets",
@@ -192,9 +192,9 @@ def noise_variance(rss_a, rss_b, s, idx, ka=NOISE_KS[0], kb=NOISE_KS[1]):
     every k) plus the model's bias, whose quartic terms grow as h^8, i.e. as k^4 on a
     surface (h^2 ~ k). With the variances a at ka and b at kb, pooled over the point's
     :data:`NOISE_POOL` nearest neighbours, sigma^2 = (rho a - b) / (rho - 1), rho =
-    (kb / ka)^4, clipped at 0. Noise-free this is ~0 (the residual is all bias), so the
-    intervals of :func:`choose_jets` are narrow and the smallest size wins; the plain
-    residual variance would let a biased fit pass for noise. Returns (sigma^2, a).
+    (kb / ka)^4, at least :data:`ROUNDING_NOISE`. Noise-free this is ~0 (the residual is
+    all bias), so the intervals of :func:`choose_jets` are narrow and the smallest size wins;
+    the plain residual variance would let a biased fit pass for noise. Returns (sigma^2, a).
     """
     s2 = s * s
     with np.errstate(invalid="ignore"):
@@ -211,7 +211,7 @@ def noise_variance(rss_a, rss_b, s, idx, ka=NOISE_KS[0], kb=NOISE_KS[1]):
             a = np.nanmean(va[pool], axis=1)
             b = np.nanmean(vb[pool], axis=1)
     rho = (kb / ka) ** 4
-    sigma2 = np.maximum((rho * a - b) / (rho - 1.0), 0.0)
+    sigma2 = np.maximum((rho * a - b) / (rho - 1.0), (ROUNDING_NOISE * s) ** 2)  # exact data: not 0
     return np.nan_to_num(sigma2, nan=0.0), np.nan_to_num(a, nan=np.inf)
 
 
