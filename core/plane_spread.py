@@ -13,7 +13,9 @@ k="auto" NR takes the smallest larger candidate whose neighbours do span the pla
 position jets of k="auto" are not held to it: their interval rule sees the lever arms
 through the variance of their Hessian, and on exact data a thin jet is still right (a
 noise-free scan with lines 12 spacings apart: median H error 0.0036 with the jets on
-20-28 thin neighbours, 0.45 with NR widened instead).
+20-28 thin neighbours, 0.45 with NR widened instead). The initial normals of k="auto" are
+(:func:`spanning_normals`): a curved scan line's PCA is the plane of the line, and every
+later stage works in the frames of the initial normals.
 
 Left open: a curve that bends in a plane (a scanned profile) spreads over that plane at
 wide neighbourhoods (a circle: 0.13 at 320 neighbours, growing with k), so it is not
@@ -24,8 +26,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import kernels
 from .kernels.spread import plane_spread
-from .tuning import THIN_SPREAD
+from .tuning import COLLINEAR, THETA_REACH, THIN_SPREAD
 
 
 def spreads(pts, normals, nb, k, centres=None) -> np.ndarray:
@@ -72,3 +75,32 @@ def widened(pts, normals, nb, k, ks) -> np.ndarray:
         thin = np.setdiff1d(thin, wider[ok])
     out[thin] = 0
     return out
+
+
+def spanning_normals(pts, normals, ok, nb, k: int, ks):
+    """Initial normals where a point's ``k`` nearest lie along one line or curve (a scan
+    line, its neighbours' lines farther than k reach): the weighted-PCA normal (eqs. 13-14)
+    of the smallest of ``ks`` above k whose neighbours span the plane of that normal; as
+    they were where none does. Returns ``(normals, ok)``, new arrays when any changed.
+
+    The PCA of one curved line is the plane of that line, not the surface: on a sphere
+    scanned along parallels 8-16 spacings apart the initial normals were 70-77 degrees off
+    (H 0 where it is 1, every point valid); on one straight line it has no normal at all."""
+    thin = np.flatnonzero(~ok | ~spans_plane(pts, normals, nb, np.full(len(pts), k)))
+    if not len(thin):
+        return normals, ok
+    normals, ok = normals.copy(), ok.copy()
+    for cand in (c for c in ks if c > k):
+        idx, dist = nb.rows(thin, cand)
+        found, has = np.empty((len(thin), 3)), np.empty(len(thin), dtype=bool)
+        kernels.pca_normals_at(pts, thin, np.ascontiguousarray(idx), np.ascontiguousarray(dist), THETA_REACH,
+                               COLLINEAR, found, has)
+        before = normals[thin]
+        normals[thin] = found
+        good = has & ~(spreads(pts, normals, nb, cand, thin) < THIN_SPREAD)
+        normals[thin[~good]] = before[~good]
+        ok[thin[good]] = True
+        thin = thin[~good]
+        if not len(thin):
+            break
+    return normals, ok

@@ -134,7 +134,17 @@ def initial_normals(pts, nb, plan, outlier, report) -> Initial:
     """PCA normals (eqs. 13-14), refined by a 2-jet if ``plan.initial == "jet"``, on the
     ``plan.k_initial`` nearest; with k="auto" on a neighbourhood that grows with the noise
     the 2-jets measure (:func:`core.scale.initial_k`, or ``plan.noise`` when given),
-    without the known outliers in robust mode."""
+    without the known outliers in robust mode, and wider where it lies along one scan line
+    (:func:`core.plane_spread.spanning_normals`)."""
+    init = _initial_normals(pts, nb, plan, outlier, report)
+    if not plan.auto:
+        return init
+    nrm, ok = plane_spread.spanning_normals(pts, init.normals, init.has_normal, nb, init.k, plan.candidates)
+    return init._replace(normals=nrm, has_normal=ok)
+
+
+def _initial_normals(pts, nb, plan, outlier, report) -> Initial:
+    """:func:`initial_normals` before the scan lines are looked after."""
     idx_p, dist_p = nb.take(plan.k_initial)
     nrm, ok = pca_normals(pts, idx_p, dist_p, progress=report.sub(0.3, 0.37))
     if not plan.auto:

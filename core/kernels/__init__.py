@@ -21,10 +21,10 @@ argument lists.
 from .jet import jet_normals
 from .nf import Fits, Frames, Settings, normal_fit
 from .outliers import outlier_scores
-from .pca import normal_spread, pca_normals
+from .pca import normal_spread, pca_normals, pca_normals_at
 from .scale import ScaleRule, choose_scales, fold_limits
 
 __all__ = [
-    "pca_normals", "jet_normals", "normal_fit", "Frames", "Settings", "Fits", "ScaleRule", "choose_scales", "fold_limits",
+    "pca_normals", "pca_normals_at", "jet_normals", "normal_fit", "Frames", "Settings", "Fits", "ScaleRule", "choose_scales", "fold_limits",
     "outlier_scores", "normal_spread",
 ]

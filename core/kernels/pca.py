@@ -17,33 +17,45 @@ def pca_normals(points, idx, dist, start, reach, collinear, normals, ok):
     Numpy reference: C = sum_i theta(d_i/h) (p_i - q)(p_i - q)^T / h^2, with h =
     reach x distance to the k-th neighbour; n = eigenvector of the smallest eigenvalue.
     """
-    n, k = idx.shape
-    for i in prange(n):
-        h = dist[i, k - 1] * reach
-        ok[i] = False
-        normals[i, 0] = math.nan
-        normals[i, 1] = math.nan
-        normals[i, 2] = math.nan
-        if not h > 0.0:
-            continue
-        c00 = c01 = c02 = c11 = c12 = c22 = 0.0
-        g = start + i
-        for j in range(k):
-            q = idx[i, j]
-            w = theta(dist[i, j] / h)
-            dx = (points[q, 0] - points[g, 0]) / h
-            dy = (points[q, 1] - points[g, 1]) / h
-            dz = (points[q, 2] - points[g, 2]) / h
-            c00 += w * dx * dx
-            c01 += w * dx * dy
-            c02 += w * dx * dz
-            c11 += w * dy * dy
-            c12 += w * dy * dz
-            c22 += w * dz * dz
-        l0, l1, l2, x, y, z = smallest_eigvec_sym3(c00, c01, c02, c11, c12, c22)
-        if l1 > collinear * max(l2, 1e-300) and l1 > l0 and math.isfinite(x):
-            normals[i, 0], normals[i, 1], normals[i, 2] = x, y, z
-            ok[i] = True
+    for i in prange(idx.shape[0]):
+        _pca_row(points, start + i, idx, dist, i, reach, collinear, normals, ok)
+
+
+@njit(**OPTS, parallel=True)
+def pca_normals_at(points, centres, idx, dist, reach, collinear, normals, ok):
+    """:func:`pca_normals` of points ``centres[i]`` (any), on row i of ``idx`` / ``dist``."""
+    for i in prange(len(centres)):
+        _pca_row(points, centres[i], idx, dist, i, reach, collinear, normals, ok)
+
+
+@njit(**OPTS)
+def _pca_row(points, g, idx, dist, i, reach, collinear, normals, ok):
+    """The weighted-PCA normal of point ``g`` on row i of ``idx`` / ``dist`` into row i of the outputs."""
+    k = idx.shape[1]
+    h = dist[i, k - 1] * reach
+    ok[i] = False
+    normals[i, 0] = math.nan
+    normals[i, 1] = math.nan
+    normals[i, 2] = math.nan
+    if not h > 0.0:
+        return
+    c00 = c01 = c02 = c11 = c12 = c22 = 0.0
+    for j in range(k):
+        q = idx[i, j]
+        w = theta(dist[i, j] / h)
+        dx = (points[q, 0] - points[g, 0]) / h
+        dy = (points[q, 1] - points[g, 1]) / h
+        dz = (points[q, 2] - points[g, 2]) / h
+        c00 += w * dx * dx
+        c01 += w * dx * dy
+        c02 += w * dx * dz
+        c11 += w * dy * dy
+        c12 += w * dy * dz
+        c22 += w * dz * dz
+    l0, l1, l2, x, y, z = smallest_eigvec_sym3(c00, c01, c02, c11, c12, c22)
+    if l1 > collinear * max(l2, 1e-300) and l1 > l0 and math.isfinite(x):
+        normals[i, 0], normals[i, 1], normals[i, 2] = x, y, z
+        ok[i] = True
 
 
 @njit(**OPTS, parallel=True)
