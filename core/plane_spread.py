@@ -78,18 +78,22 @@ def widened(pts, normals, nb, k, ks) -> np.ndarray:
 
 
 def spanning_normals(pts, normals, ok, nb, k: int, ks):
-    """Initial normals where a point's ``k`` nearest lie along one line or curve (a scan
-    line, its neighbours' lines farther than k reach): the weighted-PCA normal (eqs. 13-14)
-    of the smallest of ``ks`` above k whose neighbours span the plane of that normal; as
-    they were where none does. Returns ``(normals, ok)``, new arrays when any changed.
+    """Initial normals where a point's ``k`` nearest lie along one curved line (a scan line,
+    its neighbours' lines farther than k reach): the weighted-PCA normal (eqs. 13-14) of the
+    smallest of ``ks`` above k whose neighbours span the plane of that normal and lie near
+    one plane (:data:`FLAT_SHARE`); as they were where none does. Returns ``(normals, ok)``
+    (``ok`` unchanged), new arrays when any changed.
 
-    The PCA of one curved line is the plane of that line, not the surface: on a sphere
+    The PCA of one curved line is the plane of the line, not the surface: on a sphere
     scanned along parallels 8-16 spacings apart the initial normals were 70-77 degrees off
-    (H 0 where it is 1, every point valid); on one straight line it has no normal at all."""
-    thin = np.flatnonzero(~ok | ~spans_plane(pts, normals, nb, np.full(len(pts), k)))
+    (H 0 where it is 1, every point valid). A point whose nearest lie on a straight line has
+    no normal and keeps none, and a widened neighbourhood that is not flat is not taken:
+    wires and a cube's wireframe are curves, not a surface (widened without those tests, 3.3
+    and 5.5x as many of a wireframe's points got normals, and |k| of 1e5)."""
+    thin = np.flatnonzero(ok & ~spans_plane(pts, normals, nb, np.full(len(pts), k)))
     if not len(thin):
         return normals, ok
-    normals, ok = normals.copy(), ok.copy()
+    normals = normals.copy()
     for cand in (c for c in ks if c > k):
         idx, dist = nb.rows(thin, cand)
         found, has = np.empty((len(thin), 3)), np.empty(len(thin), dtype=bool)
@@ -98,9 +102,28 @@ def spanning_normals(pts, normals, ok, nb, k: int, ks):
         before = normals[thin]
         normals[thin] = found
         good = has & ~(spreads(pts, normals, nb, cand, thin) < THIN_SPREAD)
+        good[good] = _flat(pts, idx[good])
         normals[thin[~good]] = before[~good]
-        ok[thin[good]] = True
         thin = thin[~good]
         if not len(thin):
             break
     return normals, ok
+
+
+#: a widened neighbourhood is a surface when its points lie this close to their plane:
+#: sqrt(lambda_min / lambda_mid) of their scatter at most this (a smooth patch of scan lines
+#: is flat at its scale: 0.02-0.09 on the sphere above at 56-160 neighbours; a cube's
+#: wireframe corner, three edges, is not)
+FLAT_SHARE = 0.3
+
+
+def _flat(pts, idx) -> np.ndarray:
+    """(m,) bool: the points of each row of ``idx`` lie near one plane (:data:`FLAT_SHARE`)."""
+    out = np.empty(len(idx), dtype=bool)
+    for start in range(0, len(idx), 8192):
+        rows = idx[start:start + 8192]
+        d = pts[rows] - pts[rows].mean(axis=1, keepdims=True)
+        lam = np.linalg.eigvalsh(np.einsum("mki,mkj->mij", d, d))
+        with np.errstate(invalid="ignore", divide="ignore"):
+            out[start:start + 8192] = np.sqrt(np.maximum(lam[:, 0], 0.0) / lam[:, 1]) <= FLAT_SHARE
+    return out

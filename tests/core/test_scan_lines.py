@@ -40,3 +40,27 @@ def test_scan_lines_in_tiles_as_in_memory(tmp_path):
     f = read_cloud(tmp_path / "out.ply").fields
     np.testing.assert_array_equal(f["valid"].astype(bool), mem.valid)
     np.testing.assert_allclose(f["k1"][mem.valid], mem.k1[mem.valid], rtol=1e-5, atol=1e-6)
+
+
+def test_a_wireframe_is_not_taken_for_a_scanned_surface():
+    """A cube's edges (curves, no surface): widening their points' neighbourhoods until they
+    span a plane gave 3.3x as many of them normals, with |k| of 1e5; the widened
+    neighbourhood must also be flat (core.plane_spread.FLAT_SHARE), and a wireframe's is not."""
+    import core.plane_spread as ps
+
+    t = np.linspace(0.0, 1.0, 50)
+    edges = []
+    for a in range(3):
+        for b in (0.0, 1.0):
+            for c in (0.0, 1.0):
+                e = np.zeros((50, 3))
+                e[:, a], e[:, (a + 1) % 3], e[:, (a + 2) % 3] = t, b, c
+                edges.append(e)
+    pts = np.unique(np.vstack(edges), axis=0)
+    plain = ps.spanning_normals
+    try:
+        ps.spanning_normals = lambda p, n, ok, *a: (n, ok)
+        before = core.estimate(pts).valid.sum()
+    finally:
+        ps.spanning_normals = plain
+    assert core.estimate(pts).valid.sum() <= before
