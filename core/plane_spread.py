@@ -94,20 +94,30 @@ def spanning_normals(pts, normals, ok, nb, k: int, ks):
     if not len(thin):
         return normals, ok
     normals = normals.copy()
-    for cand in (c for c in ks if c > k):
-        idx, dist = nb.rows(thin, cand)
-        found, has = np.empty((len(thin), 3)), np.empty(len(thin), dtype=bool)
-        kernels.pca_normals_at(pts, thin, np.ascontiguousarray(idx), np.ascontiguousarray(dist), THETA_REACH,
-                               COLLINEAR, found, has)
+    for start in range(0, len(thin), _CHUNK):  # chunks: 320 neighbours of 1M thin points would be 2.5 GB
+        _widen(pts, normals, nb, thin[start:start + _CHUNK], [c for c in ks if c > k])
+    return normals, ok
+
+
+_CHUNK = 32_768
+
+
+def _widen(pts, normals, nb, thin, ks) -> None:
+    """:func:`spanning_normals` of the centres ``thin``, in place in ``normals``."""
+    for cand in ks:
+        idx, dist = (np.ascontiguousarray(a) for a in nb.rows(thin, cand))
+        idx.flags.writeable = False  # the compiled signature :func:`spreads` uses
+        found, has, spread = np.empty((len(thin), 3)), np.empty(len(thin), dtype=bool), np.empty(len(thin))
+        kernels.pca_normals_at(pts, thin, idx, dist, THETA_REACH, COLLINEAR, found, has)
         before = normals[thin]
         normals[thin] = found
-        good = has & ~(spreads(pts, normals, nb, cand, thin) < THIN_SPREAD)
+        plane_spread(pts, normals, thin, idx, np.arange(len(thin)), np.full(len(thin), cand), spread)
+        good = has & ~(spread < THIN_SPREAD)
         good[good] = _flat(pts, idx[good])
         normals[thin[~good]] = before[~good]
         thin = thin[~good]
         if not len(thin):
-            break
-    return normals, ok
+            return
 
 
 #: a widened neighbourhood is a surface when its points lie this close to their plane:

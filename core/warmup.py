@@ -56,7 +56,16 @@ def _data_dependent_types(method) -> int:
         estimate(cloud.points, method=method, cache=StageCache())
         pts = np.array(cloud.points)
         estimate(pts, method=method, neighbours=build_neighbours(pts, plan(len(pts), k="auto").k_search))
-    return 6
+    estimate(_parallels(), method=method)  # scan lines far apart: initial normals on wider rows
+    return 7
+
+
+def _parallels(n_line: int = 60, lines: int = 8, ratio: float = 10.0) -> np.ndarray:
+    """A sphere patch scanned along parallels ``ratio`` x the along-line spacing apart."""
+    step = 1.0 / (n_line - 1)
+    theta, phi = np.meshgrid(np.arange(n_line) * step - 0.5, (np.arange(lines) - (lines - 1) / 2) * step * ratio)
+    return np.column_stack([np.cos(phi.ravel()) * np.cos(theta.ravel()), np.cos(phi.ravel()) * np.sin(theta.ravel()),
+                            np.sin(phi.ravel())])
 
 
 def _read_only_inputs(cloud, noisy, method) -> int:
