@@ -80,8 +80,9 @@ def widened(pts, normals, nb, k, ks) -> np.ndarray:
 def spanning_normals(pts, normals, ok, nb, k: int, ks):
     """Initial normals where a point's ``k`` nearest lie along one curved line (a scan line,
     its neighbours' lines farther than k reach): the weighted-PCA normal (eqs. 13-14) of the
-    smallest of ``ks`` above k whose neighbours span the plane of that normal and lie near
-    one plane (:data:`FLAT_SHARE`); as they were where none does. Returns ``(normals, ok)``
+    smallest of ``ks`` above k whose neighbours span the plane of that normal, lie near one
+    plane (:data:`FLAT_SHARE`) and are not the line's own (:data:`LINE_TURN`); as they were
+    where none does. Returns ``(normals, ok)``
     (``ok`` unchanged), new arrays when any changed.
 
     The PCA of one curved line is the plane of the line, not the surface: on a sphere
@@ -112,7 +113,8 @@ def _widen(pts, normals, nb, thin, ks) -> None:
         before = normals[thin]
         normals[thin] = found
         plane_spread(pts, normals, thin, idx, np.arange(len(thin)), np.full(len(thin), cand), spread)
-        good = has & ~(spread < THIN_SPREAD)
+        turned = np.abs(np.einsum("ij,ij->i", np.nan_to_num(found), before)) < np.cos(np.radians(LINE_TURN))
+        good = has & turned & ~(spread < THIN_SPREAD)
         good[good] = _flat(pts, idx[good])
         normals[thin[~good]] = before[~good]
         thin = thin[~good]
@@ -120,6 +122,10 @@ def _widen(pts, normals, nb, thin, ks) -> None:
             return
 
 
+#: a widened normal is taken only where it turns from the line's own plane by more than this
+#: (degrees): a wide arc of one ring of a cylinder scanned in rings 12-16 spacings apart spans
+#: a flat plane, the ring's own, and its normal stays 90 degrees off (it is kept as it was)
+LINE_TURN = 10.0
 #: a widened neighbourhood is a surface when its points lie this close to their plane:
 #: sqrt(lambda_min / lambda_mid) of their scatter at most this (a smooth patch of scan lines
 #: is flat at its scale: 0.02-0.09 on the sphere above at 56-160 neighbours; a cube's
