@@ -18,6 +18,7 @@ import numpy as np
 import core.io
 import core.shapes
 from core.degenerate import MAX_COORD
+from core.io.cloud import require_points
 
 from .geometry import CloudGeometry
 from .text import display_name
@@ -110,9 +111,7 @@ def _refuse_undrawable(path, points) -> None:
     ones are (the previous cloud stays): fewer than 3 points (core.estimate's least; the
     estimate failed with an API message and a hint to change a parameter), or no point within
     ``MAX_COORD`` (nothing to draw: an empty mesh raised inside a Qt slot and no estimate ran)."""
-    n = len(points)
-    if n < 3:
-        raise core.io.CloudFileError(path, f"has {n} point{'s' * (n != 1)}; an estimate needs at least 3")
+    require_points(path, len(points))
     with np.errstate(invalid="ignore"):
         if not (np.abs(points) <= MAX_COORD).all(axis=1).any():
             raise core.io.CloudFileError(path, f"every point has a coordinate beyond {MAX_COORD:g} (up to "

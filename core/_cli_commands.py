@@ -206,7 +206,7 @@ def _estimate_one(args, src, dst, fmt, options) -> None:
             tiled_cli.run(_one(args, str(path), dst, label="stdin"))
         return
     cloud = read_input(src, args.input_format, args.drop_nonfinite)
-    tiled_cli.require_points(cloud, "stdin" if src == STDIO else src)
+    cio.cloud.require_points("stdin" if src == STDIO else src, len(cloud))
     normals = None if args.ignore_normals else cloud.normals
     orientation = args.viewpoint if args.viewpoint is not None else args.orientation
     bar = ProgressBar(not args.quiet and (sys.stderr.isatty() or args.progress), _stem(src))

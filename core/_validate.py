@@ -5,6 +5,10 @@ from __future__ import annotations
 import numpy as np
 
 
+#: the fewest points an estimate takes (a surface needs three points to span a plane)
+MIN_POINTS = 3
+
+
 def as_points(points, *, name: str = "points", drop_nonfinite: bool = False):
     """Return ``points`` as a new C-contiguous (N, 3) float64 array.
 

@@ -13,7 +13,7 @@ import numpy as np
 
 from . import degenerate, interop, stage_cache
 from ._progress import Progress
-from ._validate import as_normals, as_points, masked_as_nan, word
+from ._validate import MIN_POINTS, as_normals, as_points, masked_as_nan, word
 from .duplicates import CopiesNeighbours, Merged, NearCopies, expand, find_duplicates, near_copies
 from .planning import EstimatePlan
 from .result import CurvatureResult
@@ -111,8 +111,8 @@ def estimate(
     """
     points, normals = interop.unwrap(points, normals)  # harden: pyvista/Open3D/trimesh/laspy objects
     pts, kept = as_points(points, drop_nonfinite=drop_nonfinite)
-    if len(pts) < 3:
-        raise ValueError(f"points must hold at least 3 points, got {len(pts)}")
+    if len(pts) < MIN_POINTS:
+        raise ValueError(f"points must hold at least {MIN_POINTS} points, got {len(pts)}")
     # "Auto", "NR", "Outward": keywords in any case (the result reports them in lower case)
     asked = dict(k=word(k), method=method, passes=passes, tol=tol, initial=word(initial),
                  orientation=word(orientation), options=options)

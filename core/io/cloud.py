@@ -11,6 +11,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._memory import available_memory
+from .._validate import MIN_POINTS
 
 
 def file_path(path, *, name: str = "path") -> pathlib.Path:
@@ -21,6 +22,14 @@ def file_path(path, *, name: str = "path") -> pathlib.Path:
     if not isinstance(path, (str, os.PathLike)):
         raise TypeError(f"{name} must be a file path (str or os.PathLike), got {type(path).__name__}")
     return pathlib.Path(os.fspath(path))
+
+
+def require_points(path, n: int) -> None:
+    """Refuse a file's cloud of ``n`` points when it is too small to estimate
+    (:data:`core._validate.MIN_POINTS`), naming the file ``path``; core.estimate's own
+    message names no file."""
+    if n < MIN_POINTS:
+        raise CloudFileError(path, f"has {n} point{'s' * (n != 1)}; an estimate needs at least {MIN_POINTS}")
 
 
 class CloudFileError(ValueError):

@@ -44,7 +44,7 @@ def plan_tiles(source, store: TileStore, tile_points: int, progress, min_k: int 
     if spill:
         spill.replace(store.spill_path)
     sample = np.concatenate(parts)
-    wholechecks.refuse_degenerate(sample, seen, min_k, source.name)
+    wholechecks.refuse_degenerate(sample, min_k, source.name)
     plan = make_plan(sample, seen, tile_points, wholechecks.distinct_count(sample, seen))  # E57: seen, once read
     tmp = store.plan_path.with_name("plan.tmp.npz")
     plan.save(tmp)

@@ -13,14 +13,12 @@ import sys
 from .._memory import available_memory
 from ..io.las_stream import open_las
 from ..io.atomic import refuse_input_as_output
-from ..io.cloud import CloudFileError
+from ..io.cloud import require_points
 from .run import bytes_per_point, estimate_tiled, parse_memory
 
 _LAS = (".las", ".laz")
 #: bytes per point of an in-memory k="auto" estimate (1M points measured 1.3-1.6 GB)
 AUTO_BYTES_PER_POINT = 1600
-#: the fewest points an estimate takes (core.estimate refuses fewer)
-MIN_POINTS = 3
 
 
 def add_arguments(parser) -> None:
@@ -63,13 +61,6 @@ def _in_memory_budget(memory) -> int:
     return available_memory() // 2
 
 
-def require_points(cloud, name) -> None:
-    """Refuse a cloud too small to estimate, naming its file ``name``."""
-    if len(cloud) < MIN_POINTS:
-        raise CloudFileError(name, f"has {len(cloud)} point{'s' * (len(cloud) != 1)}; an estimate needs at "
-                                   f"least {MIN_POINTS}")
-
-
 def run(args) -> int:
     """Run the estimate of ``args`` in tiles (or, for k="auto" within memory and no tile
     option, whole, into LAS/LAZ: the same answer without the tiles' halos)."""
@@ -106,7 +97,7 @@ def _whole_to_las(args, orientation) -> int:
     from ..io.atomic import atomic_write
     from ..io.las_stream import LasResultWriter, quantisation, result_columns
     cloud = core.io.read_cloud(args.input, drop_nonfinite=args.drop_nonfinite)
-    require_points(cloud, _label(args))
+    require_points(_label(args), len(cloud))
     normals = None if args.ignore_normals else cloud.normals
     res = core.estimate(cloud.points, normals, k=args.k, method=args.method, passes=args.passes,
                         orientation=orientation, options=dict(args.option or []))

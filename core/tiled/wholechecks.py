@@ -21,12 +21,12 @@ from .. import degenerate
 from ..duplicates import find_duplicates
 
 
-def refuse_degenerate(sample: np.ndarray, count: int, min_k: int, name: str) -> None:
-    """ValueError with :func:`core.degenerate.reason` when the cloud of ``count`` points,
-    sampled as ``sample`` (m, 3), cannot be estimated. A sample's extent and spacing are
-    those of the cloud at most, so the reasons it gives hold for the cloud."""
-    why = f"{count} points are fewer than the {min_k} the method needs for one fit" if count < min_k else None
-    why = why or degenerate.reason(np.ascontiguousarray(sample, dtype=np.float64), min_k)
+def refuse_degenerate(sample: np.ndarray, min_k: int, name: str) -> None:
+    """ValueError with :func:`core.degenerate.reason` when the cloud sampled as ``sample``
+    (m, 3) cannot be estimated. A sample's extent and spacing are those of the cloud at most,
+    so the reasons it gives hold for the cloud; a cloud of fewer than ``min_k`` points is
+    sampled whole, so its count is the sample's."""
+    why = degenerate.reason(np.ascontiguousarray(sample, dtype=np.float64), min_k)
     if why is not None:
         raise ValueError(f"{name}: no point can be estimated: {why}")
 
