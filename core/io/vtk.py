@@ -19,7 +19,7 @@ import numpy as np
 
 from .._memory import available_memory
 from .cloud import CloudFileError, RawCloud, check_memory, split_components
-from .vtp_blocks import check_binary_headers
+from .vtp_blocks import Tags, check_binary_headers
 from .vtp_points import points_only
 from .xml_scan import scan_xml
 
@@ -41,8 +41,7 @@ def read_vtp(path) -> RawCloud:
 
     with points_only(path) as copy:  # VTK never reads the cells: damaged ones aborted it
         try:
-            check_xml_sizes(copy)
-            check_binary_headers(copy, available_memory())
+            check_vtp(copy, available_memory())
             return _read(vtkXMLPolyDataReader(), copy)
         except CloudFileError as error:
             if copy is path:
@@ -178,23 +177,40 @@ _COUNT = re.compile(r"[ \t\r\n]*([0-9]+)[ \t\r\n]*")  # a count, with the white 
 _LARGEST = 2**63 - 1  # VTK's counts are vtkIdType
 
 
-def check_xml_sizes(path) -> None:
+def check_vtp(path, available: int) -> None:
     """VTK allocates what an XML file's NumberOf... attributes declare before reading any
     data, and a failed allocation aborts the process (std::bad_alloc, not an exception); a
     huge NumberOfComponents kept it busy for minutes, and it read NumberOfPoints="1e12" as 1.
-    The XML VTK parses is parsed here first, by expat as in VTK (any quotes, spaces, character
-    references, comments): each NumberOf... must be decimal digits, and the arrays they
-    declare must fit in memory and, when not compressed, in the file."""
+    The XML VTK parses is parsed here first, once, by expat as in VTK (any quotes, spaces,
+    character references, comments): each NumberOf... must be decimal digits, and the arrays
+    they declare must fit in memory (``available`` bytes) and, when not compressed, in the
+    file; then the binary arrays' headers are checked on the same parse
+    (:func:`core.io.vtp_blocks.check_binary_headers`)."""
     if os.path.getsize(path) == 0:
         return
     with open(path, "rb") as f, mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as data:
-        sizes = _Sizes(path, len(data))
-        scan_xml(data, sizes, path)
-    sizes.check()
+        sizes, tags = _Sizes(path, len(data)), Tags()
+        scan_xml(data, _Both(sizes, tags), path)
+        sizes.check()
+        check_binary_headers(data, tags, available, path)
+
+
+class _Both:
+    """Two :func:`core.io.xml_scan.scan_xml` handlers on one parse (the second one's end tags too)."""
+
+    def __init__(self, first, second):
+        self.first, self.second = first, second
+
+    def start(self, name: str, attrs: dict, pos: int) -> None:
+        self.first.start(name, attrs, pos)
+        self.second.start(name, attrs, pos)
+
+    def end(self, name: str) -> None:
+        self.second.end(name)
 
 
 class _Sizes:
-    """The sizes an XML file declares, read from each start tag expat reports (see check_xml_sizes)."""
+    """The sizes an XML file declares, read from each start tag expat reports (see check_vtp)."""
 
     def __init__(self, path, file_size: int):
         self.path, self.file_size = path, file_size

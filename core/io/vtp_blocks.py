@@ -17,15 +17,12 @@ from __future__ import annotations
 import base64
 import binascii
 import html
-import mmap
-import os
 import re
 import struct
 import sys
 from dataclasses import dataclass
 
 from .cloud import CloudFileError
-from .xml_scan import scan_xml
 
 _TAG = re.compile(rb"<(/?)([A-Za-z][\w.:-]*)((?:[^<>\"']|\"[^\"<]*\"|'[^'<]*')*)>")
 _ATTR = re.compile(rb"([\w.:-]+)\s*=\s*(?:\"([^\"]*)\"|'([^']*)')")
@@ -63,27 +60,22 @@ class _Array:
     why: str  # how ``expected`` was found
 
 
-def check_binary_headers(path, available: int) -> None:
+def check_binary_headers(data, tags: "Tags", available: int, path) -> None:
     """Raise :class:`CloudFileError` when a binary DataArray's header is one that VTK would
-    act on to its harm (see the module docstring); ``available`` is the memory available.
-    The tags and their attributes are read by expat, as VTK reads them (:mod:`core.io.xml_scan`)."""
-    if os.path.getsize(path) == 0:
-        return
-    with open(path, "rb") as f, mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as data:
-        end = data.find(b"<AppendedData")
-        end = len(data) if end < 0 else end
-        tags = _Tags()
-        scan_xml(data, tags, path)
-        layout = _layout(data, end, available, tags.vtkfile)
-        if layout is None:
-            return  # no VTKFile element, or a header type / byte order that VTK refuses itself
-        for pos, attrs, where, counts in tags.arrays:
-            problem = _problem(layout, _array(data, pos, attrs, where, counts))
-            if problem:
-                raise CloudFileError(path, f"{_label(attrs, where)}: {problem}")
+    act on to its harm (see the module docstring). ``data``: the file, memory-mapped;
+    ``tags``: what expat read of its XML (:mod:`core.io.xml_scan`, the one parse
+    :func:`core.io.vtk.check_vtp` shares); ``available``: the memory available."""
+    end = data.find(b"<AppendedData")
+    layout = _layout(data, len(data) if end < 0 else end, available, tags.vtkfile)
+    if layout is None:
+        return  # no VTKFile element, or a header type / byte order that VTK refuses itself
+    for pos, attrs, where, counts in tags.arrays:
+        problem = _problem(layout, _array(data, pos, attrs, where, counts))
+        if problem:
+            raise CloudFileError(path, f"{_label(attrs, where)}: {problem}")
 
 
-class _Tags:
+class Tags:
     """What :func:`check_binary_headers` reads of the XML: the VTKFile element's attributes,
     and each DataArray's (position of its '<', attributes, section and piece, the piece's
     attributes)."""

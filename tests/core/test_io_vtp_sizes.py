@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 
 import core
+from core._memory import available_memory
 from core.io import CloudFileError
 from core.io import vtk as vtk_io, xml_scan
 
@@ -26,6 +27,11 @@ pytest.importorskip("vtkmodules.vtkIOXML")
 HUGE = "1000000000000"
 MEMORY = "GB of memory available"
 NOT_A_COUNT = "allowed: a count in decimal digits (no sign, point or exponent)"
+
+
+def _check(path):
+    """The checks read_cloud makes before VTK reads a .vtp (one parse of its XML)."""
+    vtk_io.check_vtp(path, available_memory())
 
 
 def _vtp(piece='NumberOfPoints="4"', components='"3"', before=""):
@@ -94,7 +100,7 @@ def test_vtp_document_types_refused(tmp_path, doctype):
     """Entities could spell a size (or an element) where no check sees it; none is expanded."""
     path = tmp_path / "d.vtp"
     path.write_text(_vtp('NumberOfPoints="&n;"', before=doctype))
-    for check in (core.io.read_cloud, vtk_io.check_xml_sizes):
+    for check in (core.io.read_cloud, _check):
         with pytest.raises(CloudFileError) as info:
             check(path)
         assert "DOCTYPE" in str(info.value) and "d.vtp" in str(info.value), str(info.value)
@@ -108,10 +114,10 @@ def test_vtp_long_comment_skipped_not_rescanned(tmp_path, monkeypatch):
     path.write_text(_vtp(f"NumberOfPoints='{HUGE}'", before="<!--" + "x- " * ((8 << 20) // 3) + "-->"))
     t0 = time.perf_counter()
     with pytest.raises(CloudFileError, match=f'NumberOfPoints="{HUGE}"'):
-        vtk_io.check_xml_sizes(path)
+        _check(path)
     assert time.perf_counter() - t0 < 2
     path.write_text(_vtp(before="<!--" + "x" * (8 << 20) + "-- -->"))  # '--' inside: expat names it
-    vtk_io.check_xml_sizes(path)
+    _check(path)
     with pytest.raises(CloudFileError, match="VTK cannot read it"):
         core.io.read_cloud(path)
 
@@ -123,7 +129,7 @@ def test_vtp_long_tag_refused(tmp_path, monkeypatch):
     text = _vtp(f'a="{"x" * (1 << 20)}" NumberOfPoints="4"')
     path.write_text(text)
     with pytest.raises(CloudFileError, match=f"a tag .* of more than 65536 bytes at byte {text.index('<Piece')};"):
-        vtk_io.check_xml_sizes(path)
+        _check(path)
 
 
 def test_vtp_count_refused_through_the_cli(tmp_path):
