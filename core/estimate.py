@@ -292,7 +292,8 @@ def _result(pts, kept, plan, *, stages, neighbours, repaired) -> CurvatureResult
         fold_typical=init.fold_typical, crease_typical=marks.crease_typical, normals_repaired=repaired,
         jet_fraction=float(kc.on_jet.mean()),
     )
-    degree = np.where(kc.on_jet, JET_DEGREE if kc.jet_degree is None else kc.jet_degree, plan.options.get("degree", -1))
+    fitted = np.where(fit.degree > 0, fit.degree.astype(np.int64), plan.options.get("degree", -1))  # a fit may fall a degree
+    degree = np.where(kc.on_jet, JET_DEGREE if kc.jet_degree is None else kc.jet_degree, fitted)
     return CurvatureResult(
         points=pts, normals=fit.normals, k1=fit.k1, k2=fit.k2, e1=fit.e1, e2=fit.e2, valid=fit.valid, k_point=kc.k_point, degree_point=degree, outlier_score=marks.outlier_score,
         crease=marks.crease, _border=marks.border, orientation_confidence=marks.orientation_confidence,

@@ -26,7 +26,8 @@ class CurvatureResult:
         collinear, rank-deficient fit): k1, k2, e1, e2 are NaN there, never a made-up value.
     k_point : (N,) int, neighbourhood size used at each point (varies with ``k="auto"``).
     degree_point : (N,) int, polynomial degree of the model fitted at each point: of the
-        normal field for NF/NR, of the position jet where ``k="auto"`` kept a jet (see
+        normal field for NF/NR (the highest up to the ``degree`` option that the point's
+        neighbourhood determines: on two or three scan lines a cubic falls to 2 or 1), of the position jet where ``k="auto"`` kept a jet (see
         :mod:`core.scale`); -1 for methods without the option.
     outlier_score : (N,) distance of each point from its neighbours' plane in units of
         their spread; :attr:`outlier` is ``outlier_score > 4``.

@@ -90,7 +90,7 @@ from .kernels import jets as jet_kernels, pool as pool_kernels
 from .kernels.frame import intrinsic_frames
 from .linalg import tangent_basis
 from .patch import Chunk
-from .tuning import (AUTO_DEGREE, AUTO_KS, FOLD_COS, FOLD_FRACTION, FOLD_MIN_BAD, FOLD_NOISE, GAMMA,
+from .tuning import (AUTO_DEGREE, AUTO_KS, DEGREE_PIVOT, FOLD_COS, FOLD_FRACTION, FOLD_MIN_BAD, FOLD_NOISE, GAMMA,
                      INITIAL_K0, INITIAL_SHARE, JET_DEGREE, JET_GAMMA, JET_DEGREES, JET_KS, JET_QUIET, JET_REACH, JET_SCORE,
                      NEIGHBOUR_BUDGET, NOISE_KS, NOISE_POOL, RCOND, JET_RCOND, JET_TILT, ROUNDING_NOISE, WIDEN_SHARE)
 
@@ -120,7 +120,7 @@ def choose_k(points, normals, nb, has_normal, ks, degree, report):
 
 def _nf_rule(degree):
     """The NF rule's :class:`core.kernels.ScaleRule` (ICI width, fold test) for ``degree``."""
-    return kernels.ScaleRule(degree, GAMMA, RCOND, FOLD_FRACTION, FOLD_COS, FOLD_NOISE, FOLD_MIN_BAD)
+    return kernels.ScaleRule(degree, GAMMA, RCOND, FOLD_FRACTION, FOLD_COS, FOLD_NOISE, FOLD_MIN_BAD, DEGREE_PIVOT)
 
 
 def _per_centre(kernel, points, normals, nb, centres, ks, rule, report=None, *, flat=None):
@@ -237,7 +237,7 @@ def _jet_frames(points, normals, rows, centres, s, t1, t2):
 
 
 def _jet_rule():
-    return kernels.ScaleRule(JET_DEGREE, JET_GAMMA, JET_RCOND, FOLD_FRACTION, FOLD_COS, FOLD_NOISE, FOLD_MIN_BAD)
+    return kernels.ScaleRule(JET_DEGREE, JET_GAMMA, JET_RCOND, FOLD_FRACTION, FOLD_COS, FOLD_NOISE, FOLD_MIN_BAD, JET_RCOND)
 
 
 def choose_jets(points, normals, nb, has_normal, ks, report):

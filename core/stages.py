@@ -45,8 +45,9 @@ class Initial(NamedTuple):
 
 class Fit(NamedTuple):
     """One fit of the method over all points: refined ``normals``, ``k1``, ``k2``,
-    ``e1``, ``e2`` (NaN where not ``valid``), and the normal fit's residual ``rms`` and
-    the normals' ``spread`` (NaN for methods without a normal fit)."""
+    ``e1``, ``e2`` (NaN where not ``valid``), and the normal fit's residual ``rms``, the
+    normals' ``spread`` (NaN for methods without a normal fit) and the ``degree`` of the
+    polynomial it fitted (:func:`core.kernels.lstsq.solve_determined`; 0 where none)."""
 
     normals: np.ndarray
     k1: np.ndarray
@@ -56,6 +57,7 @@ class Fit(NamedTuple):
     valid: np.ndarray
     rms: np.ndarray
     spread: np.ndarray
+    degree: np.ndarray
 
 
 class Flags(NamedTuple):
@@ -325,7 +327,8 @@ def _empty_fit(n) -> Fit:
     def scalars():
         return np.full(n, np.nan)
 
-    return Fit(vectors(), scalars(), scalars(), vectors(), vectors(), np.zeros(n, dtype=bool), scalars(), scalars())
+    return Fit(vectors(), scalars(), scalars(), vectors(), vectors(), np.zeros(n, dtype=bool), scalars(), scalars(),
+               np.zeros(n, dtype=np.int8))
 
 
 class _Fitter(NamedTuple):
@@ -366,7 +369,7 @@ def _fit_chunk(chunk, method, opts, out: Fit) -> None:
     good = ok & frame.ok
     stored = [(frame.normal, out.normals), (frame.e1, out.e1), (frame.e2, out.e2), (frame.k1, out.k1), (frame.k2, out.k2)]
     if diag is not None and "rms" in diag:
-        stored += [(diag["rms"], out.rms), (diag["spread"], out.spread)]
+        stored += [(diag["rms"], out.rms), (diag["spread"], out.spread), (diag["degree"], out.degree)]
     stored.append((good, out.valid))  # valid last: True where good
     for src, dst in stored:  # dst[centres[good]] = src[good], one compiled loop per array
         put_rows(good, chunk.centres, _columns(src, dst.dtype), dst.reshape(len(dst), -1))

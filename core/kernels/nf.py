@@ -27,7 +27,7 @@ from numba import njit, prange
 
 from ._base import BLOCK, OPTS, theta
 from .lstsq import (BX, BY, C1, C2, CX, CY, accumulate, fit_scratch, monomials, reset, slope_variances, solve,
-                    solve_coefficients)
+                    solve_coefficients, solve_determined)
 from .robust import robust_weights
 
 
@@ -58,7 +58,9 @@ class Settings(NamedTuple):
     weighting : 0 uniform (eqs. 25-26), 1 theta of eq. 14;
     constraint : 0 none, 1 projection onto eq. 22's plane (§4.4), 2 exact;
     robust : 0 none, 1 Huber, 2 Tukey, with ``irls`` reweighting iterations;
-    degree : 1 (the paper's linear model), 2 or 3; rcond : singularity threshold.
+    degree : 1 (the paper's linear model), 2 or 3, the most a centre's fit uses;
+    rcond : singularity threshold; pivot : the smallest Cholesky pivot of a determined fit
+    of degree 2 or 3 (below it the centre's fit falls a degree: :func:`solve_determined`).
     """
 
     theta_reach: float
@@ -68,20 +70,22 @@ class Settings(NamedTuple):
     irls: int
     degree: int
     rcond: float
+    pivot: float
 
 
 class Fits(NamedTuple):
     """What the fit writes per centre: mu (M, 2), W (M, 2, 2) in units of 1/h, var (M, 3)
     the least-squares variances of W11, (W12 + W21)/2, W22, rms (M,) the weighted RMS
     residual of the normal components, spread (M,) their weighted RMS deviation from
-    their mean (how much the normals turn), ok (M,) bool."""
+    their mean (how much the normals turn), degree (M,) the degree fitted
+    (:func:`solve_determined`; 0 where no fit)."""
 
     mu: np.ndarray
     W: np.ndarray
     var: np.ndarray
     rms: np.ndarray
     spread: np.ndarray
-    ok: np.ndarray
+    degree: np.ndarray
 
 
 @njit(**OPTS)
@@ -134,32 +138,40 @@ def _fit_block(f, opt, out, rows, start, stop, s):
     per-point allocation would cost more than the fit)."""
     for r in range(start, stop):
         n = f.kc[r]
-        out.ok[r] = _fit_point(f, opt, r, rows[r], n, s)
-        if out.ok[r]:
-            _store(opt, r, n, s, out)
+        degree = _fit_point(f, opt, r, rows[r], n, s)
+        out.degree[r] = degree
+        if degree > 0:
+            _store(opt, degree, r, n, s, out)
 
 
 @njit(**OPTS)
 def _fit_point(f, opt, r, row, n, s):
     """Least squares (eqs. 25-26) of centre r's n neighbours (row ``row`` of f.idx), then ``opt.irls`` robust
-    reweightings; False when the system is singular. Only the last solve computes the
-    columns of G^-1 that the variances and the exact constraint need."""
+    reweightings; returns the degree fitted, the highest up to ``opt.degree`` that the
+    neighbourhood determines (decided on the first solve), or 0 when the system is
+    singular. Only the last solve computes the columns of G^-1 that the variances and the
+    exact constraint need."""
     gather(f, r, row, n, opt.weighting, opt.theta_reach, s)
     for j in range(n):
         s.wt[j] = s.base[j]
     monomials(s.u, s.v, n, opt.degree, s.R)
     rounds = opt.irls if opt.robust > 0 else 0
+    degree = opt.degree
     for it in range(rounds + 1):
         if it > 0:
-            robust_weights(s, n, opt.degree, opt.robust)
-        reset(opt.degree, s.vec, s.G, s.acc)
-        accumulate(s.R, s.X, s.Y, s.wt, 0, n, opt.degree, s.vec, s.G, s.acc)
-        if it < rounds:
-            if not solve_coefficients(opt.degree, opt.rcond, s.vec, s.G, s.L, s.acc):
-                return False
-        elif not solve(opt.degree, opt.rcond, s.vec, s.G, s.L, s.acc):
-            return False
-    return True
+            robust_weights(s, n, degree, opt.robust)
+        reset(degree, s.vec, s.G, s.acc)
+        accumulate(s.R, s.X, s.Y, s.wt, 0, n, degree, s.vec, s.G, s.acc)
+        if it == 0 and degree > 1:  # (the paper's linear fit takes the direct path: a third faster)
+            degree = solve_determined(degree, opt.rcond, opt.pivot, s.vec, s.G, s.L, s.acc, rounds == 0)
+            if degree == 0:
+                return 0
+        elif it < rounds:
+            if not solve_coefficients(degree, opt.rcond, s.vec, s.G, s.L, s.acc):
+                return 0
+        elif not solve(degree, opt.rcond, s.vec, s.G, s.L, s.acc):
+            return 0
+    return degree
 
 
 @njit(**OPTS)
@@ -188,8 +200,8 @@ def _exact_constraint(vec):
 
 
 @njit(**OPTS)
-def _store(opt, r, n, s, out):
-    """Write centre r's mu and W (under the constraint of eq. 22) and diagnostics."""
+def _store(opt, degree, r, n, s, out):
+    """Write centre r's mu and W (fitted at ``degree``) (under the constraint of eq. 22) and diagnostics."""
     vec, acc = s.vec, s.acc
     if opt.constraint == 2:
         cx0, cy0, w11, w12, w21, w22 = _exact_constraint(vec)
@@ -209,7 +221,7 @@ def _store(opt, r, n, s, out):
     out.W[r, 0, 1] = w12
     out.W[r, 1, 0] = w21
     out.W[r, 1, 1] = w22
-    out.var[r, 0], out.var[r, 1], out.var[r, 2] = slope_variances(opt.degree, n, vec, acc)
+    out.var[r, 0], out.var[r, 1], out.var[r, 2] = slope_variances(degree, n, vec, acc)
     sw = max(acc[0], 1e-300)
     out.rms[r] = math.sqrt((acc[3] + acc[4]) / sw)
     mx, my = vec[BX, 0] / sw, vec[BY, 0] / sw

@@ -10,7 +10,7 @@ import numpy as np
 from numba import njit, prange
 
 from ._base import BLOCK, OPTS
-from .lstsq import CX, CY, accumulate, fit_scratch, monomials, reset, slope_variances, solve
+from .lstsq import CX, CY, accumulate, fit_scratch, monomials, reset, slope_variances, solve_determined
 from .nf import gather
 
 
@@ -20,7 +20,9 @@ class ScaleRule(NamedTuple):
     the singularity threshold ``rcond``, and the fold test: ``fold_fraction`` (share of a
     ring allowed off the graph), ``fold_cos`` (a normal turned beyond this cosine is off
     it), ``fold_noise`` (heights within this many noise heights are not a fold) and
-    ``fold_min_bad`` (fewest off-graph neighbours that make a fold)."""
+    ``fold_min_bad`` (fewest off-graph neighbours that make a fold); ``pivot``: a normal
+    fit of degree 2-3 whose Cholesky pivots do not all exceed it falls a degree
+    (:func:`~core.kernels.lstsq.solve_determined`)."""
 
     degree: int
     gamma: float
@@ -29,6 +31,7 @@ class ScaleRule(NamedTuple):
     fold_cos: float
     fold_noise: float
     fold_min_bad: int
+    pivot: float
 
 
 @njit(**OPTS)
@@ -168,14 +171,15 @@ def _choose_block(f, ks, rule, chosen, start, stop):
         reset(rule.degree, s.vec, s.G, s.acc)
         _local_reference(f.points, f.normals, f.idx, r, ks[0], f.z, rule.fold_cos, ref)
         stop_c = _fold_limit(f.points, f.normals, f.idx, r, ks, rule, ref)
-        chosen[r] = _ici(s, ks, stop_c, rule.degree, rule.gamma, rule.rcond, bounds)
+        chosen[r] = _ici(s, ks, stop_c, rule, bounds)
 
 
 @njit(**OPTS)
-def _ici(s, ks, stop, degree, gamma, rcond, bounds):
+def _ici(s, ks, stop, rule, bounds):
     """The largest of ks[:stop] whose confidence interval of (W11, (W12 + W21)/2, W22)
-    meets those of all smaller sizes (``bounds``: scratch for the running intersection)."""
-    vec, acc = s.vec, s.acc
+    meets those of all smaller sizes (``bounds``: scratch for the running intersection).
+    Each size fits the highest degree up to ``rule.degree`` that it determines."""
+    vec, acc, degree, gamma = s.vec, s.acc, rule.degree, rule.gamma
     lo, hi = bounds[0], bounds[1]
     lo[:] = -math.inf
     hi[:] = math.inf
@@ -184,11 +188,12 @@ def _ici(s, ks, stop, degree, gamma, rcond, bounds):
     for c in range(stop):
         accumulate(s.R, s.X, s.Y, s.base, prev, ks[c], degree, vec, s.G, acc)
         prev = ks[c]
-        if not solve(degree, rcond, vec, s.G, s.L, acc):
+        fitted = solve_determined(degree, rule.rcond, rule.pivot, vec, s.G, s.L, acc, True)
+        if fitted == 0:
             if c == 0:
                 continue
             break
-        v0, v1, v2 = slope_variances(degree, ks[c], vec, acc)
+        v0, v1, v2 = slope_variances(fitted, ks[c], vec, acc)
         est0 = vec[CX, 1]
         est1 = 0.5 * (vec[CX, 2] + vec[CY, 1])
         est2 = vec[CY, 2]

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import kernels
-from ..tuning import IRLS_ITERATIONS, RCOND, THETA_REACH
+from ..tuning import DEGREE_PIVOT, IRLS_ITERATIONS, RCOND, THETA_REACH
 from ._options import choose
 from ._result import MethodFit
 
@@ -68,8 +68,8 @@ def fit(chunk, *, weights="uniform", constraint="project", robust=None, degree=1
     var = np.full((m, 3), np.inf)
     rms = np.full(m, np.nan)
     spread = np.full(m, np.nan)
-    ok = np.empty(m, dtype=bool)
+    fitted = np.zeros(m, dtype=np.int8)
     settings = kernels.Settings(THETA_REACH, _WEIGHTS.index(weights), _CONSTRAINTS.index(constraint),
-                                _ROBUST.index(robust), reweightings, degree, RCOND)
-    kernels.normal_fit(chunk.frames(), settings, kernels.Fits(mu, W, var, rms, spread, ok), chunk.kernel_rows())
-    return MethodFit(mu, W, ok, {"var": var, "rms": rms, "spread": spread})
+                                _ROBUST.index(robust), reweightings, degree, RCOND, DEGREE_PIVOT)
+    kernels.normal_fit(chunk.frames(), settings, kernels.Fits(mu, W, var, rms, spread, fitted), chunk.kernel_rows())
+    return MethodFit(mu, W, fitted > 0, {"var": var, "rms": rms, "spread": spread, "degree": fitted})

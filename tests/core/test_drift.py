@@ -15,7 +15,7 @@ def _fit(h, normals=None, valid=None):
     nrm = np.tile([0.0, 0.0, 1.0], (n, 1)) if normals is None else normals
     ok = np.ones(n, dtype=bool) if valid is None else valid
     e1, e2 = np.tile([1.0, 0.0, 0.0], (n, 1)), np.tile([0.0, 1.0, 0.0], (n, 1))
-    return Fit(nrm, h + 0.5, h - 0.5, e1, e2, ok, np.zeros(n), np.zeros(n))
+    return Fit(nrm, h + 0.5, h - 0.5, e1, e2, ok, np.zeros(n), np.zeros(n), np.full(n, 3, dtype=np.int8))
 
 
 def _ring(n, width):

@@ -65,13 +65,16 @@ def test_robust_normal_fit_matches_numpy_irls(robust, degree):
     idx, dist = nb.take(60)
     centres = np.arange(4, 40)
     chunk = Chunk.build(p, nrm, idx[centres], dist[centres, -1], centres)
-    mu, W, ok, _ = get_method("nf").fit(chunk, constraint="none", degree=degree, robust=robust)
+    mu, W, ok, diag = get_method("nf").fit(chunk, constraint="none", degree=degree, robust=robust)
     pa = chunk.patch
     u, v = pa.u, pa.v
     cols = [np.ones_like(u), u, v, u * u, u * v, v * v, u**3, u * u * v, u * v * v, v**3]
-    A = np.stack(cols[:(degree + 1) * (degree + 2) // 2], axis=2)
     assert ok.all()
+    # a fit its neighbours do not determine falls a degree (measured: 1 of the 36 cubics, pivot 5e-3)
+    assert (diag["degree"] <= degree).all() and np.mean(diag["degree"] == degree) > 0.9
     for r in range(len(centres)):
+        d = diag["degree"][r]
+        A = np.stack(cols[:(d + 1) * (d + 2) // 2], axis=2)
         cx, cy = _numpy_irls(A[r], pa.X[r], pa.Y[r], pa.weight[r], robust)
         np.testing.assert_allclose(mu[r], [cx[0], cy[0]], atol=1e-9)
         np.testing.assert_allclose(W[r], [[cx[1], cx[2]], [cy[1], cy[2]]], atol=1e-7)

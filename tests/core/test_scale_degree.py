@@ -24,7 +24,7 @@ def _degree_rule(pts, normals, k3, sigma2):
     degrees = np.array([d for d, _ in tuning.JET_DEGREES], dtype=np.int64)
     kd = np.array([k for _, k in tuning.JET_DEGREES], dtype=np.int64)
     chosen, coef = np.empty(n, dtype=np.int64), np.empty((n, 6))
-    rule = kernels.ScaleRule(3, tuning.JET_GAMMA, tuning.RCOND, 0.2, 0.34, 3.0, 3)
+    rule = kernels.ScaleRule(3, tuning.JET_GAMMA, tuning.RCOND, 0.2, 0.34, 3.0, 3, tuning.RCOND)
     jets.jet_degrees(f, degrees, kd, np.full(n, k3, dtype=np.int64), np.full(n, sigma2), rule, chosen, coef)
     return chosen, coef, h, degrees
 
@@ -85,7 +85,7 @@ def _frames_and_rules(n=2500, seed=5):
     f = kernels.Frames(pts, normals, np.ascontiguousarray(idx), np.zeros(n, dtype=np.int64), h, np.arange(n),
                        t1, t2, np.nan_to_num(normals, nan=1.0))
     sigma2 = np.where(np.arange(n) < n // 3, (0.01 / h) ** 2, 1e-12)
-    rule = kernels.ScaleRule(3, tuning.JET_GAMMA, tuning.RCOND, 0.2, 0.34, 3.0, 3)
+    rule = kernels.ScaleRule(3, tuning.JET_GAMMA, tuning.RCOND, 0.2, 0.34, 3.0, 3, tuning.RCOND)
     return f, sigma2, rule
 
 
