@@ -83,7 +83,7 @@ def fit_scratch(kmax):
                    np.zeros((MAX_TERMS, MAX_TERMS)), np.zeros(5))
 
 
-@njit(**OPTS)
+@njit(**OPTS, inline="always")
 def monomials(u, v, n, degree, R):
     """R[:, j] = the monomials (:func:`poly_row`) of neighbour j < n, once per point:
     every reweighting and every nested size reuses them."""
@@ -171,7 +171,7 @@ def accumulate(R, X, Y, wt, j0, j1, degree, vec, G, acc):
     acc[2] += s2
 
 
-@njit(**OPTS)
+@njit(**OPTS, inline="always")
 def reset(degree, vec, G, acc):
     p = n_terms(degree)
     G[:p, :p] = 0.0
@@ -180,7 +180,7 @@ def reset(degree, vec, G, acc):
     acc[:] = 0.0
 
 
-@njit(**OPTS)
+@njit(**OPTS, inline="always")
 def solve_linear(rcond, vec, G, acc):
     """:func:`solve` for degree 1 (the paper's eqs. 25–26) by the closed-form inverse of
     the equilibrated 3x3 matrix: the common case, and twice as fast as a Cholesky."""

@@ -88,7 +88,7 @@ class Fits(NamedTuple):
     degree: np.ndarray
 
 
-@njit(**OPTS)
+@njit(**OPTS, inline="always")
 def gather(f, r, row, n, weighting, theta_reach, s):
     """Neighbours 0..n-1 of centre r of the :class:`Frames` ``f`` (row ``row`` of
     ``f.idx``) in its frame, into the scratch ``s``: offsets (u, v) / h, normal components
@@ -144,7 +144,7 @@ def _fit_block(f, opt, out, rows, start, stop, s):
             _store(opt, degree, r, n, s, out)
 
 
-@njit(**OPTS)
+@njit(**OPTS, inline="always")
 def _fit_point(f, opt, r, row, n, s):
     """Least squares (eqs. 25-26) of centre r's n neighbours (row ``row`` of f.idx), then ``opt.irls`` robust
     reweightings; returns the degree fitted, the highest up to ``opt.degree`` that the
@@ -199,7 +199,7 @@ def _exact_constraint(vec):
     return cx0, cy0, cx1, cx2, cy1, cy2
 
 
-@njit(**OPTS)
+@njit(**OPTS, inline="always")
 def _store(opt, degree, r, n, s, out):
     """Write centre r's mu and W (fitted at ``degree``) (under the constraint of eq. 22) and diagnostics."""
     vec, acc = s.vec, s.acc
