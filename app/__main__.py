@@ -62,7 +62,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "write --viewpoint=-1,0,2 when X is negative)")
     p.add_argument("--noise", type=float, metavar="PCT", help="Gaussian noise, sigma in %% of the mean spacing")
     p.add_argument("--field", metavar="NAME", help="displayed field: mean (H), gaussian (K), k1, k2, shape_index, "
-                   "curvedness, normal_dev, err_mean, err_gaussian, ...")
+                   "curvedness, k_point, degree_point, normal_dev, err_mean, err_gaussian, ...")
     p.add_argument("--compare", metavar="METHOD", help="show a second method side by side")
     p.add_argument("--glyphs", metavar="LIST", help="comma-separated glyphs to show: e1,e2,normals")
     p.add_argument("--pick", type=int, metavar="INDEX", help="inspect this point (panel, neighbourhood, frame)")

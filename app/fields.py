@@ -12,6 +12,7 @@ from functools import lru_cache
 import numpy as np
 
 from core.anisotropy import STRIPED
+from core.tuning import JET_DEGREES
 
 __all__ = ["FieldSpec", "FIELDS", "ALIASES", "resolve_field", "compute_fields", "robust_limits", "curvature_floor",
            "is_signed", "colormap_for", "Colouring", "colouring"]
@@ -63,6 +64,8 @@ FIELDS: dict[str, FieldSpec] = {
         FieldSpec("shape_index", "Shape index", True),
         FieldSpec("curvedness", "Curvedness", False),
         FieldSpec("k_point", "Neighbourhood size k", False, scale="log"),
+        FieldSpec("degree_point", "Polynomial degree of the fit", False,
+                  span=(1.0, float(max(3, *(d for d, _ in JET_DEGREES))))),  # NR's normal field 1-3, the jets 3+
         FieldSpec("outlier_score", "Outlier score", False, scale="threshold", threshold=4.0),
         FieldSpec("anisotropy", f"Anisotropy (> {STRIPED:g}: stripes)", False, span=(0.0, 1.0)),
         FieldSpec("normal_dev", "Normal deviation", False, "reference", "deg"),
@@ -126,6 +129,7 @@ def compute_fields(result, *, reference_normals=None, sample=None) -> dict[str, 
         "shape_index": result.shape_index,
         "curvedness": result.curvedness,
         "k_point": np.where(np.asarray(result.k_point) > 0, result.k_point, np.nan),  # -1: no fit, not a size
+        "degree_point": np.where(np.asarray(result.degree_point) > 0, result.degree_point, np.nan),  # -1: none
         "outlier_score": result.outlier_score,
         "anisotropy": result.anisotropy,
     }

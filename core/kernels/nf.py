@@ -201,7 +201,7 @@ def _exact_constraint(vec):
 
 @njit(**OPTS, inline="always")
 def _store(opt, degree, r, n, s, out):
-    """Write centre r's mu and W (fitted at ``degree``) (under the constraint of eq. 22) and diagnostics."""
+    """Write centre r's mu and W (under the constraint of eq. 22) and diagnostics of its fit of ``degree``."""
     vec, acc = s.vec, s.acc
     if opt.constraint == 2:
         cx0, cy0, w11, w12, w21, w22 = _exact_constraint(vec)
