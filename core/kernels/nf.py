@@ -148,8 +148,8 @@ def _fit_block(f, opt, out, rows, start, stop, s):
 def _fit_point(f, opt, r, row, n, s):
     """Least squares (eqs. 25-26) of centre r's n neighbours (row ``row`` of f.idx), then ``opt.irls`` robust
     reweightings; returns the degree fitted, the highest up to ``opt.degree`` that the
-    neighbourhood determines (decided on the first solve), or 0 when the system is
-    singular. Only the last solve computes the columns of G^-1 that the variances and the
+    neighbourhood determines (at every solve: a reweighting that drops a far scan line
+    can leave the rest too few lines for it), or 0 when the system is singular. Only the last solve computes the columns of G^-1 that the variances and the
     exact constraint need."""
     gather(f, r, row, n, opt.weighting, opt.theta_reach, s)
     for j in range(n):
@@ -162,8 +162,8 @@ def _fit_point(f, opt, r, row, n, s):
             robust_weights(s, n, degree, opt.robust)
         reset(degree, s.vec, s.G, s.acc)
         accumulate(s.R, s.X, s.Y, s.wt, 0, n, degree, s.vec, s.G, s.acc)
-        if it == 0 and degree > 1:  # (the paper's linear fit takes the direct path: a third faster)
-            degree = solve_determined(degree, opt.rcond, opt.pivot, s.vec, s.G, s.L, s.acc, rounds == 0)
+        if degree > 1:  # (the paper's linear fit takes the direct path: a third faster)
+            degree = solve_determined(degree, opt.rcond, opt.pivot, s.vec, s.G, s.L, s.acc, it == rounds)
             if degree == 0:
                 return 0
         elif it < rounds:
