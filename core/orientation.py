@@ -42,6 +42,10 @@ ORIENT_K = 10
 #: every one of them and were the only voters (the sphere faced inward, H = -1); not "beyond
 #: the largest": a single outlier far from a torus was then the only voter.
 VOTE_BINS = 64
+#: a part whose mean (sign-propagated) normal is longer than this is an open sheet, not a
+#: closed surface (whose outward normals sum to zero); see :func:`floors_up`. Denser sampling
+#: on one side of a closed object lengthens its mean (a box with its top 5x as dense: 0.4).
+OPEN_SHARE = 0.6
 #: an offset along a normal counts in the chord test only beyond this many times the
 #: pair's spread (median offset of their neighbours from their planes): below it, it is noise
 GATE = 2.0
@@ -252,7 +256,29 @@ def _global_signs(points, normals, parts, mode, sign, rank):
         far, facing = far_facing(rel, normals[rows], reach[lab])
         vote = np.bincount(group, np.bincount(lab[far], facing, n_comp), n_comp)
         lab = group[lab]
+        vote = floors_up(vote, normal_sums(normals[rows], lab, n_comp), np.bincount(lab, minlength=n_comp))
     sign[have[vote[lab] < 0]] *= -1.0
+
+
+def normal_sums(normals, part, n_parts) -> np.ndarray:
+    """(n_parts, 3) sum of each part's (sign-propagated) normals (summed over tiles in a
+    tiled run)."""
+    return np.stack([np.bincount(part, normals[:, a], n_parts) for a in range(3)], axis=1)
+
+
+def floors_up(vote, sums, counts) -> np.ndarray:
+    """The outward ``vote`` per part, except for open sheets that lie mostly level (a
+    ground, a floor with things on it, terrain): their vote is their mean normal's z, so they
+    face up. A closed surface's outward normals sum to zero (the divergence theorem); a part
+    whose mean normal is longer than :data:`OPEN_SHARE` is open, has no inside, and its
+    "outward" side is decided by how the cloud's centre sits above or below it: a street
+    scan's ground (objects lift the centre above it) faced down at 99.9 % of its points.
+    Level: the mean normal within 45 degrees of vertical (a facade keeps the vote)."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean = sums / np.maximum(counts, 1)[:, None]
+    length = np.linalg.norm(mean, axis=1)
+    level = (length > OPEN_SHARE) & (np.abs(mean[:, 2]) >= np.cos(np.radians(45.0)) * length)
+    return np.where(level, mean[:, 2], vote)
 
 
 def reach_histogram(dist, rms, lab, n_comp) -> np.ndarray:

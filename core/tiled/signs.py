@@ -16,7 +16,7 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import breadth_first_order, connected_components, minimum_spanning_tree
 
-from ..orientation import VOTE_BINS, far_facing, outer_reach, reach_histogram
+from ..orientation import VOTE_BINS, far_facing, floors_up, normal_sums, outer_reach, reach_histogram
 from .store import TileStore
 
 _CHUNK = 1_000_000
@@ -128,9 +128,12 @@ def _outward(store, nodes, offset, flat, part, parity) -> np.ndarray:
         hist += reach_histogram(np.linalg.norm(chunk["xyz"] - centre, axis=1), rms, part[node], n_parts)
     reach = outer_reach(hist) * rms
     vote = np.zeros(n_parts)
+    sums = np.zeros((n_parts, 3))
     for chunk, node in _own_chunks(store, nodes, offset):
         far, facing = far_facing(chunk["xyz"] - centre, chunk["n"], reach[part[node]])
         vote += np.bincount(part[node[far]], facing * parity[node[far]], n_parts)
+        sums += normal_sums(chunk["n"] * parity[node][:, None], part[node], n_parts)
+    vote = floors_up(vote, sums, np.bincount(part, flat["count"], n_parts))
     return np.where(vote[part] < 0, -1.0, 1.0)
 
 
