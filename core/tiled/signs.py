@@ -116,7 +116,8 @@ def _upward(flat, part, parity) -> np.ndarray:
 def _outward(store, nodes, offset, flat, part, parity) -> np.ndarray:
     """Flip each part as :func:`core.orientation.orient` does in memory: a vote of its
     outer half by distance from the cloud's centre (:func:`core.orientation.far_facing`), each
-    weighted by how squarely its normal faces away from the centre."""
+    weighted by how squarely its normal faces away from the centre; open level parts face up
+    (:func:`core.orientation.floors_up`, on their normals summed over the tiles)."""
     n_parts = int(part.max()) + 1
     centre = flat["sum"].sum(axis=0) / max(float(flat["count"].sum()), 1.0)
     square = np.zeros(n_parts)
