@@ -7,7 +7,7 @@ import numpy as np
 from . import kernels
 from .linalg import tangent_basis
 from .orientation import orient_normals  # noqa: F401  (moved: orientation lives in core.orientation)
-from .tuning import COLLINEAR, DEGREE_PIVOT, RCOND, THETA_REACH
+from .tuning import COLLINEAR, INITIAL_JET_PIVOT, RCOND, THETA_REACH
 
 _CHUNK = 131_072
 
@@ -66,7 +66,7 @@ def jet_normals(points, normals, ok, idx, dist, *, progress=None):
         hgt = np.full(len(centres), np.nan)
         good = np.empty(len(centres), dtype=bool)
         kernels.jet_normals(points, np.ascontiguousarray(idx[at]), np.ascontiguousarray(dist[at, -1]), centres,
-                            t1, t2, z, DEGREE_PIVOT, res, hgt, good)
+                            t1, t2, z, INITIAL_JET_PIVOT, res, hgt, good)
         out[centres[good]] = res[good]
         height[centres[good]] = hgt[good]
         if progress is not None:

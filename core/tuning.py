@@ -31,8 +31,8 @@ RCOND = 1e-10
 JET_RCOND = 1e-5
 #: the smallest Cholesky pivot (equilibrated normal matrix) of a normal fit of degree 2 or
 #: 3 (k="auto"'s cubic normal field, or options={"degree": ...}); below it the point's fit
-#: falls a degree (core.kernels.lstsq.solve_determined; the initial 2-jet normal falls back
-#: to the PCA plane the same way, core.normals.jet_normals): its coefficients' variance grows
+#: falls a degree (core.kernels.lstsq.solve_determined; for the initial 2-jet normal see
+#: INITIAL_JET_PIVOT): its coefficients' variance grows
 #: as 1 / pivot, and where the neighbours lie on two to four scan lines the cubic's terms
 #: across the lines are fitted to the lines' own bend. Measured (uniform weights, 200 centres
 #: each): uniform random torus, sphere, chirp, saddle: pivots >= 1.9e-2 at 28+ neighbours,
@@ -42,6 +42,16 @@ JET_RCOND = 1e-5
 #: geometric mean 0.456x -> 0.447x, tuning race 0/72 lost either way. 3e-3: parallels 0.092
 #: and 0.69, races unchanged; 3e-2: 2 tuning cells lost (1.04x).
 DEGREE_PIVOT = 1e-2
+#: the same for the initial 2-jet normal of k="auto" (core.normals.jet_normals): below it the
+#: quadratic is not determined and the point keeps its PCA normal. Lower than DEGREE_PIVOT: on
+#: noisy scan lines 6 spacings apart (sphere parallels, noise 0.1) an ill-determined 2-jet still
+#: tilts the PCA plane of a noisy line the right way (mean |H error| 0.049 / 0.032 at 1e-4, 0.19 /
+#: 0.28 at 1e-2, 0.067 / 0.061 with no test); on an exact grid 5x sparser across its rows it is
+#: wrong (454 initial normals 10-63 degrees off with no test; none at 1e-4 or 1e-2; at 1e-5 the
+#: grid turned in space kept 24). Also better at 1e-4 than at 1e-2: the floor under a scanner
+#: (mean |H| within 0.2 m of the axis 2.8 -> 0.90); worse: noise-free parallels 16 spacings
+#: apart (mean |H - 1| 0.49 -> 0.84, 12 apart 0.53 -> 0.57). Both races unchanged.
+INITIAL_JET_PIVOT = 1e-4
 #: a quiet point keeps its jet as the result only if the jet's normal is within this many
 #: degrees of its initial (2-jet) normal (core.scale.choose_model); elsewhere NR fits it. The
 #: second guard against a jet the rank test let through (a 5:1 grid's three-column fits reach
