@@ -123,7 +123,8 @@ def _outward(store, nodes, offset, flat, part, parity) -> np.ndarray:
     square = np.zeros(n_parts)
     for chunk, node in _own_chunks(store, nodes, offset):
         square += np.bincount(part[node], np.sum((chunk["xyz"] - centre) ** 2, axis=1), n_parts)
-    rms = np.sqrt(square / np.maximum(np.bincount(part, flat["count"], n_parts), 1))
+    counts = np.bincount(part, flat["count"], n_parts)
+    rms = np.sqrt(square / np.maximum(counts, 1))
     hist = np.zeros((n_parts, VOTE_BINS), dtype=np.int64)
     for chunk, node in _own_chunks(store, nodes, offset):
         hist += reach_histogram(np.linalg.norm(chunk["xyz"] - centre, axis=1), rms, part[node], n_parts)
@@ -134,7 +135,7 @@ def _outward(store, nodes, offset, flat, part, parity) -> np.ndarray:
         far, facing = far_facing(chunk["xyz"] - centre, chunk["n"], reach[part[node]])
         vote += np.bincount(part[node[far]], facing * parity[node[far]], n_parts)
         sums += normal_sums(chunk["n"] * parity[node][:, None], part[node], n_parts)
-    vote = floors_up(vote, sums, np.bincount(part, flat["count"], n_parts))
+    vote = floors_up(vote, sums, counts)
     return np.where(vote[part] < 0, -1.0, 1.0)
 
 
