@@ -11,7 +11,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import degenerate, interop, stage_cache
+from . import degenerate, interop, one_sheet, stage_cache
 from ._progress import Progress
 from ._validate import MIN_POINTS, as_normals, as_points, masked_as_nan, word
 from .duplicates import CopiesNeighbours, Merged, NearCopies, expand, find_duplicates, near_copies
@@ -136,7 +136,7 @@ def estimate(
         if cache is not None:
             cache.remember(pts, found.merged)
         return _on_distinct(found.merged, pts, kept, normals, asked, **args)
-    best = refine(front.pts, front.init, front.outlier, front.nb, front.scale, plan,
+    best = refine(front.pts, front.init, front.outlier, front.fit_nb, front.scale, plan,
                   report.sub(0.7 if plan.auto else 0.45, 1.0))
     front = front._replace(scale=front.scale._replace(jets=None))  # merged into best: 86 MiB less at 1M points
     best, confidence = settle_signs(front.pts, best, front.nb, plan, front.confidence)
@@ -185,7 +185,9 @@ class Prepared(NamedTuple):
     order is ``order.to_caller``), neighbours ``nb``, outlier ``scores`` and flags
     ``outlier``, oriented initial normals ``init`` (and the counts of their ``repaired``
     rows when given, the orientation ``confidence``), the linear ``reference`` fit creases
-    are judged by (k="auto") and the ``scale`` per point."""
+    are judged by (k="auto") and the ``scale`` per point; ``fit_nb`` is ``nb`` as the
+    normals are fitted on it (each point's own sheet first, :mod:`core.one_sheet`), the
+    orientation and the result read ``nb``."""
 
     pts: np.ndarray
     nb: object
@@ -197,6 +199,7 @@ class Prepared(NamedTuple):
     reference: object
     scale: object
     order: SpatialOrder
+    fit_nb: object = None
 
 
 def prepare(pts, normals, plan, neighbours, report, *, cache=None, near=False, sort_given=False) -> Prepared:
@@ -215,8 +218,11 @@ def prepare(pts, normals, plan, neighbours, report, *, cache=None, near=False, s
     # the narrow search alive after a noisy cloud widens it (+480 MB at 1M points)
     scores = run("scores", lambda: outlier_scores(pts, nb.take(plan.k_initial)[0]))
     outlier = scores > OUTLIER_SCORE
+    fit_nb = nb  # with k="auto", each point's own sheet first (core.one_sheet): what the normals are fitted on
+    if plan.auto and normals is None:
+        fit_nb = run("sheets", lambda: one_sheet.fit_graph(pts, nb, plan.k_initial)) or nb
     if normals is None:
-        init, repaired = run("initial", lambda: initial_normals(pts, nb, plan, outlier, report)), None
+        init, repaired = run("initial", lambda: initial_normals(pts, fit_nb, plan, outlier, report)), None
     else:
         init, repaired = run("initial", lambda: given_normals(pts, normals, nb, plan))
     init, confidence = run("orientation", lambda: orient_signs(pts, init, nb.take(plan.k_initial)[0], plan,
@@ -225,12 +231,12 @@ def prepare(pts, normals, plan, neighbours, report, *, cache=None, near=False, s
 
     reference = None
     if plan.auto:
-        reference = run("reference", lambda: crease_reference(pts, init.normals, init.has_normal, nb, plan,
+        reference = run("reference", lambda: crease_reference(pts, init.normals, init.has_normal, fit_nb, plan,
                                                                 report.sub(0.45, 0.47)))
     inliers = init.has_normal & ~outlier if plan.robust else init.has_normal  # outliers sit out the choice of k
-    kc = run("scale", lambda: choose_scale(pts, init.normals, nb, inliers, plan, report.sub(0.47, 0.7), scores=scores,
-                                           k_initial=init.k))
-    return Prepared(pts, nb, scores, outlier, init, repaired, confidence, reference, kc, order)
+    kc = run("scale", lambda: choose_scale(pts, init.normals, fit_nb, inliers, plan, report.sub(0.47, 0.7),
+                                           scores=scores, k_initial=init.k))
+    return Prepared(pts, nb, scores, outlier, init, repaired, confidence, reference, kc, order, fit_nb)
 
 
 def _near_copies(pts, nb, order: SpatialOrder, plan) -> None:

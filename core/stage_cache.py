@@ -44,6 +44,7 @@ _BASE = ("k_initial", "k_search", "initial", "auto", "noise", "fold_typical", "r
 STAGE_FIELDS = {
     "neighbours": ("k_search",),  # served by any kept search of at least k_search (StageCache._search)
     "scores": ("k_initial",),
+    "sheets": ("k_initial", "auto"),
     "initial": _BASE,
     "orientation": _BASE + ("orientation",),
     "reference": _BASE + ("orientation", "method", "options"),

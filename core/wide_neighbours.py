@@ -50,8 +50,9 @@ class WidenableNeighbours(Neighbours):
     of a noise-free cloud use at most 40 neighbours of the 226-320 the plan allows.
     """
 
-    def __init__(self, points, indices, distances, *, k_max, tree, rank):
+    def __init__(self, points, indices, distances, *, k_max, tree, rank, sheets=None):
         object.__setattr__(self, "_points", points)
+        object.__setattr__(self, "_sheets", sheets)  # a core.one_sheet.SheetRows, put into every row served
         object.__setattr__(self, "_pair", (indices, distances))  # one attribute: replaced at once
         object.__setattr__(self, "_lock", threading.Lock())
         object.__setattr__(self, "_k_max", int(k_max))
@@ -92,6 +93,17 @@ class WidenableNeighbours(Neighbours):
     def _held(self):
         return self._pair
 
+    def with_sheets(self, sheets):
+        """A new graph on the same tree whose rows of the points of ``sheets`` (a
+        :class:`core.one_sheet.SheetRows`) are those rows, held and searched alike; this
+        one is unchanged (a cache may hold it)."""
+        idx, dist = (a.copy() for a in self._pair)
+        sheets.put(idx, dist)
+        idx.setflags(write=False)
+        dist.setflags(write=False)
+        return WidenableNeighbours(self._points, idx, dist, k_max=self._k_max, tree=self._tree, rank=self._rank,
+                                   sheets=sheets)
+
     def take(self, k: int):
         self._check_k(k)
         idx, dist = self._pair if k <= self.width else self.widen(k)
@@ -110,6 +122,8 @@ class WidenableNeighbours(Neighbours):
             query_rows(self._points, self._tree, self._rank, centres[start:stop], dist[start:stop],
                        idx[start:stop], max(k, SEARCH_RADIUS_NODE), SEARCH_REACH)
         _self_first(idx, dist, centres)
+        if self._sheets is not None:
+            self._sheets.put(idx, dist, centres)
         return idx, dist
 
     def widen(self, k: int | None = None, *, progress=None):
@@ -122,6 +136,8 @@ class WidenableNeighbours(Neighbours):
                 idx = np.empty((n, k), dtype=self._pair[0].dtype)
                 dist = np.empty((n, k), dtype=np.float64)
                 _query_tree(self._points, self._tree, self._rank, idx, dist, Progress(progress))
+                if self._sheets is not None:
+                    self._sheets.put(idx, dist)
                 idx.setflags(write=False)
                 dist.setflags(write=False)
                 object.__setattr__(self, "_pair", (idx, dist))

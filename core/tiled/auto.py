@@ -54,7 +54,7 @@ def run_auto_tile(root, tile: int, spec) -> dict:
     # fit p where later fits use it, and one ring more: an own point's border flag counts its valid neighbours
     reach = [rings_from(own, nb.indices, tplan.passes - p + 1) for p in range(tplan.passes + 1)]
     fits, back = [], []  # the last three passes' fits; pass 1 stepped back where pass 2 drifts (core.drift)
-    pool = nb.take(min(DRIFT_POOL, tplan.k_search))[0]
+    pool = front.fit_nb.take(min(DRIFT_POOL, tplan.k_search))[0]
 
     def output(fit, nrm, p):
         best = finish(Refined(fit, nrm, p), front.scale, front.outlier, tplan)
@@ -64,7 +64,7 @@ def run_auto_tile(root, tile: int, spec) -> dict:
         res = result_of(pts, np.ones(len(pts), dtype=bool), tplan, stages=stages, neighbours=nb, repaired=front.repaired)
         return _outputs(rec, res, nb, own, owner, exact, spec, front.init.normals)
 
-    for p, fit, nrm, complete in fit_passes(pts, front.init, front.outlier, nb, front.scale, tplan, Progress(None),
+    for p, fit, nrm, complete in fit_passes(pts, front.init, front.outlier, front.fit_nb, front.scale, tplan, Progress(None),
                                          n_fits=tplan.passes + 1, fitted=reach):
         seen = fit.valid & judged
         stats[p] = math.fsum(turn_angles(fit.normals, nrm, seen)), int(seen.sum())

@@ -20,6 +20,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ..one_sheet import sheet_width
+
 #: own points whose k-th neighbour distance sets the first margin (a subsample suffices)
 _PROBE = 20_000
 #: the first margin is this many times (rings x the 99th percentile of the k-th distance)
@@ -45,9 +47,12 @@ def auto_chain(passes: int, k_search: int, k_initial: int) -> tuple:
     neighbours, the jets' normals) and their k_init-NN PCA and 2-jet, which in robust mode
     skip outliers over the whole ``k_search`` list (``Neighbours.take_without``): exact
     ``k_search`` lists to ring ``passes + 1``. The outlier flags of those lists' points,
-    ring ``passes + 2``, need only their ``k_initial`` nearest (the outlier scores).
+    ring ``passes + 2``, need only their ``k_initial`` nearest (the outlier scores). Each
+    point's own-sheet order (:mod:`core.one_sheet`) reads its neighbours' normals, from their
+    own-sheet rows in turn: the first :func:`core.one_sheet.sheet_width` one ring further,
+    and the ``k_initial`` nearest two.
     """
-    return ((passes + 1, k_search), (passes + 2, k_initial))
+    return ((passes + 1, k_search), (passes + 2, sheet_width(k_search)), (passes + 3, k_initial))
 
 
 def shortfall(nb, own, chain, lo, hi) -> tuple[float, np.ndarray]:

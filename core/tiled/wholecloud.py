@@ -25,6 +25,7 @@ from typing import Callable
 import numpy as np
 
 from ..normals import pca_normals
+from ..one_sheet import fit_graph, sheet_width
 from ..scale import initial_k
 from ..stages import _small_normals, fold_spreads, initial_rows, noise_samples, outlier_scores
 from ..tuning import OUTLIER_SCORE
@@ -52,9 +53,11 @@ class Quantity:
 #: what a pre-pass round's tiles load: (k_max, dependency chain) of the plan, see
 #: :func:`core.tiled.halo.shortfall`
 _LOADS = {
-    "before": lambda plan: (plan.k_initial, ((1, plan.k_initial),)),
-    # own rows to the initial k, their points' small normals and outlier flags
-    "initial": lambda plan: (_k_init(plan), ((0, _k_init(plan)), (1, plan.k_initial))),
+    # own rows to the initial k, on their own sheet (core.one_sheet: two more rings)
+    "before": lambda plan: (sheet_width(plan), ((1, sheet_width(plan)), (2, plan.k_initial))),
+    # own rows to the initial k, their points' small normals and outlier flags, on their sheets
+    "initial": lambda plan: (max(_k_init(plan), sheet_width(plan)),
+                             ((0, max(_k_init(plan), sheet_width(plan))), (1, sheet_width(plan)), (2, plan.k_initial))),
 }
 
 
@@ -62,8 +65,9 @@ def _noise_samples(ctx):
     """The noise ratios (:func:`core.stages.noise_samples`) of the tile's own points,
     apart for those with an outlier among their neighbours."""
     pts, nb, plan, own = ctx.pts, ctx.nb, ctx.plan, ctx.own
+    outlier = outlier_scores(pts, nb.take(plan.k_initial)[0]) > OUTLIER_SCORE
+    nb = fit_graph(pts, nb, plan.k_initial) or nb  # as in memory: the initial normals on their own sheet
     idx_p, dist_p = nb.take(plan.k_initial)
-    outlier = outlier_scores(pts, idx_p) > OUTLIER_SCORE
     nrm, ok = pca_normals(pts, idx_p, dist_p)
     _, ratio, clean = noise_samples(pts, nrm, ok, idx_p, dist_p, outlier)
     finite = np.isfinite(ratio)
@@ -77,8 +81,9 @@ def _fold_samples(ctx):
     among those neighbours (their robust rows reach further than the tile loads: exact only
     where the cloud has clean points, which the median then takes alone)."""
     pts, nb, plan, own = ctx.pts, ctx.nb, ctx.plan, ctx.own
+    outlier = outlier_scores(pts, nb.take(plan.k_initial)[0]) > OUTLIER_SCORE
+    nb = fit_graph(pts, nb, plan.k_initial) or nb
     idx_p, dist_p = nb.take(plan.k_initial)
-    outlier = outlier_scores(pts, idx_p) > OUTLIER_SCORE
     nrm, ok = pca_normals(pts, idx_p, dist_p)
     small = _small_normals(pts, nrm, ok, idx_p, dist_p, None, plan)
     idx, _ = initial_rows(nb, _k_init(plan), outlier, plan)

@@ -131,8 +131,8 @@ def test_the_derived_auto_chain_is_enough(tmp_path, monkeypatch, small_candidate
 
 
 def test_the_auto_chain_covers_every_pass():
-    assert halo.auto_chain(4, 226, 15) == ((5, 226), (6, 15))
-    assert halo.auto_chain(0, 20, 15) == ((1, 20), (2, 15))
+    assert halo.auto_chain(4, 226, 15) == ((5, 226), (6, 40), (7, 15))  # own-sheet rows: two rings more (core.one_sheet)
+    assert halo.auto_chain(0, 20, 15) == ((1, 20), (2, 20), (3, 15))
 
 
 @pytest.mark.parametrize("sizes", [[0], [1], [5, 0, 3], [4, 4], [3000, 1, 2500, 0, 7], [1_200_000, 900_001]])

@@ -1,0 +1,143 @@
+"""Neighbourhoods on the point's own sheet (k="auto").
+
+Two sheets a few spacings apart (the skins of a plate 2-6 spacings thick, a wall scanned
+twice and registered a little apart, a floor under a raised panel) share their nearest
+points: 20 neighbours reach about 5 spacings. The second sheet's points read as noise to
+the noise measure (0.18 spacing on two noise-free planes 4 spacings apart, so the initial
+neighbourhood grew to 77 and took in both), and the position jets fitted their heights: a
+mean |H| of 1.65 on two flat planes, 1230 points above |k| = 5, every one reported valid.
+With the other sheet's points taken out of the rows by hand (an oracle), both planes came
+out exact.
+
+A neighbour q lies on another sheet of point p when its normal is parallel to p's (either
+sign, within :data:`core.tuning.SHEET_COS`) and its offset from p's tangent plane exceeds
+:data:`core.tuning.SHEET_RATIO` x its distance (a chord steeper than 30 degrees, which one
+sheet sampled finer than its curvature never shows between parallel normals) and
+:data:`core.tuning.SHEET_GATE` x p's noise spread (the median offset of its 10 nearest).
+Creases and a tube's own curvature are kept by the parallel test (their normals turn with
+the offset). The initial normals are found again on the rows so reordered, and the rule
+applied again on them (:data:`core.tuning.SHEET_ROUNDS`), since the first normals lean
+towards the other sheet. Where any point's first :data:`core.tuning.SEARCH_WIDTH` list
+another sheet, every row of the whole graph (all ``k_search`` columns, searched once, so
+the order does not depend on how wide a graph was held) lists its own sheet first, and
+every stage from the initial normals on fits one sheet. The orientation still reads the
+plain nearest (its chord test tells the skins of a thin part apart across them), and so
+does the result's graph.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from .kernels import sign_evidence
+from .kernels.sheets import count_other, own_sheet_first
+from .neighbours import Neighbours
+from .wide_neighbours import WidenableNeighbours
+from .normals import pca_normals
+from .tuning import PCA_K, SEARCH_WIDTH, SHEET_COS, SHEET_GATE, SHEET_MIN, SHEET_REACH, SHEET_ROUNDS, SHEET_SIDED
+
+#: neighbours whose median offset is a point's noise spread (as the orientation's gate)
+SPREAD_K = 10
+
+
+class SheetRule(NamedTuple):
+    """The points' ``normals`` (N, 3), which have one (``ok``) and ``scales`` (N, 2): each
+    one's noise spread and the least offset another sheet has (:data:`core.tuning.SHEET_REACH`
+    x the distance to its ``k``-th neighbour): what tells a neighbour on another sheet
+    (:mod:`core.kernels.sheets`)."""
+
+    normals: np.ndarray
+    ok: np.ndarray
+    scales: np.ndarray
+
+    def flagged(self, pts, idx) -> np.ndarray:
+        """The points whose row of ``idx`` (the graph's first columns) lists another sheet."""
+        count = np.empty(len(idx), dtype=np.int64)
+        count_other(pts, self.normals, self.ok, self.scales, idx, _RULE, count)
+        return np.flatnonzero(count)
+
+    def ordered(self, pts, rows, dist, centres):
+        """Copies of ``rows`` and ``dist`` (the neighbour rows of the points ``centres``),
+        each listing its own sheet first, then the rest, each in the row's order."""
+        perm = np.empty(rows.shape, dtype=np.int64)
+        own_sheet_first(pts, self.normals, self.ok, self.scales, rows, centres, _RULE, perm)
+        return np.take_along_axis(rows, perm, axis=1), np.take_along_axis(dist, perm, axis=1)
+
+
+_RULE = (SHEET_COS, SHEET_GATE, float(SHEET_MIN), SHEET_SIDED, float(PCA_K))
+
+
+class SheetRows(NamedTuple):
+    """The rows of a graph that list their own sheet first: the points ``centres`` (M,),
+    their whole rows ``idx`` and ``dist`` (M, k_max), and ``slot`` (N,), each point's row
+    here (-1: its row is the plain nearest)."""
+
+    centres: np.ndarray
+    idx: np.ndarray
+    dist: np.ndarray
+    slot: np.ndarray
+
+    def put(self, idx, dist, points=None) -> None:
+        """Write these rows (cut to the width of ``idx``) into ``idx`` and ``dist`` in place:
+        the whole graph's, or the rows of ``points``."""
+        if points is None:
+            at, mine = self.centres, slice(None)
+        else:
+            found = self.slot[points]
+            at = np.flatnonzero(found >= 0)
+            mine = found[at]
+        w = idx.shape[1]
+        idx[at] = self.idx[mine, :w]
+        dist[at] = self.dist[mine, :w]
+
+
+def sheet_width(plan_or_k) -> int:
+    """The columns whose rows are judged (:data:`core.tuning.SEARCH_WIDTH`, at most the
+    plan's ``k_search`` or the given k)."""
+    k = plan_or_k if isinstance(plan_or_k, (int, np.integer)) else plan_or_k.k_search
+    return min(SEARCH_WIDTH, int(k))
+
+
+def rule(pts, normals, ok, idx, dist, k) -> SheetRule | None:
+    """The :class:`SheetRule` of ``normals`` on the graph rows ``idx``, ``dist`` (their
+    ``k``-th neighbour sets the least offset), or None if no row lists another sheet."""
+    scales = np.empty((len(pts), 2))
+    sign_evidence.offset_spread(pts, np.where(ok[:, None], normals, 0.0), idx[:, :SPREAD_K], ok, scales[:, 0])
+    scales[:, 1] = SHEET_REACH * dist[:, k - 1]
+    found = SheetRule(normals, ok, scales)
+    return found if len(found.flagged(pts, idx)) else None
+
+
+def fit_graph(pts, nb, k):
+    """The graph ``nb`` with the rows that list another sheet among their first
+    :data:`core.tuning.SEARCH_WIDTH` listing their own sheet first (over all ``k_max``
+    columns), from PCA normals on the ``k`` nearest (found again on the reordered rows
+    :data:`core.tuning.SHEET_ROUNDS` - 1 times), as a new graph (``nb`` is not modified: a
+    cache may hold it); None where no row does."""
+    idx, dist = nb.take(min(nb.width, SEARCH_WIDTH))
+    nrm, ok = pca_normals(pts, idx[:, :k], dist[:, :k])
+    found = None
+    for r in range(SHEET_ROUNDS):
+        latest = rule(pts, nrm, ok, idx, dist, k)
+        if latest is None:  # the normals found on the last order see one sheet: keep it
+            break
+        found = latest
+        if r + 1 < SHEET_ROUNDS:
+            near = found.flagged(pts, idx)
+            mine, mine_dist = idx[:, :k].copy(), dist[:, :k].copy()
+            mine[near], mine_dist[near] = (a[:, :k] for a in found.ordered(pts, idx[near], dist[near], near))
+            nrm, ok = pca_normals(pts, mine, mine_dist)
+    if found is None:
+        return None
+    centres = found.flagged(pts, idx)
+    rows, rows_dist = found.ordered(pts, *nb.rows(centres, nb.k_max), centres)
+    slot = np.full(len(pts), -1, dtype=np.int64)
+    slot[centres] = np.arange(len(centres))
+    sheets = SheetRows(centres, rows, rows_dist, slot)
+    if isinstance(nb, WidenableNeighbours):
+        return nb.with_sheets(sheets)
+    idx, dist = nb.indices.copy(), nb.distances.copy()
+    sheets.put(idx, dist)
+    return Neighbours(nb.points, idx, dist)
