@@ -9,20 +9,23 @@ mean |H| of 1.65 on two flat planes, 1230 points above |k| = 5, every one report
 With the other sheet's points taken out of the rows by hand (an oracle), both planes came
 out exact.
 
-A neighbour q lies on another sheet of point p when its normal is parallel to p's (either
-sign, within :data:`core.tuning.SHEET_COS`) and its offset from p's tangent plane exceeds
-:data:`core.tuning.SHEET_RATIO` x its distance (a chord steeper than 30 degrees, which one
-sheet sampled finer than its curvature never shows between parallel normals) and
-:data:`core.tuning.SHEET_GATE` x p's noise spread (the median offset of its 10 nearest).
-Creases and a tube's own curvature are kept by the parallel test (their normals turn with
-the offset). The initial normals are found again on the rows so reordered, and the rule
-applied again on them (:data:`core.tuning.SHEET_ROUNDS`), since the first normals lean
-towards the other sheet. Where any point's first :data:`core.tuning.SEARCH_WIDTH` list
-another sheet, every row of the whole graph (all ``k_search`` columns, searched once, so
-the order does not depend on how wide a graph was held) lists its own sheet first, and
-every stage from the initial normals on fits one sheet. The orientation still reads the
-plain nearest (its chord test tells the skins of a thin part apart across them), and so
-does the result's graph.
+A neighbour q lies on another sheet than point p when its normal is parallel to p's (either
+sign, within :data:`core.tuning.SHEET_COS`) and its offset from p's tangent plane, less the
+sagitta the turn between their normals explains (chord x sin(turn / 2): on one sheet the
+offset is that sagitta), exceeds :data:`core.tuning.SHEET_GATE` x p's noise spread (the
+median offset of its 10 nearest) and :data:`core.tuning.SHEET_REACH` x the distance to its
+15th neighbour. A side of p's plane holds another sheet when at least
+:data:`core.tuning.SHEET_MIN` of its first :data:`core.tuning.SEARCH_WIDTH` neighbours lie
+there, :data:`core.tuning.SHEET_SIDED` times as many as on the other side (noise's tails fall
+on both), and 15 are left on p's own (:mod:`core.kernels.sheets`). Creases and a tube's own
+curvature are kept by the parallel test and the sagitta (their normals turn with the offset).
+The initial normals are found again on the rows so reordered and the rule applied again on
+them (:data:`core.tuning.SHEET_ROUNDS`), since the first normals lean towards the other sheet.
+The rows that hold another sheet are then searched whole (``k_max`` columns, so the order
+does not depend on how wide a graph was held) and list p's own sheet first, then the rest,
+each in distance order; every stage from the initial normals on reads them. The orientation
+and the result's graph keep the plain nearest (the orientation's chord test tells the skins
+of a thin part apart across them).
 """
 
 from __future__ import annotations
@@ -34,9 +37,9 @@ import numpy as np
 from .kernels import sign_evidence
 from .kernels.sheets import count_other, own_sheet_first
 from .neighbours import Neighbours
-from .wide_neighbours import WidenableNeighbours
 from .normals import pca_normals
 from .tuning import PCA_K, SEARCH_WIDTH, SHEET_COS, SHEET_GATE, SHEET_MIN, SHEET_REACH, SHEET_ROUNDS, SHEET_SIDED
+from .wide_neighbours import WidenableNeighbours
 
 #: neighbours whose median offset is a point's noise spread (as the orientation's gate)
 SPREAD_K = 10
