@@ -19,8 +19,9 @@ median offset of its 10 nearest) and :data:`core.tuning.SHEET_REACH` x the dista
 there, :data:`core.tuning.SHEET_SIDED` times as many as on the other side (noise's tails fall
 on both), and 15 are left on p's own (:mod:`core.kernels.sheets`). Creases and a tube's own
 curvature are kept by the parallel test and the sagitta (their normals turn with the offset).
-The initial normals are found again on the rows so reordered and the rule applied again on
-them (:data:`core.tuning.SHEET_ROUNDS`), since the first normals lean towards the other sheet.
+The rule first reads PCA normals of the :data:`core.tuning.SHEET_K` nearest (at 3 spacings
+apart the 15 nearest lean towards the other sheet); the initial normals are found again on
+the rows so reordered and the rule applied again on them (:data:`core.tuning.SHEET_ROUNDS`).
 The rows that hold another sheet are then searched whole (``k_max`` columns, so the order
 does not depend on how wide a graph was held) and list p's own sheet first, then the rest,
 each in distance order; every stage from the initial normals on reads them. The orientation
@@ -37,8 +38,10 @@ import numpy as np
 from .kernels import sign_evidence
 from .kernels.sheets import count_other, own_sheet_first
 from .neighbours import Neighbours
+from . import plane_spread
 from .normals import pca_normals
-from .tuning import PCA_K, SEARCH_WIDTH, SHEET_COS, SHEET_GATE, SHEET_MIN, SHEET_REACH, SHEET_ROUNDS, SHEET_SIDED
+from .plane_spread import LINE_SPREAD
+from .tuning import PCA_K, SEARCH_WIDTH, SHEET_COS, SHEET_GATE, SHEET_MIN, SHEET_K, SHEET_REACH, SHEET_ROUNDS, SHEET_SIDED
 from .wide_neighbours import WidenableNeighbours
 
 #: neighbours whose median offset is a point's noise spread (as the orientation's gate)
@@ -113,17 +116,28 @@ def rule(pts, normals, ok, idx, dist, k) -> SheetRule | None:
     return found if len(found.flagged(pts, idx)) else None
 
 
+def _spans_plane(pts, normals, ok, nb, k) -> np.ndarray:
+    """(N,) bool: the point's ``k`` nearest spread over its plane (:mod:`core.plane_spread`,
+    at least :data:`core.plane_spread.LINE_SPREAD`). Along a scan line the normal is the
+    line's guess and the next line, a few spacings off that guessed plane, is no other
+    sheet: a sphere or cylinder scanned in rings 8-16 spacings apart had whole rings
+    reordered (a cylinder's orientation 100 -> 83-92 % right)."""
+    with np.errstate(invalid="ignore"):
+        return plane_spread.spreads(pts, np.where(ok[:, None], normals, np.nan), nb, k) >= LINE_SPREAD
+
+
 def fit_graph(pts, nb, k):
     """The graph ``nb`` with the rows that list another sheet among their first
     :data:`core.tuning.SEARCH_WIDTH` listing their own sheet first (over all ``k_max``
-    columns), from PCA normals on the ``k`` nearest (found again on the reordered rows
-    :data:`core.tuning.SHEET_ROUNDS` - 1 times), as a new graph (``nb`` is not modified: a
+    columns), from PCA normals on the :data:`core.tuning.SHEET_K` nearest (then on the ``k``
+    nearest of the reordered rows, :data:`core.tuning.SHEET_ROUNDS` - 1 times), as a new graph (``nb`` is not modified: a
     cache may hold it); None where no row does."""
     idx, dist = nb.take(min(nb.width, SEARCH_WIDTH))
-    nrm, ok = pca_normals(pts, idx[:, :k], dist[:, :k])
+    first = min(k, SHEET_K)
+    nrm, ok = pca_normals(pts, idx[:, :first], dist[:, :first])
     found = None
     for r in range(SHEET_ROUNDS):
-        latest = rule(pts, nrm, ok, idx, dist, k)
+        latest = rule(pts, nrm, ok & _spans_plane(pts, nrm, ok, nb, k), idx, dist, k)
         if latest is None:  # the normals found on the last order see one sheet: keep it
             break
         found = latest

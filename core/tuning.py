@@ -397,3 +397,4 @@ SHEET_REACH = 0.5
 SHEET_MIN = 5
 SHEET_SIDED = 4.0
 SHEET_ROUNDS = 2
+SHEET_K = 8  # the rule's first normals: PCA of the 8 nearest (the 15 nearest lean across 3 spacings)
