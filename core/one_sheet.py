@@ -10,18 +10,18 @@ With the other sheet's points taken out of the rows by hand (an oracle), both pl
 out exact.
 
 A neighbour q lies on another sheet than point p when its normal is parallel to p's (either
-sign, within :data:`core.tuning.SHEET_COS`) and its offset from p's tangent plane, less the
+sign, within :data:`SHEET_COS`) and its offset from p's tangent plane, less the
 sagitta the turn between their normals explains (chord x sin(turn / 2): on one sheet the
-offset is that sagitta), exceeds :data:`core.tuning.SHEET_GATE` x p's noise spread (the
-median offset of its 10 nearest) and :data:`core.tuning.SHEET_REACH` x the distance to its
+offset is that sagitta), exceeds :data:`SHEET_GATE` x p's noise spread (the
+median offset of its 10 nearest) and :data:`SHEET_REACH` x the distance to its
 15th neighbour. A side of p's plane holds another sheet when at least
-:data:`core.tuning.SHEET_MIN` of its first :data:`core.tuning.SEARCH_WIDTH` neighbours lie
-there, :data:`core.tuning.SHEET_SIDED` times as many as on the other side (noise's tails fall
+:data:`SHEET_MIN` of its first :data:`core.tuning.SEARCH_WIDTH` neighbours lie
+there, :data:`SHEET_SIDED` times as many as on the other side (noise's tails fall
 on both), and 15 are left on p's own (:mod:`core.kernels.sheets`). Creases and a tube's own
 curvature are kept by the parallel test and the sagitta (their normals turn with the offset).
-The rule first reads PCA normals of the :data:`core.tuning.SHEET_K` nearest (at 3 spacings
+The rule first reads PCA normals of the :data:`SHEET_K` nearest (at 3 spacings
 apart the 15 nearest lean towards the other sheet); the initial normals are found again on
-the rows so reordered and the rule applied again on them (:data:`core.tuning.SHEET_ROUNDS`).
+the rows so reordered and the rule applied again on them (:data:`SHEET_ROUNDS`).
 The rows that hold another sheet are then searched whole (``k_max`` columns, so the order
 does not depend on how wide a graph was held) and list p's own sheet first, then the rest,
 each in distance order; every stage from the initial normals on reads them. The orientation
@@ -37,20 +37,40 @@ import numpy as np
 
 from .kernels import sign_evidence
 from .kernels.sheets import count_other, own_sheet_first
-from .neighbours import Neighbours
 from . import plane_spread
+from .neighbours import Neighbours
 from .normals import pca_normals
 from .plane_spread import LINE_SPREAD
-from .tuning import PCA_K, SEARCH_WIDTH, SHEET_COS, SHEET_GATE, SHEET_MIN, SHEET_K, SHEET_REACH, SHEET_ROUNDS, SHEET_SIDED
+from .tuning import PCA_K, SEARCH_WIDTH
 from .wide_neighbours import WidenableNeighbours
 
+#: a neighbour lies on another sheet than the point (k="auto") when its normal
+#: is parallel to the point's within SHEET_COS (30 degrees, either sign) and its offset from
+#: the point's plane, less the sagitta their normals' turn explains, is beyond SHEET_GATE x the
+#: point's noise spread (median offset of its 10 nearest) and SHEET_REACH x the distance to
+#: its 15th neighbour; a side of the plane holds another sheet where at least SHEET_MIN of a
+#: row's neighbours lie there and SHEET_SIDED times as many as on the other side (noise's
+#: tails fall on both). SHEET_ROUNDS: initial normals found again on the reordered rows,
+#: and the rule applied again on them
+SHEET_COS = 0.8660254037844387
+SHEET_GATE = 3.0
+SHEET_REACH = 0.5
+SHEET_MIN = 5
+SHEET_SIDED = 4.0
+SHEET_ROUNDS = 2
+#: the fits' own-sheet graph is made (a copy of the held graph: 480 MB at 1M points) only where
+#: at least this share of the rows hold another sheet: noisy single surfaces have a few tilted
+#: rows (8000 points: 1-6 at 0.2 spacing of noise, 20-47 at 0.5, 74-119 at 1), a noisy 1M
+#: plane peaked at 2228 MiB with them against 1761 without, for the same answer
+SHEET_SHARE = 0.01
+SHEET_K = 8  # the rule's first normals: PCA of the 8 nearest (the 15 nearest lean across 3 spacings)
 #: neighbours whose median offset is a point's noise spread (as the orientation's gate)
 SPREAD_K = 10
 
 
 class SheetRule(NamedTuple):
     """The points' ``normals`` (N, 3), which have one (``ok``) and ``scales`` (N, 2): each
-    one's noise spread and the least offset another sheet has (:data:`core.tuning.SHEET_REACH`
+    one's noise spread and the least offset another sheet has (:data:`SHEET_REACH`
     x the distance to its ``k``-th neighbour): what tells a neighbour on another sheet
     (:mod:`core.kernels.sheets`)."""
 
@@ -129,9 +149,9 @@ def _spans_plane(pts, normals, ok, nb, k) -> np.ndarray:
 def fit_graph(pts, nb, k):
     """The graph ``nb`` with the rows that list another sheet among their first
     :data:`core.tuning.SEARCH_WIDTH` listing their own sheet first (over all ``k_max``
-    columns), from PCA normals on the :data:`core.tuning.SHEET_K` nearest (then on the ``k``
-    nearest of the reordered rows, :data:`core.tuning.SHEET_ROUNDS` - 1 times), as a new graph (``nb`` is not modified: a
-    cache may hold it); None where no row does."""
+    columns), from PCA normals on the :data:`SHEET_K` nearest (then on the ``k``
+    nearest of the reordered rows, :data:`SHEET_ROUNDS` - 1 times), as a new graph (``nb`` is not modified: a
+    cache may hold it); None where fewer than :data:`SHEET_SHARE` of the rows do."""
     idx, dist = nb.take(min(nb.width, SEARCH_WIDTH))
     first = min(k, SHEET_K)
     nrm, ok = pca_normals(pts, idx[:, :first], dist[:, :first])
@@ -149,6 +169,8 @@ def fit_graph(pts, nb, k):
     if found is None:
         return None
     centres = found.flagged(pts, idx)
+    if len(centres) < SHEET_SHARE * len(pts):  # a copy of the graph (480 MB at 1M) for a few noisy rows
+        return None
     rows, rows_dist = found.ordered(pts, *nb.rows(centres, nb.k_max), centres)
     slot = np.full(len(pts), -1, dtype=np.int64)
     slot[centres] = np.arange(len(centres))

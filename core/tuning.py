@@ -382,19 +382,3 @@ OMP_WAIT_POLICY = "PASSIVE"
 #: 6.6-6.8, NR / kNN CPU 1.16-1.22 -> 1.00. On bare metal huge pages are cheap to fault and
 #: 4 KiB pages cost more faults: not measured there. Same bits either way.
 NUMPY_HUGEPAGES = False
-
-#: core.one_sheet: a neighbour lies on another sheet than the point (k="auto") when its normal
-#: is parallel to the point's within SHEET_COS (30 degrees, either sign) and its offset from
-#: the point's plane, less the sagitta their normals' turn explains, is beyond SHEET_GATE x the
-#: point's noise spread (median offset of its 10 nearest) and SHEET_REACH x the distance to
-#: its 15th neighbour; a side of the plane holds another sheet where at least SHEET_MIN of a
-#: row's neighbours lie there and SHEET_SIDED times as many as on the other side (noise's
-#: tails fall on both). SHEET_ROUNDS: initial normals found again on the reordered rows,
-#: and the rule applied again on them
-SHEET_COS = 0.8660254037844387
-SHEET_GATE = 3.0
-SHEET_REACH = 0.5
-SHEET_MIN = 5
-SHEET_SIDED = 4.0
-SHEET_ROUNDS = 2
-SHEET_K = 8  # the rule's first normals: PCA of the 8 nearest (the 15 nearest lean across 3 spacings)

@@ -47,17 +47,14 @@ def test_a_fit_row_lists_its_own_sheet_first():
     np.testing.assert_array_equal(np.sort(graph.indices, axis=1), np.sort(plain.indices, axis=1))  # reordered only
 
 
-@pytest.mark.parametrize("noise, most", [(0.0, 0), (0.2, 0.002)])
-def test_one_surface_keeps_its_plain_nearest(noise, most):
-    """On a single surface (a torus) no row is reordered noise-free, so the estimate is the
-    one before the rule, bit for bit; at 0.2 spacing of noise a few tilted rows are
-    (measured 2-6 of 8000 on seven shapes)."""
+@pytest.mark.parametrize("noise", [0.0, 0.2, 0.5])
+def test_one_surface_keeps_its_plain_nearest(noise):
+    """A single surface (a torus, noise-free or at 0.2-0.5 spacing) gets no own-sheet graph,
+    so the estimate is the one before the rule, bit for bit: its few tilted noisy rows (1-6
+    of 8000 at 0.2, 20-47 at 0.5) stay below core.one_sheet.SHEET_SHARE."""
     s = shapes.torus(6000, seed=2)
     pts = core.noise.add_noise(s.points, noise, seed=3) if noise else s.points
-    nb = build_neighbours(pts, 40)
-    graph = one_sheet.fit_graph(pts, nb, 15)
-    moved = 0.0 if graph is None else (graph.indices != nb.indices).any(axis=1).mean()
-    assert moved <= most
+    assert one_sheet.fit_graph(pts, build_neighbours(pts, 40), 15) is None
 
 
 def test_the_result_keeps_the_plain_nearest():
