@@ -126,14 +126,16 @@ def sheet_width(plan_or_k) -> int:
     return min(SEARCH_WIDTH, int(k))
 
 
-def rule(pts, normals, ok, idx, dist, k) -> SheetRule | None:
+def rule(pts, normals, ok, idx, dist, k):
     """The :class:`SheetRule` of ``normals`` on the graph rows ``idx``, ``dist`` (their
-    ``k``-th neighbour sets the least offset), or None if no row lists another sheet."""
+    ``k``-th neighbour sets the least offset) and the points whose rows it flags, or None if
+    it flags none."""
     scales = np.empty((len(pts), 2))
     sign_evidence.offset_spread(pts, np.where(ok[:, None], normals, 0.0), idx[:, :SPREAD_K], ok, scales[:, 0])
     scales[:, 1] = SHEET_REACH * dist[:, k - 1]
     found = SheetRule(normals, ok, scales)
-    return found if len(found.flagged(pts, idx)) else None
+    flagged = found.flagged(pts, idx)
+    return (found, flagged) if len(flagged) else None
 
 
 def _spans_plane(pts, normals, ok, nb, k) -> np.ndarray:
@@ -160,15 +162,14 @@ def fit_graph(pts, nb, k):
         latest = rule(pts, nrm, ok & _spans_plane(pts, nrm, ok, nb, k), idx, dist, k)
         if latest is None:  # the normals found on the last order see one sheet: keep it
             break
-        found = latest
+        found, centres = latest
         if r + 1 < SHEET_ROUNDS:
-            near = found.flagged(pts, idx)
             mine, mine_dist = idx[:, :k].copy(), dist[:, :k].copy()
-            mine[near], mine_dist[near] = (a[:, :k] for a in found.ordered(pts, idx[near], dist[near], near))
+            mine[centres], mine_dist[centres] = (a[:, :k] for a in found.ordered(pts, idx[centres], dist[centres],
+                                                                                 centres))
             nrm, ok = pca_normals(pts, mine, mine_dist)
     if found is None:
         return None
-    centres = found.flagged(pts, idx)
     if len(centres) < SHEET_SHARE * len(pts):  # a copy of the graph (480 MB at 1M) for a few noisy rows
         return None
     rows, rows_dist = found.ordered(pts, *nb.rows(centres, nb.k_max), centres)

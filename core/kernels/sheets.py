@@ -68,16 +68,15 @@ def own_sheet_first(points, normals, ok, scales, rows, centres, rule, perm):
     for r in prange(len(centres)):
         i = centres[r]
         up, down = _sides(points, normals, ok, scales, rows, r, i, rule)
-        perm[r, 0] = 0
-        front = 1
-        back = w - 1
-        for m in range(w - 1, 0, -1):  # the other sheets' points fill the row from its end, in order
-            s = _side(points, normals, ok, scales, i, rows[r, m], rule)
-            if (s > 0 and up) or (s < 0 and down):
-                perm[r, back] = m
-                back -= 1
+        other = np.zeros(w, dtype=np.bool_)
         for m in range(1, w):
             s = _side(points, normals, ok, scales, i, rows[r, m], rule)
-            if not ((s > 0 and up) or (s < 0 and down)):
+            other[m] = (s > 0 and up) or (s < 0 and down)
+        front, back = 0, w - 1 - np.count_nonzero(other)  # own sheet from the start, the others after it
+        for m in range(w):
+            if other[m]:
+                back += 1
+                perm[r, back] = m
+            else:
                 perm[r, front] = m
                 front += 1

@@ -61,12 +61,19 @@ _LOADS = {
 }
 
 
+def _initial_graph(ctx):
+    """The tile's outlier flags (on the plain nearest) and the graph its initial normals are
+    found on, as in memory (:func:`core.estimate.prepare`): each point's own sheet first."""
+    pts, nb, plan = ctx.pts, ctx.nb, ctx.plan
+    outlier = outlier_scores(pts, nb.take(plan.k_initial)[0]) > OUTLIER_SCORE
+    return outlier, fit_graph(pts, nb, plan.k_initial) or nb
+
+
 def _noise_samples(ctx):
     """The noise ratios (:func:`core.stages.noise_samples`) of the tile's own points,
     apart for those with an outlier among their neighbours."""
-    pts, nb, plan, own = ctx.pts, ctx.nb, ctx.plan, ctx.own
-    outlier = outlier_scores(pts, nb.take(plan.k_initial)[0]) > OUTLIER_SCORE
-    nb = fit_graph(pts, nb, plan.k_initial) or nb  # as in memory: the initial normals on their own sheet
+    pts, plan, own = ctx.pts, ctx.plan, ctx.own
+    outlier, nb = _initial_graph(ctx)
     idx_p, dist_p = nb.take(plan.k_initial)
     nrm, ok = pca_normals(pts, idx_p, dist_p)
     _, ratio, clean = noise_samples(pts, nrm, ok, idx_p, dist_p, outlier)
@@ -80,9 +87,8 @@ def _fold_samples(ctx):
     at the initial scale the whole cloud's noise chose, apart for those with an outlier
     among those neighbours (their robust rows reach further than the tile loads: exact only
     where the cloud has clean points, which the median then takes alone)."""
-    pts, nb, plan, own = ctx.pts, ctx.nb, ctx.plan, ctx.own
-    outlier = outlier_scores(pts, nb.take(plan.k_initial)[0]) > OUTLIER_SCORE
-    nb = fit_graph(pts, nb, plan.k_initial) or nb
+    pts, plan, own = ctx.pts, ctx.plan, ctx.own
+    outlier, nb = _initial_graph(ctx)
     idx_p, dist_p = nb.take(plan.k_initial)
     nrm, ok = pca_normals(pts, idx_p, dist_p)
     small = _small_normals(pts, nrm, ok, idx_p, dist_p, None, plan)

@@ -57,7 +57,8 @@ def probe_case(sampler, name, level, n, seed, evaluate) -> dict:
     umbilic = (s.k1 - s.k2) <= metrics.UMBILIC * np.maximum(np.abs(s.k1), np.abs(s.k2))
     use = (ev & s.interior & ~umbilic)[order]
     best = refine(front.pts, front.init, front.outlier, front.fit_nb, front.scale, plan, report).fit
-    first = next(fit_passes(front.pts, front.init, front.outlier, front.nb, front.scale, plan, report, n_fits=1))[1]
+    first = next(fit_passes(front.pts, front.init, front.outlier, front.fit_nb, front.scale, plan, report,
+                             n_fits=1))[1]
     jets, ok = front.scale.jets, best.valid & front.scale.jets[-1]
     out = {"nr": _angles(best.normals, best.e1, best.e2, truth, use & ok)}
     out["first fit"] = _angles(first.normals, first.e1, first.e2, truth, use & ok & first.valid) / out["nr"]
