@@ -220,7 +220,9 @@ def prepare(pts, normals, plan, neighbours, report, *, cache=None, near=False, s
     outlier = scores > OUTLIER_SCORE
     fit_nb = nb  # with k="auto", each point's own sheet first (core.one_sheet): what the normals are fitted on
     if plan.auto and normals is None:
-        fit_nb = run("sheets", lambda: one_sheet.fit_graph(pts, nb, plan.k_initial)) or nb
+        sheets = run("sheets", lambda: one_sheet.graphs(pts, nb, plan.k_initial))
+        if sheets is not None:  # the plain nearest are then served from the fits' graph (core.plain_rows)
+            fit_nb, nb = sheets
     if normals is None:
         init, repaired = run("initial", lambda: initial_normals(pts, fit_nb, plan, outlier, report)), None
     else:

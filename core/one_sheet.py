@@ -40,6 +40,7 @@ from .kernels.sheets import count_other, own_sheet_first
 from . import plane_spread
 from .neighbours import Neighbours
 from .normals import pca_normals
+from .plain_rows import PlainNeighbours
 from .plane_spread import LINE_SPREAD
 from .tuning import PCA_K, SEARCH_WIDTH
 from .wide_neighbours import WidenableNeighbours
@@ -68,6 +69,10 @@ SHEET_K = 8  # the rule's first normals: PCA of the 8 nearest (the 15 nearest le
 SPREAD_K = 10
 
 
+#: rows ordered per step (bounds the temporary arrays: 200k rows of 56 were 1.8 GB at once)
+_CHUNK = 65_536
+
+
 class SheetRule(NamedTuple):
     """The points' ``normals`` (N, 3), which have one (``ok``) and ``scales`` (N, 2): each
     one's noise spread and the least offset another sheet has (:data:`SHEET_REACH`
@@ -86,37 +91,60 @@ class SheetRule(NamedTuple):
 
     def ordered(self, pts, rows, dist, centres):
         """Copies of ``rows`` and ``dist`` (the neighbour rows of the points ``centres``),
-        each listing its own sheet first, then the rest, each in the row's order."""
+        each listing its own sheet first, then the rest, each in the row's order, and the
+        permutation ``perm`` (int64) that made them (``rows[r, perm[r]]``)."""
         perm = np.empty(rows.shape, dtype=np.int64)
         own_sheet_first(pts, self.normals, self.ok, self.scales, rows, centres, _RULE, perm)
-        return np.take_along_axis(rows, perm, axis=1), np.take_along_axis(dist, perm, axis=1)
+        return np.take_along_axis(rows, perm, axis=1), np.take_along_axis(dist, perm, axis=1), perm
+
+    def ordered_in_steps(self, pts, rows_of, centres):
+        """:meth:`ordered` of the rows ``rows_of(c)`` of the points ``centres``, :data:`_CHUNK`
+        at a time (all at once, the copies were 1.3 GB at 1M points): yields each step's
+        slice of ``centres``, its points, their ordered rows and distances and the permutation."""
+        for start in range(0, len(centres), _CHUNK):
+            part = slice(start, start + _CHUNK)
+            yield (part, centres[part], *self.ordered(pts, *rows_of(centres[part]), centres[part]))
 
 
 _RULE = (SHEET_COS, SHEET_GATE, float(SHEET_MIN), SHEET_SIDED, float(PCA_K))
 
 
 class SheetRows(NamedTuple):
-    """The rows of a graph that list their own sheet first: the points ``centres`` (M,),
-    their whole rows ``idx`` and ``dist`` (M, k_max), and ``slot`` (N,), each point's row
-    here (-1: its row is the plain nearest)."""
+    """The columns beyond those a graph holds of its rows that list their own sheet first:
+    the points ``centres`` (M,), the columns ``width`` to ``k_max`` of their rows, ``idx``
+    and ``dist`` (M, k_max - width; the first ``width`` are in the graph's held rows), and
+    ``slot`` (N,), each point's row here (-1: its row is the plain nearest). Only the
+    columns beyond the held ones are kept: whole rows of a 1M-point cloud of two sheets were
+    672 MB on top of the held copy."""
 
     centres: np.ndarray
     idx: np.ndarray
     dist: np.ndarray
     slot: np.ndarray
 
-    def put(self, idx, dist, points=None) -> None:
-        """Write these rows (cut to the width of ``idx``) into ``idx`` and ``dist`` in place:
-        the whole graph's, or the rows of ``points``."""
+    def put(self, idx, dist, held, points=None) -> None:
+        """Write these rows into ``idx`` and ``dist`` (a graph's, or the rows of ``points``,
+        searched to their width) in place: their first columns from ``held`` (the graph's held
+        rows, as wide as these start), the rest from here."""
         if points is None:
             at, mine = self.centres, slice(None)
         else:
             found = self.slot[points]
             at = np.flatnonzero(found >= 0)
             mine = found[at]
-        w = idx.shape[1]
-        idx[at] = self.idx[mine, :w]
-        dist[at] = self.dist[mine, :w]
+        start, mine = held[0].shape[1], np.arange(len(self.centres))[mine]
+        stop = idx.shape[1] - start
+        for c in range(0, len(at), _CHUNK):  # in steps: a gather of every row at once was 480 MB at 1M
+            to, fro = at[c:c + _CHUNK], mine[c:c + _CHUNK]
+            rows = self.centres[fro]
+            idx[to, :start], dist[to, :start] = held[0][rows], held[1][rows]
+            idx[to, start:], dist[to, start:] = self.idx[fro, :stop], self.dist[fro, :stop]
+
+    def beyond(self, k: int) -> "SheetRows | None":
+        """These rows once the graph holds ``k`` more columns (None: it holds them all)."""
+        if k >= self.idx.shape[1]:
+            return None
+        return self._replace(idx=self.idx[:, k:].copy(), dist=self.dist[:, k:].copy())
 
 
 def sheet_width(plan_or_k) -> int:
@@ -148,12 +176,57 @@ def _spans_plane(pts, normals, ok, nb, k) -> np.ndarray:
         return plane_spread.spreads(pts, np.where(ok[:, None], normals, np.nan), nb, k) >= LINE_SPREAD
 
 
+class SheetGraphs(NamedTuple):
+    """The graph the fits read (``fit``: each point's own sheet first) and the plain nearest
+    served from it (``plain``, a :class:`core.plain_rows.PlainNeighbours`)."""
+
+    fit: object
+    plain: object
+
+
 def fit_graph(pts, nb, k):
     """The graph ``nb`` with the rows that list another sheet among their first
     :data:`core.tuning.SEARCH_WIDTH` listing their own sheet first (over all ``k_max``
-    columns), from PCA normals on the :data:`SHEET_K` nearest (then on the ``k``
-    nearest of the reordered rows, :data:`SHEET_ROUNDS` - 1 times), as a new graph (``nb`` is not modified: a
-    cache may hold it); None where fewer than :data:`SHEET_SHARE` of the rows do."""
+    columns), as a new graph (``nb`` is not modified: a cache may hold it); None where fewer
+    than :data:`SHEET_SHARE` of the rows do (:func:`graphs`)."""
+    made = graphs(pts, nb, k)
+    return None if made is None else made.fit
+
+
+def graphs(pts, nb, k) -> SheetGraphs | None:
+    """:func:`fit_graph`, and the plain nearest served from it: ``nb`` itself is no longer
+    needed (480 MB at 1M points, what a cloud of two sheets went over 2 GB by)."""
+    found = _judged(pts, nb, k)
+    if found is None:
+        return None
+    found, centres = found
+    wide = isinstance(nb, WidenableNeighbours)  # a search's columns beyond those held come from SheetRows
+    idx, dist = (a.copy() for a in (nb._held() if wide else (nb.indices, nb.distances)))  # nb stays as it is
+    width = idx.shape[1]
+    tail_idx = np.empty((len(centres), nb.k_max - width), dtype=idx.dtype)
+    tail_dist = np.empty((len(centres), nb.k_max - width))
+    kind = np.uint16 if nb.k_max <= 1 << 16 else np.int64
+    plain = np.empty((len(centres), nb.k_max), dtype=kind)  # the plain row's j-th: column plain[r, j]
+    for part, at, rows, rows_dist, perm in found.ordered_in_steps(pts, lambda c: nb.rows(c, nb.k_max), centres):
+        idx[at], dist[at] = rows[:, :width], rows_dist[:, :width]
+        tail_idx[part], tail_dist[part] = rows[:, width:], rows_dist[:, width:]
+        np.put_along_axis(plain[part], perm, np.arange(nb.k_max, dtype=kind)[None, :], axis=1)
+    slot = np.full(len(pts), -1, dtype=np.int64)
+    slot[centres] = np.arange(len(centres))
+    if wide:
+        fit = nb.with_sheets(idx, dist, SheetRows(centres, tail_idx, tail_dist, slot))
+        whole = fit.whole_rows
+    else:
+        fit = Neighbours(nb.points, idx, dist)
+        whole = lambda c: fit.rows(c, fit.k_max)  # noqa: E731 - every column held
+    return SheetGraphs(fit, PlainNeighbours(fit, centres, plain, slot, whole))
+
+
+def _judged(pts, nb, k):
+    """``(rule, centres)``: the :class:`SheetRule` and the points whose rows list another
+    sheet, from PCA normals on the :data:`SHEET_K` nearest (then on the ``k`` nearest of the
+    reordered rows, :data:`SHEET_ROUNDS` - 1 times); None where fewer than
+    :data:`SHEET_SHARE` of the rows do."""
     idx, dist = nb.take(min(nb.width, SEARCH_WIDTH))
     first = min(k, SHEET_K)
     nrm, ok = pca_normals(pts, idx[:, :first], dist[:, :first])
@@ -165,19 +238,9 @@ def fit_graph(pts, nb, k):
         found, centres = latest
         if r + 1 < SHEET_ROUNDS:
             mine, mine_dist = idx[:, :k].copy(), dist[:, :k].copy()
-            mine[centres], mine_dist[centres] = (a[:, :k] for a in found.ordered(pts, idx[centres], dist[centres],
-                                                                                 centres))
+            for _, at, rows, rows_dist, _ in found.ordered_in_steps(pts, lambda c: (idx[c], dist[c]), centres):
+                mine[at], mine_dist[at] = rows[:, :k], rows_dist[:, :k]
             nrm, ok = pca_normals(pts, mine, mine_dist)
-    if found is None:
+    if found is None or len(centres) < SHEET_SHARE * len(pts):  # a copy of the graph (480 MB at 1M) for a few noisy rows
         return None
-    if len(centres) < SHEET_SHARE * len(pts):  # a copy of the graph (480 MB at 1M) for a few noisy rows
-        return None
-    rows, rows_dist = found.ordered(pts, *nb.rows(centres, nb.k_max), centres)
-    slot = np.full(len(pts), -1, dtype=np.int64)
-    slot[centres] = np.arange(len(centres))
-    sheets = SheetRows(centres, rows, rows_dist, slot)
-    if isinstance(nb, WidenableNeighbours):
-        return nb.with_sheets(sheets)
-    idx, dist = nb.indices.copy(), nb.distances.copy()
-    sheets.put(idx, dist)
-    return Neighbours(nb.points, idx, dist)
+    return found, centres

@@ -93,16 +93,15 @@ class WidenableNeighbours(Neighbours):
     def _held(self):
         return self._pair
 
-    def with_sheets(self, sheets):
-        """A new graph on the same tree whose rows of the points of ``sheets`` (a
-        :class:`core.one_sheet.SheetRows`) are those rows, held and searched alike; this
-        one is unchanged (a cache may hold it)."""
-        idx, dist = (a.copy() for a in self._pair)
-        sheets.put(idx, dist)
-        idx.setflags(write=False)
-        dist.setflags(write=False)
-        return WidenableNeighbours(self._points, idx, dist, k_max=self._k_max, tree=self._tree, rank=self._rank,
-                                   sheets=sheets)
+    def with_sheets(self, indices, distances, sheets):
+        """A new graph on the same tree that holds ``indices`` and ``distances`` (this one's
+        held rows, some listing their own sheet first) and serves the further columns of
+        those rows from ``sheets`` (a :class:`core.one_sheet.SheetRows`), searched rows alike;
+        this one is unchanged (a cache may hold it)."""
+        indices.setflags(write=False)
+        distances.setflags(write=False)
+        return WidenableNeighbours(self._points, indices, distances, k_max=self._k_max, tree=self._tree,
+                                   rank=self._rank, sheets=sheets)
 
     def take(self, k: int):
         self._check_k(k)
@@ -111,7 +110,8 @@ class WidenableNeighbours(Neighbours):
 
     def rows(self, centres: np.ndarray, k: int):
         self._check_k(k)
-        held_idx, held_dist = self._pair
+        pair, sheets = self._state()
+        held_idx, held_dist = pair
         if k <= held_idx.shape[1]:
             return held_idx[centres, :k], held_dist[centres, :k]
         centres = np.asarray(centres, dtype=np.int64)
@@ -122,9 +122,26 @@ class WidenableNeighbours(Neighbours):
             query_rows(self._points, self._tree, self._rank, centres[start:stop], dist[start:stop],
                        idx[start:stop], max(k, SEARCH_RADIUS_NODE), SEARCH_REACH)
         _self_first(idx, dist, centres)
-        if self._sheets is not None:
-            self._sheets.put(idx, dist, centres)
+        if sheets is not None:
+            sheets.put(idx, dist, pair, centres)
         return idx, dist
+
+    def whole_rows(self, centres):
+        """All ``k_max`` columns of the rows of ``centres``, which list their own sheet first
+        (:class:`core.one_sheet.SheetRows`): their held columns and the rest kept for them."""
+        pair, sheets = self._state()
+        if sheets is None:  # widened to k_max: all held
+            return self.rows(centres, self._k_max)
+        rows = sheets.slot[centres]
+        return (np.hstack((pair[0][centres], sheets.idx[rows])), np.hstack((pair[1][centres], sheets.dist[rows])))
+
+    def _state(self):
+        """The held rows and the :class:`core.one_sheet.SheetRows` beyond them, read as one
+        (:meth:`widen` replaces both)."""
+        if self._sheets is None:
+            return self._pair, None
+        with self._lock:
+            return self._pair, self._sheets
 
     def widen(self, k: int | None = None, *, progress=None):
         """Every row searched to ``k`` (default ``k_max``) neighbours, if fewer are held."""
@@ -136,11 +153,14 @@ class WidenableNeighbours(Neighbours):
                 idx = np.empty((n, k), dtype=self._pair[0].dtype)
                 dist = np.empty((n, k), dtype=np.float64)
                 _query_tree(self._points, self._tree, self._rank, idx, dist, Progress(progress))
-                if self._sheets is not None:
-                    self._sheets.put(idx, dist)
+                sheets = self._sheets
+                if sheets is not None:
+                    sheets.put(idx, dist, self._pair)
+                    sheets = sheets.beyond(k - self.width)  # the columns now held are dropped from it
                 idx.setflags(write=False)
                 dist.setflags(write=False)
                 object.__setattr__(self, "_pair", (idx, dist))
+                object.__setattr__(self, "_sheets", sheets)
             return self._pair
 
 

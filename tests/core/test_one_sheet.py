@@ -62,3 +62,56 @@ def test_the_result_keeps_the_plain_nearest():
     res = core.estimate(pts)
     plain = build_neighbours(pts, res.neighbours.k_max)
     np.testing.assert_array_equal(res.neighbours.indices, plain.indices)
+
+
+def test_a_held_graph_serves_the_own_sheet_rows_a_whole_one_does():
+    """A graph that holds 40 columns (k="auto") keeps only the columns beyond them of the rows
+    it reorders (core.one_sheet.SheetRows): served, searched and widened, every row is the
+    one the whole graph lists."""
+    from core.wide_neighbours import search_in_spatial_order
+
+    pts, _ = _two_planes(4, 0.2, n=3000)
+    held, _ = search_in_spatial_order(pts, 120, width=40)
+    whole, _ = search_in_spatial_order(pts, 120)
+    pts = held.points
+    fit_held, fit_whole = one_sheet.fit_graph(pts, held, 15), one_sheet.fit_graph(pts, whole, 15)
+    assert fit_held.width == 40 and fit_whole.width == 120 and held.width == 40  # the plain graph is unchanged
+    some = np.random.default_rng(0).choice(len(pts), 300, replace=False)
+    for k in (30, 40, 60, 120):
+        np.testing.assert_array_equal(fit_held.rows(some, k)[0], fit_whole.rows(some, k)[0])
+    fit_held.widen(70)  # the held columns grow: the rows beyond keep only the rest
+    assert fit_held.width == 70
+    np.testing.assert_array_equal(fit_held.take(70)[1], fit_whole.take(70)[1])
+    np.testing.assert_array_equal(fit_held.rows(some, 120)[0], fit_whole.rows(some, 120)[0])
+    np.testing.assert_array_equal(fit_held.indices, fit_whole.indices)
+    assert fit_held._sheets is None  # all held: nothing kept beside the graph
+
+
+@pytest.mark.parametrize("width", [40, None])
+def test_the_plain_nearest_are_served_from_the_own_sheet_graph(width):
+    """The estimate keeps one graph (core.plain_rows): the orientation, the border flags and
+    the result read the plain nearest through the own-sheet graph's permutation, row for row
+    what the plain search gave, held (k="auto") or whole."""
+    from core.wide_neighbours import search_in_spatial_order
+
+    pts, _ = _two_planes(4, 0.2, n=3000)
+    plain, _ = search_in_spatial_order(pts, 120, width=width)
+    truth, _ = search_in_spatial_order(pts, 120)
+    pts = plain.points
+    fit, served = one_sheet.graphs(pts, plain, 15)
+    assert served.width == fit.width and served.k_max == 120
+    moved = fit.take(30)[0] != truth.take(30)[0]
+    assert moved.any(axis=1).mean() > 0.5  # most rows are reordered for the fits
+    some = np.random.default_rng(1).choice(len(pts), 300, replace=False)
+    for k in (10, 15, 40):
+        np.testing.assert_array_equal(served.take(k)[0], truth.take(k)[0])
+        np.testing.assert_array_equal(served.take(k)[1], truth.take(k)[1])
+    for k in (15, 60, 120):
+        np.testing.assert_array_equal(served.rows(some, k)[0], truth.rows(some, k)[0])
+    fit.widen(70)
+    np.testing.assert_array_equal(served.take(70)[0], truth.take(70)[0])
+    np.testing.assert_array_equal(served.indices, truth.indices)
+    np.testing.assert_array_equal(served.distances, truth.distances)
+    drop = np.zeros(len(pts), dtype=bool)
+    drop[::7] = True
+    np.testing.assert_array_equal(served.take_without(20, drop)[0], truth.take_without(20, drop)[0])
