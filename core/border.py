@@ -28,6 +28,8 @@ from .neighbours import search_in_spatial_order
 #: empty side while the chance that random sampling leaves one inside is ~1e-3
 #: (measured: tests/core/test_border.py, random planes, noise 0 and 0.2 spacing).
 BORDER_K = 30
+#: rows per step of the border test (bounds its int64 copy of the graph)
+_ROWS = 131_072
 #: flag when the widest empty angle between neighbour directions exceeds this (degrees);
 #: at 30 random neighbours an interior gap this wide has a probability of ~2e-4
 GAP = 120.0
@@ -57,11 +59,11 @@ def border_flags(points, normals, idx):
     pts = np.ascontiguousarray(points, dtype=np.float64)
     nrm = np.ascontiguousarray(normals, dtype=np.float64)
     graph = np.asarray(idx)[:, :BORDER_K]  # a view: the kernel reads the columns in place
-    if graph.dtype != np.int64:
-        graph = graph.astype(np.int64)
     gap = np.empty(len(pts))
     reach = np.empty(len(pts))
-    kern.tangent_extent(pts, nrm, graph, N_DIRS, gap, reach)
+    for start in range(0, len(graph), _ROWS):  # int64 by steps: the whole graph's copy was 240 MB at 1M points
+        rows = slice(start, start + _ROWS)
+        kern.tangent_extent(pts, nrm, graph[rows].astype(np.int64, copy=False), N_DIRS, gap[rows], reach[rows], start)
     gap = np.degrees(gap)
     with np.errstate(invalid="ignore"):
         border = (gap > GAP) | (reach < REACH)
@@ -73,7 +75,7 @@ def border_of(points, normals, nb):
     :class:`core.Neighbours`), or from a search of their own when ``nb`` holds fewer (or is None)."""
     k = min(BORDER_K, len(points))
     if served_by(nb, len(points)):
-        return border_flags(points, normals, nb.take(k)[0])[0]
+        return border_flags(points, normals, nb.take_indices(k))[0]
     # e.g. an integer k < 30: one more search, the test is meaningless on fewer. In spatial
     # order (the same rows as build_neighbours, 5x faster at 100k points); each point's test
     # reads only its own row, so the flags are the same

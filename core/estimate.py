@@ -12,6 +12,7 @@ from typing import NamedTuple
 import numpy as np
 
 from . import degenerate, interop, one_sheet, stage_cache
+from .plain_rows import PlainNeighbours
 from ._progress import Progress
 from ._validate import MIN_POINTS, as_normals, as_points, masked_as_nan, word
 from .duplicates import CopiesNeighbours, Merged, NearCopies, expand, find_duplicates, near_copies
@@ -139,6 +140,8 @@ def estimate(
     best = refine(front.pts, front.init, front.outlier, front.fit_nb, front.scale, plan,
                   report.sub(0.7 if plan.auto else 0.45, 1.0))
     front = front._replace(scale=front.scale._replace(jets=None))  # merged into best: 86 MiB less at 1M points
+    if cache is None and isinstance(front.nb, PlainNeighbours):  # the fits are done: their graph made plain, read
+        front = front._replace(nb=front.nb.release(), fit_nb=None)  # without copies (-141 MiB at 1M, two sheets)
     best, confidence = settle_signs(front.pts, best, front.nb, plan, front.confidence)
     marks = flags(best.fit, front.scores, plan, front.reference, nb=front.nb, confidence=confidence)
     stages = front.order.to_caller(_reported((front.init, best, front.scale, marks)))
@@ -227,7 +230,7 @@ def prepare(pts, normals, plan, neighbours, report, *, cache=None, near=False, s
         init, repaired = run("initial", lambda: initial_normals(pts, fit_nb, plan, outlier, report)), None
     else:
         init, repaired = run("initial", lambda: given_normals(pts, normals, nb, plan))
-    init, confidence = run("orientation", lambda: orient_signs(pts, init, nb.take(plan.k_initial)[0], plan,
+    init, confidence = run("orientation", lambda: orient_signs(pts, init, nb.take_indices(plan.k_initial), plan,
                                                                 rank=order.order))
     report(0.45, "orientation")
 

@@ -56,6 +56,10 @@ class Neighbours:
         self._check_k(k)
         return self.indices[:, :k], self.distances[:, :k]
 
+    def take_indices(self, k: int) -> np.ndarray:
+        """The indices of :meth:`take` alone (a graph that builds its rows then skips the distances)."""
+        return self.take(k)[0]
+
     @property
     def width(self) -> int:
         """Columns held in memory: every row's first ``width`` neighbours are at hand

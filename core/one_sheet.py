@@ -205,7 +205,7 @@ def graphs(pts, nb, k) -> SheetGraphs | None:
     width = idx.shape[1]
     tail_idx = np.empty((len(centres), nb.k_max - width), dtype=idx.dtype)
     tail_dist = np.empty((len(centres), nb.k_max - width))
-    kind = np.uint16 if nb.k_max <= 1 << 16 else np.int64
+    kind = np.min_scalar_type(nb.k_max - 1)  # a byte per column up to 256 (56 MB at 1M points)
     plain = np.empty((len(centres), nb.k_max), dtype=kind)  # the plain row's j-th: column plain[r, j]
     for part, at, rows, rows_dist, perm in found.ordered_in_steps(pts, lambda c: nb.rows(c, nb.k_max), centres):
         idx[at], dist[at] = rows[:, :width], rows_dist[:, :width]

@@ -4,7 +4,7 @@ Where a point's row lists its own sheet first, the fits read that graph and the 
 the sign checks, the border flags and the result read the plain nearest. Both graphs held
 side by side were 480 MB more at 1M points of two sheets (2.4 GB peak): the plain rows are
 a permutation of the reordered ones, so :class:`PlainNeighbours` keeps that permutation
-(2 bytes per column of a reordered row) and serves the plain rows from the own-sheet graph.
+(a byte per column of a reordered row up to 256 columns) and serves the plain rows from the own-sheet graph.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ _CHUNK = 65_536
 class PlainNeighbours(Neighbours):
     """The plain nearest neighbours of the points of ``fit`` (a graph some of whose rows list
     the point's own sheet first): the rows of the points ``centres`` (M,) are read from
-    ``fit``'s whole row through ``plain`` (M, k_max) uint16, the column of ``fit``'s row that
+    ``fit``'s whole row through ``plain`` (M, k_max) unsigned ints, the column of ``fit``'s row that
     is the plain row's j-th; the other rows are ``fit``'s. ``whole(centres)`` gives those
     whole rows of ``fit``; ``slot`` (N,) is each point's row of ``plain`` (-1: none)."""
 
@@ -81,6 +81,14 @@ class PlainNeighbours(Neighbours):
         self._put_back(idx, dist, np.arange(len(self._centres)), self._centres)
         return idx, dist
 
+    def take_indices(self, k: int) -> np.ndarray:
+        """The indices of :meth:`take` alone (the orientation, the sign checks and the border
+        flags read no distance: 8 of the 12 bytes per entry not copied)."""
+        self._check_k(k)
+        idx = np.array(self._fit.take(k)[0])
+        self._put_back(idx, None, np.arange(len(self._centres)), self._centres)
+        return idx
+
     def rows(self, centres: np.ndarray, k: int):
         self._check_k(k)
         idx, dist = (np.array(a) for a in self._fit.rows(centres, k))
@@ -90,11 +98,32 @@ class PlainNeighbours(Neighbours):
         return idx, dist
 
     def _put_back(self, idx, dist, mine, at) -> None:
-        """Rows ``at`` of ``idx`` and ``dist``: the plain rows ``mine`` (rows of ``plain``)."""
+        """Rows ``at`` of ``idx`` and ``dist`` (None: not wanted): the plain rows ``mine`` (rows of ``plain``)."""
         k = idx.shape[1]
         for start in range(0, len(mine), _CHUNK):
             part, to = mine[start:start + _CHUNK], at[start:start + _CHUNK]
             whole_idx, whole_dist = self._whole(self._centres[part])
             cols = self._plain[part, :k].astype(np.intp)
             idx[to] = np.take_along_axis(whole_idx, cols, axis=1)
-            dist[to] = np.take_along_axis(whole_dist, cols, axis=1)
+            if dist is not None:
+                dist[to] = np.take_along_axis(whole_dist, cols, axis=1)
+
+    def release(self):
+        """The plain graph made in place of the fits' one once they are done (``fit`` is then
+        the plain nearest and must not be fitted on again), where ``fit`` holds every
+        column (its arrays are :func:`core.one_sheet.graphs`' own copies or searches): the
+        permutation and the copies of the rows served are then no longer needed. Otherwise self."""
+        fit = self._fit
+        if fit.width < fit.k_max:
+            return self
+        idx, dist = fit.widen()
+        for a in (idx, dist):
+            a.setflags(write=True)
+        for start in range(0, len(self._centres), _CHUNK):
+            part = slice(start, start + _CHUNK)
+            rows, cols = self._centres[part], self._plain[part].astype(np.intp)
+            idx[rows] = np.take_along_axis(idx[rows], cols, axis=1)
+            dist[rows] = np.take_along_axis(dist[rows], cols, axis=1)
+        for a in (idx, dist):
+            a.setflags(write=False)
+        return fit

@@ -47,8 +47,8 @@ def refine(pts, initial: Initial, outlier, nb, sc: Scale, plan, report) -> Refin
         seen = fit.valid if judged is None else fit.valid & judged
         change = passes.mean_turn_deg(fit.normals, nrm, seen) if rule.measures else None
         keep, more = rule.step(p, change)
-        if keep:
-            before, best = best, Refined(complete(), nrm, p)
+        if keep:  # the first fit is kept aside for the drift rule (pass 2 undone) only: 107 MB at 1M points
+            before, best = best if p == 1 else None, Refined(complete(), nrm, p)
         elif best.passes_run == 1:  # pass 2 undone, fitted everywhere: where it repeats pass 1's change, drift
             pool = nb.take(min(DRIFT_POOL, plan.k_search))[0]
             best = best._replace(fit=drift.step_back(before.fit, best.fit, complete(), pool))
@@ -197,4 +197,4 @@ def wider_ring(nb, plan):
     ``plan.k_search`` it searches (15 with k=15: one more search of 30 cost NR k=15 on 100k
     points 1.3x its CPU time); set by the plan alone, so a cache's wider graph gives the
     same signs."""
-    return nb.take(min(RESETTLE_K, plan.k_search))[0]  # k_search <= N, and >= ORIENT_K unless k is smaller
+    return nb.take_indices(min(RESETTLE_K, plan.k_search))  # k_search <= N, and >= ORIENT_K unless k is smaller

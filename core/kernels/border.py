@@ -12,14 +12,15 @@ from ._base import OPTS as _OPTS
 
 
 @njit(**_OPTS, parallel=True)
-def tangent_extent(points, normals, idx, n_dirs, gap, reach):
+def tangent_extent(points, normals, idx, n_dirs, gap, reach, start):
     """Per point, from its neighbours projected on its tangent plane:
 
     - ``gap``: the largest angle between consecutive neighbour directions (radians);
     - ``reach``: the smallest, over ``n_dirs`` directions u, of the farthest neighbour
       offset along u, divided by the farthest neighbour distance: ~1 inside a surface, and
       at most d / r at distance d from a border (nothing lies beyond it).
-    NaN where the point has no normal or no distinct neighbour.
+    NaN where the point has no normal or no distinct neighbour. Row r of ``idx``, ``gap`` and
+    ``reach`` is point ``start + r`` (a step of the whole cloud's rows).
     """
     n, k = idx.shape
     dirs = np.empty((n_dirs, 2))  # the same directions for every point: computed once
@@ -28,15 +29,15 @@ def tangent_extent(points, normals, idx, n_dirs, gap, reach):
     for blk in prange((n + BLOCK - 1) // BLOCK):
         scratch = np.empty((3, k))  # xs, ys, angles: once per block, not per point
         for i in range(blk * BLOCK, min(n, (blk + 1) * BLOCK)):
-            _extent(points, normals, idx, i, dirs, scratch, gap, reach)
+            _extent(points, normals, idx, i, start + i, dirs, scratch, gap, reach)
 
 
 @njit(**_OPTS)
-def _extent(points, normals, idx, i, dirs, scratch, gap, reach):
-    """:func:`tangent_extent` at point i."""
+def _extent(points, normals, idx, i, p, dirs, scratch, gap, reach):
+    """:func:`tangent_extent` at point ``p``, row ``i``."""
     gap[i] = math.nan
     reach[i] = math.nan
-    nx, ny, nz = normals[i, 0], normals[i, 1], normals[i, 2]
+    nx, ny, nz = normals[p, 0], normals[p, 1], normals[p, 2]
     if not (math.isfinite(nx) and math.isfinite(ny) and math.isfinite(nz)):
         return
     # tangent basis: t1 = n x (axis least aligned with n), t2 = n x t1
@@ -53,9 +54,9 @@ def _extent(points, normals, idx, i, dirs, scratch, gap, reach):
     r = 0.0
     for c in range(idx.shape[1]):
         j = idx[i, c]
-        dx = points[j, 0] - points[i, 0]
-        dy = points[j, 1] - points[i, 1]
-        dz = points[j, 2] - points[i, 2]
+        dx = points[j, 0] - points[p, 0]
+        dy = points[j, 1] - points[p, 1]
+        dz = points[j, 2] - points[p, 2]
         x = dx * t1x + dy * t1y + dz * t1z
         y = dx * t2x + dy * t2y + dz * t2z
         rr = math.sqrt(x * x + y * y)

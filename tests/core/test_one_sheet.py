@@ -106,6 +106,7 @@ def test_the_plain_nearest_are_served_from_the_own_sheet_graph(width):
     for k in (10, 15, 40):
         np.testing.assert_array_equal(served.take(k)[0], truth.take(k)[0])
         np.testing.assert_array_equal(served.take(k)[1], truth.take(k)[1])
+        np.testing.assert_array_equal(served.take_indices(k), truth.take(k)[0])
     for k in (15, 60, 120):
         np.testing.assert_array_equal(served.rows(some, k)[0], truth.rows(some, k)[0])
     fit.widen(70)
@@ -115,3 +116,17 @@ def test_the_plain_nearest_are_served_from_the_own_sheet_graph(width):
     drop = np.zeros(len(pts), dtype=bool)
     drop[::7] = True
     np.testing.assert_array_equal(served.take_without(20, drop)[0], truth.take_without(20, drop)[0])
+    # the fits done, their graph is turned into the plain one in place (no copies served any more)
+    plain_again = served.release()
+    assert plain_again is fit
+    np.testing.assert_array_equal(plain_again.take(120)[0], truth.take(120)[0])
+    np.testing.assert_array_equal(plain_again.take(120)[1], truth.take(120)[1])
+
+
+def test_a_graph_short_of_columns_is_not_turned_plain():
+    from core.wide_neighbours import search_in_spatial_order
+
+    pts, _ = _two_planes(4, 0.0, n=3000)
+    plain, _ = search_in_spatial_order(pts, 120, width=40)
+    fit, served = one_sheet.graphs(plain.points, plain, 15)
+    assert served.release() is served and fit.width == 40  # the rows beyond 40 are not all held
