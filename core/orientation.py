@@ -42,6 +42,13 @@ ORIENT_K = 10
 #: every one of them and were the only voters (the sphere faced inward, H = -1); not "beyond
 #: the largest": a single outlier far from a torus was then the only voter.
 VOTE_BINS = 64
+#: points farther than this many times the RMS distance of the points from the cloud's centre
+#: are strays to the outward vote (:func:`_global_signs`): they move no centre and cast no
+#: vote. One point 1e6 object sizes away moved the centre 100 sizes off an ellipsoid, so that
+#: all its points lay at one distance (one bin of :func:`reach_histogram`) and all of them
+#: voted: 2 of 8 directions of the stray point turned it inward, with confidence 1. A point
+#: is a stray only while the points that far make up less than 1 / STRAY_RMS^2 of the cloud.
+STRAY_RMS = 10.0
 #: a part whose mean (sign-propagated) normal is longer than this is an open sheet, not a
 #: closed surface (whose outward normals sum to zero); see :func:`floors_up`. Denser sampling
 #: on one side of a closed object lengthens its mean (a box with its top 5x as dense: 0.4).
@@ -248,15 +255,19 @@ def _global_signs(points, normals, parts, mode, sign, rank):
         vote = np.zeros(n_comp)
         vote[lab[first]] = normals[have[first], 2]
     else:
-        pts = points[rows]
+        pts, nrm = points[rows], normals[rows]
+        sums, counts = normal_sums(nrm, group[lab], n_comp), np.bincount(group[lab], minlength=n_comp)
         rel = pts - pts.mean(axis=0)
         square = np.einsum("ij,ij->i", rel, rel)
+        kept = square <= STRAY_RMS ** 2 * square.mean()
+        if not kept.all():  # stray points far off: not in the centre, nor the distances, nor the vote
+            rel = pts[kept] - pts[kept].mean(axis=0)
+            square, lab, nrm = np.einsum("ij,ij->i", rel, rel), lab[kept], nrm[kept]
         rms = np.sqrt(np.bincount(lab, square, n_comp) / np.maximum(np.bincount(lab, minlength=n_comp), 1))
         reach = outer_reach(reach_histogram(np.sqrt(square), rms, lab, n_comp)) * rms
-        far, facing = far_facing(rel, normals[rows], reach[lab])
-        vote = np.bincount(group, np.bincount(lab[far], facing, n_comp), n_comp)
-        lab = group[lab]
-        vote = floors_up(vote, normal_sums(normals[rows], lab, n_comp), np.bincount(lab, minlength=n_comp))
+        far, facing = far_facing(rel, nrm, reach[lab])
+        vote = floors_up(np.bincount(group, np.bincount(lab[far], facing, n_comp), n_comp), sums, counts)
+        lab = group[labels[rows]]
     sign[have[vote[lab] < 0]] *= -1.0
 
 

@@ -16,7 +16,7 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import breadth_first_order, connected_components, minimum_spanning_tree
 
-from ..orientation import VOTE_BINS, far_facing, floors_up, normal_sums, outer_reach, reach_histogram
+from ..orientation import STRAY_RMS, VOTE_BINS, far_facing, floors_up, normal_sums, outer_reach, reach_histogram
 from .store import TileStore
 
 _CHUNK = 1_000_000
@@ -119,24 +119,49 @@ def _outward(store, nodes, offset, flat, part, parity) -> np.ndarray:
     weighted by how squarely its normal faces away from the centre; open level parts face up
     (:func:`core.orientation.floors_up`, on their normals summed over the tiles)."""
     n_parts = int(part.max()) + 1
-    centre = flat["sum"].sum(axis=0) / max(float(flat["count"].sum()), 1.0)
-    square = np.zeros(n_parts)
-    for chunk, node in _own_chunks(store, nodes, offset):
-        square += np.bincount(part[node], np.sum((chunk["xyz"] - centre) ** 2, axis=1), n_parts)
     counts = np.bincount(part, flat["count"], n_parts)
-    rms = np.sqrt(square / np.maximum(counts, 1))
+    kept, centre = _strays_out(store, nodes, offset, flat["sum"].sum(axis=0) / max(float(counts.sum()), 1.0))
+    square, kept_counts = np.zeros(n_parts), np.zeros(n_parts)
+    for chunk, node, k in kept():
+        square += np.bincount(part[node[k]], np.sum((chunk["xyz"][k] - centre) ** 2, axis=1), n_parts)
+        kept_counts += np.bincount(part[node[k]], minlength=n_parts)
+    rms = np.sqrt(square / np.maximum(kept_counts, 1))
     hist = np.zeros((n_parts, VOTE_BINS), dtype=np.int64)
-    for chunk, node in _own_chunks(store, nodes, offset):
-        hist += reach_histogram(np.linalg.norm(chunk["xyz"] - centre, axis=1), rms, part[node], n_parts)
+    for chunk, node, k in kept():
+        hist += reach_histogram(np.linalg.norm(chunk["xyz"][k] - centre, axis=1), rms, part[node[k]], n_parts)
     reach = outer_reach(hist) * rms
     vote = np.zeros(n_parts)
     sums = np.zeros((n_parts, 3))
-    for chunk, node in _own_chunks(store, nodes, offset):
-        far, facing = far_facing(chunk["xyz"] - centre, chunk["n"], reach[part[node]])
-        vote += np.bincount(part[node[far]], facing * parity[node[far]], n_parts)
+    for chunk, node, k in kept():
+        far, facing = far_facing(chunk["xyz"][k] - centre, chunk["n"][k], reach[part[node[k]]])
+        voters = node[k][far]
+        vote += np.bincount(part[voters], facing * parity[voters], n_parts)
         sums += normal_sums(chunk["n"] * parity[node][:, None], part[node], n_parts)
     vote = floors_up(vote, sums, counts)
     return np.where(vote[part] < 0, -1.0, 1.0)
+
+
+def _strays_out(store, nodes, offset, centre):
+    """``(kept, centre)``: the chunks of :func:`_own_chunks` with a mask of the points that
+    are no strays (:data:`core.orientation.STRAY_RMS`), and their centre, as
+    :func:`core.orientation.orient` finds them in memory."""
+    square, n = 0.0, 0
+    for chunk, _ in _own_chunks(store, nodes, offset):
+        square += float(np.sum((chunk["xyz"] - centre) ** 2))
+        n += len(chunk)
+    limit = STRAY_RMS ** 2 * square / max(n, 1)
+
+    def kept():
+        for chunk, node in _own_chunks(store, nodes, offset):
+            yield chunk, node, np.sum((chunk["xyz"] - centre) ** 2, axis=1) <= limit
+
+    total, m = np.zeros(3), 0
+    for chunk, _, k in kept():
+        total += chunk["xyz"][k].sum(axis=0)
+        m += int(k.sum())
+    if m == n:  # none: the centre as it was (the in-memory run does not recompute it either)
+        return kept, centre
+    return kept, total / max(m, 1)
 
 
 def _own_chunks(store, nodes, offset):

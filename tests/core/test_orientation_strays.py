@@ -21,6 +21,16 @@ _STRAYS = {
 }
 
 
+def _far_off(seed, radii=1e6):
+    d = np.random.default_rng(seed).normal(size=3)
+    return (d / np.linalg.norm(d) * radii)[None, :]
+
+
+# one point 1e6 radii off moved the centre 500 radii: every point of the sphere at one distance
+# (one histogram bin), all of them voted, and these two directions (of 12) turned it inward
+_STRAYS.update({"one point 1e6 radii off, a": _far_off(9), "one point 1e6 radii off, b": _far_off(10)})
+
+
 @pytest.mark.parametrize("k", [15, "auto"])
 @pytest.mark.parametrize("strays", sorted(_STRAYS))
 @pytest.mark.parametrize("move", ["as is", "translated", "scaled"])
@@ -33,12 +43,14 @@ def test_stray_points_leave_a_sphere_facing_outward(strays, k, move):
     assert np.median(res.mean[:2000]) * scale == pytest.approx(1.0, rel=0.06)
 
 
-def test_tiles_vote_as_the_whole_cloud(tmp_path):
-    pts = np.vstack([_SPHERE.points, _STRAYS["two points 10 radii off"]])
+@pytest.mark.parametrize("strays", ["two points 10 radii off", "one point 1e6 radii off, a"])
+def test_tiles_vote_as_the_whole_cloud(tmp_path, strays):
+    pts = np.vstack([_SPHERE.points, _STRAYS[strays]])
     mem = core.estimate(pts, k=15)
     estimate_tiled(pts, tmp_path / "out.ply", k=15, tile_points=500, workers=0)
     f = read_cloud(tmp_path / "out.ply")
     np.testing.assert_array_equal(np.sign(np.einsum("ij,ij->i", f.normals, mem.normals)[mem.valid]), 1.0)
+    assert (np.einsum("ij,ij->i", mem.normals[:2000], _SPHERE.normals) > 0).all()
 
 
 def _street(seed=0):
