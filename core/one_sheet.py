@@ -241,6 +241,6 @@ def _judged(pts, nb, k):
             for _, at, rows, rows_dist, _ in found.ordered_in_steps(pts, lambda c: (idx[c], dist[c]), centres):
                 mine[at], mine_dist[at] = rows[:, :k], rows_dist[:, :k]
             nrm, ok = pca_normals(pts, mine, mine_dist)
-    if found is None or len(centres) < SHEET_SHARE * len(pts):  # a copy of the graph (480 MB at 1M) for a few noisy rows
+    if found is None or len(centres) < SHEET_SHARE * len(pts):  # a copy (480 MB at 1M) for a few noisy rows
         return None
     return found, centres

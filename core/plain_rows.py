@@ -4,7 +4,9 @@ Where a point's row lists its own sheet first, the fits read that graph and the 
 the sign checks, the border flags and the result read the plain nearest. Both graphs held
 side by side were 480 MB more at 1M points of two sheets (2.4 GB peak): the plain rows are
 a permutation of the reordered ones, so :class:`PlainNeighbours` keeps that permutation
-(a byte per column of a reordered row up to 256 columns) and serves the plain rows from the own-sheet graph.
+(a byte per column of a reordered row up to 256 columns) and serves the plain rows from the
+own-sheet graph; once the fits are done, :meth:`PlainNeighbours.release` turns that graph
+into the plain one in place.
 """
 
 from __future__ import annotations
@@ -22,8 +24,8 @@ _CHUNK = 65_536
 class PlainNeighbours(Neighbours):
     """The plain nearest neighbours of the points of ``fit`` (a graph some of whose rows list
     the point's own sheet first): the rows of the points ``centres`` (M,) are read from
-    ``fit``'s whole row through ``plain`` (M, k_max) unsigned ints, the column of ``fit``'s row that
-    is the plain row's j-th; the other rows are ``fit``'s. ``whole(centres)`` gives those
+    ``fit``'s whole row through ``plain`` (M, k_max) unsigned ints, the column of ``fit``'s
+    row that is the plain row's j-th; the other rows are ``fit``'s. ``whole(centres)`` gives those
     whole rows of ``fit``; ``slot`` (N,) is each point's row of ``plain`` (-1: none)."""
 
     def __init__(self, fit, centres, plain, slot, whole):
@@ -99,6 +101,8 @@ class PlainNeighbours(Neighbours):
 
     def _put_back(self, idx, dist, mine, at) -> None:
         """Rows ``at`` of ``idx`` and ``dist`` (None: not wanted): the plain rows ``mine`` (rows of ``plain``)."""
+        if self._plain is None:  # released: ``fit`` holds the plain rows
+            return
         k = idx.shape[1]
         for start in range(0, len(mine), _CHUNK):
             part, to = mine[start:start + _CHUNK], at[start:start + _CHUNK]
@@ -126,4 +130,5 @@ class PlainNeighbours(Neighbours):
             dist[rows] = np.take_along_axis(dist[rows], cols, axis=1)
         for a in (idx, dist):
             a.setflags(write=False)
+        object.__setattr__(self, "_plain", None)  # this view now serves ``fit`` as it is
         return fit

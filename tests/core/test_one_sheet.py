@@ -121,6 +121,8 @@ def test_the_plain_nearest_are_served_from_the_own_sheet_graph(width):
     assert plain_again is fit
     np.testing.assert_array_equal(plain_again.take(120)[0], truth.take(120)[0])
     np.testing.assert_array_equal(plain_again.take(120)[1], truth.take(120)[1])
+    np.testing.assert_array_equal(served.take(40)[0], truth.take(40)[0])  # the view still serves it right
+    np.testing.assert_array_equal(served.rows(some, 120)[0], truth.rows(some, 120)[0])
 
 
 def test_a_graph_short_of_columns_is_not_turned_plain():
