@@ -37,10 +37,7 @@ surfaces 2-30x better than NR at the same k). Elsewhere NR fits a cubic normal f
 chosen k (at least the noise-set initial scale) and refines it: with noise it averages
 better than the jet (1.2-1.8x). Quiet but sparse points, whose 15 neighbours reach over
 0.4 of a radius of curvature (:data:`JET_REACH`), or whose jet tilts from the initial normal
-(:data:`JET_TILT`: three grid lines do not determine a cubic), use NR with the NF rule below,
-on at most the jet's own k: quiet data have no noise to average, and a normal field on more
-bends over the surface (a ripple of 32 spacings: NR on the NF rule's 80-226 neighbours had
-normals 7.6 degrees off, 31 % beyond 10; on the jet's 20-28, 5.5 and 1.5 %).
+(:data:`JET_TILT`: three grid lines do not determine a cubic), use NR with the NF rule below.
 ``res.k_point`` and ``res.degree_point`` hold the choice. (Values and reasons of the
 constants: :mod:`core.tuning`.)
 
@@ -382,8 +379,8 @@ def choose_model(points, normals, nb, has_normal, ks, report):
     Returns ``(k, on_jet, quiet, jets, degree)``: jets (aligned with ``normals``, of ``degree`` per
     point, see :func:`choose_jets`) are kept where the noise is below :data:`JET_QUIET`, the jet
     does not reach too far (:data:`JET_REACH`) and its normal is within :data:`JET_TILT` of ``normals``;
-    elsewhere NR fits on k neighbours, k by the NF rule (:func:`choose_k`, at most the jet's k)
-    where the data are quiet but too sparse for the jet. A cloud too small for a cubic jet or for the
+    elsewhere NR fits on k neighbours, k by the NF rule (:func:`choose_k`) where the data
+    are quiet but too sparse for the jet. A cloud too small for a cubic jet or for the
     noise measurement (fewer than ``NOISE_KS[-1]`` neighbours) keeps NR on ``ks[0]`` everywhere.
     """
     n = len(points)
@@ -397,7 +394,7 @@ def choose_model(points, normals, nb, has_normal, ks, report):
     tilt = np.abs(np.einsum("ij,ij->i", jets[0], np.nan_to_num(normals)))  # cos to the initial normal (NaN: no jet)
     on_jet = quiet & (reach <= JET_REACH) & (tilt >= np.cos(np.radians(JET_TILT)))
     nf_rule = quiet & ~on_jet
-    if nf_rule.any():  # too few points per radius of curvature for a position jet: NF's own rule,
+    if nf_rule.any():  # too few points per radius of curvature for a position jet: NF's own rule
         k_nf = choose_k(points, normals, nb, nf_rule, ks, AUTO_DEGREE, lambda *a: None)
-        k = np.where(nf_rule, np.minimum(k_nf, k), k)  # no wider than the jet's (quiet: nothing to average)
+        k = np.where(nf_rule, k_nf, k)
     return k, on_jet, quiet, aligned_jets(jets, normals), degree
