@@ -106,3 +106,30 @@ def test_the_plan_searches_as_far_as_the_largest_jet(n):
     p = core.plan(n, k="auto")
     jks = [k for k in scale.jet_candidates(n) if k <= p.candidates[-1]]
     assert jks and max(jks) <= p.k_search and p.k_search == p.candidates[-1]
+
+
+def _ripple(x, y, a=0.057, w=17.5):
+    """z = a sin(wx) sin(wy): at 8000 points a wavelength of 32 spacings and slopes up to 1,
+    curvature changing sign every 8 spacings (the sweep's fast ripple)."""
+    sx, cx, sy, cy = np.sin(w * x), np.cos(w * x), np.sin(w * y), np.cos(w * y)
+    return (a * sx * sy, a * w * cx * sy, a * w * sx * cy, -a * w * w * sx * sy, a * w * w * cx * cy,
+            -a * w * w * sx * sy)
+
+
+@pytest.mark.xfail(strict=True, reason="open: quiet points whose jet is refused take the NF rule's wide k")
+def test_quiet_points_off_the_jet_stay_small_where_the_surface_ripples():
+    """Noise-free, a point whose jet is not kept (its 15 nearest reach 0.4 of a radius of
+    curvature, or its jet leans off a blurred initial normal) is fitted by NR on the NF rule's
+    k: on a ripple 80-226 neighbours, whose normal field is off by 7.6 degrees (median), 31 %
+    of the normals by more than 10. Capping it at the jet's k met this (1.5 %, H 0.093) but
+    broke the floor under a scanner (test_scan_lines) and the pose invariance of the scale."""
+    s = shapes._graph_sample("ripple", _ripple, 8000, np.random.default_rng(0))
+    res = core.estimate(s.points)
+    use = s.interior & res.valid
+    off = np.degrees(np.arccos(np.clip(np.abs(np.einsum("ij,ij->i", res.normals, s.normals)), 0, 1)))[use]
+    assert np.mean(off > 10) < 0.05  # 0.31; 0.015 with the cap
+    assert np.percentile(res.k_point[use], 90) <= 40  # 226
+    h = 0.5 * (s.k1 + s.k2)
+    scale_h = np.sqrt(np.mean(h[use] ** 2))
+    # 0.130; 0.093 with the cap; the paper's k = 15: 0.19; a cubic jet on 15: 0.105
+    assert np.median(np.abs(res.mean - h)[use]) < 0.11 * scale_h
