@@ -266,7 +266,10 @@ def _global_signs(points, normals, parts, mode, sign, rank):
         rms = np.sqrt(np.bincount(lab, square, n_comp) / np.maximum(np.bincount(lab, minlength=n_comp), 1))
         reach = outer_reach(reach_histogram(np.sqrt(square), rms, lab, n_comp)) * rms
         far, facing = far_facing(rel, nrm, reach[lab])
-        vote = floors_up(np.bincount(group, np.bincount(lab[far], facing, n_comp), n_comp), sums, counts)
+        grp = group[lab]
+        beside = centre_beside(sums, normal_sums(rel, grp, n_comp), np.bincount(grp, square, n_comp),
+                               np.bincount(grp, minlength=n_comp))
+        vote = floors_up(np.bincount(group, np.bincount(lab[far], facing, n_comp), n_comp), sums, counts, beside)
         lab = group[labels[rows]]
     sign[have[vote[lab] < 0]] *= -1.0
 
@@ -277,19 +280,39 @@ def normal_sums(normals, part, n_parts) -> np.ndarray:
     return np.stack([np.bincount(part, normals[:, a], n_parts) for a in range(3)], axis=1)
 
 
-def floors_up(vote, sums, counts) -> np.ndarray:
+def floors_up(vote, sums, counts, beside=None) -> np.ndarray:
     """The outward ``vote`` per part, except for open sheets that lie mostly level (a
-    ground, a floor with things on it, terrain): their vote is their mean normal's z, so they
+    ground, a floor with things on it, terrain) with the cloud's centre ``beside`` them
+    (:func:`centre_beside`; default: every part): their vote is their mean normal's z, so they
     face up. A closed surface's outward normals sum to zero (the divergence theorem); a part
     whose mean normal is longer than :data:`OPEN_SHARE` is open, has no inside, and its
     "outward" side is decided by how the cloud's centre sits above or below it: a street
     scan's ground (objects lift the centre above it) faced down at 99.9 % of its points.
-    Level: the mean normal within 45 degrees of vertical (a facade keeps the vote)."""
+    Level: the mean normal within 45 degrees of vertical (a facade keeps the vote). A small
+    level patch far from the centre keeps its vote: a sphere sampled in 500 separate clumps
+    had those near its south pole face up, inward (8.8 % of its points)."""
     with np.errstate(invalid="ignore", divide="ignore"):
         mean = sums / np.maximum(counts, 1)[:, None]
     length = np.linalg.norm(mean, axis=1)
     level = (length > OPEN_SHARE) & (np.abs(mean[:, 2]) >= np.cos(np.radians(45.0)) * length)
+    if beside is not None:
+        level &= beside
     return np.where(level, mean[:, 2], vote)
+
+
+def centre_beside(sums, offsets, squares, counts) -> np.ndarray:
+    """(n_parts,) bool: the cloud's centre lies beside each part rather than off its plane,
+    nearer to the plane (of the part's mean normal ``sums``, through its centroid) than the
+    part's RMS radius. From sums over the part's points of their positions relative to the
+    centre (``offsets``), of their squared distances from it (``squares``) and ``counts``: the
+    radius about the centroid by the parallel axis theorem, so tiles can sum them too."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        n = np.maximum(counts, 1)[:, None]
+        centroid = offsets / n
+        radius2 = squares / n[:, 0] - np.einsum("ij,ij->i", centroid, centroid)
+        unit = sums / np.linalg.norm(sums, axis=1, keepdims=True)
+        off_plane = np.abs(np.einsum("ij,ij->i", np.nan_to_num(unit), centroid))
+    return off_plane * off_plane < np.maximum(radius2, 0.0)
 
 
 def reach_histogram(dist, rms, lab, n_comp) -> np.ndarray:

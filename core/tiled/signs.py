@@ -16,7 +16,8 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import breadth_first_order, connected_components, minimum_spanning_tree
 
-from ..orientation import STRAY_RMS, VOTE_BINS, far_facing, floors_up, normal_sums, outer_reach, reach_histogram
+from ..orientation import (STRAY_RMS, VOTE_BINS, centre_beside, far_facing, floors_up, normal_sums, outer_reach,
+                           reach_histogram)
 from .store import TileStore
 
 _CHUNK = 1_000_000
@@ -121,10 +122,11 @@ def _outward(store, nodes, offset, flat, part, parity) -> np.ndarray:
     n_parts = int(part.max()) + 1
     counts = np.bincount(part, flat["count"], n_parts)
     kept, centre = _strays_out(store, nodes, offset, flat["sum"].sum(axis=0) / max(float(counts.sum()), 1.0))
-    square, kept_counts = np.zeros(n_parts), np.zeros(n_parts)
+    square, kept_counts, offsets = np.zeros(n_parts), np.zeros(n_parts), np.zeros((n_parts, 3))
     for chunk, node, k in kept():
         square += np.bincount(part[node[k]], np.sum((chunk["xyz"][k] - centre) ** 2, axis=1), n_parts)
         kept_counts += np.bincount(part[node[k]], minlength=n_parts)
+        offsets += normal_sums(chunk["xyz"][k] - centre, part[node[k]], n_parts)
     rms = np.sqrt(square / np.maximum(kept_counts, 1))
     hist = np.zeros((n_parts, VOTE_BINS), dtype=np.int64)
     for chunk, node, k in kept():
@@ -137,7 +139,7 @@ def _outward(store, nodes, offset, flat, part, parity) -> np.ndarray:
         voters = node[k][far]
         vote += np.bincount(part[voters], facing * parity[voters], n_parts)
         sums += normal_sums(chunk["n"] * parity[node][:, None], part[node], n_parts)
-    vote = floors_up(vote, sums, counts)
+    vote = floors_up(vote, sums, counts, centre_beside(sums, offsets, square, kept_counts))
     return np.where(vote[part] < 0, -1.0, 1.0)
 
 
