@@ -7,7 +7,7 @@ import math
 import re
 import sys
 
-from PySide6.QtGui import QValidator
+from PySide6.QtGui import QStandardItemModel, QValidator
 from PySide6.QtWidgets import QCheckBox, QComboBox, QDoubleSpinBox, QFormLayout, QHBoxLayout, QWidget
 
 from ..fields import FIELDS
@@ -65,7 +65,11 @@ class FieldPanel(QWidget):
     def __init__(self, state, parent=None):
         super().__init__(parent)
         self._state = state
+        # the combo's model, held from here: fetched with combo.model() it once came back as a
+        # stale wrapper of another, deleted object (a QSurface) at the same address
+        self._items = QStandardItemModel(self)
         self.combo = QComboBox()
+        self.combo.setModel(self._items)
         for name, spec in FIELDS.items():
             self.combo.addItem(spec.title, name)
         self.auto = QCheckBox("Robust")
@@ -140,9 +144,8 @@ class FieldPanel(QWidget):
 
     def set_available(self, names) -> None:
         """Grey out fields the current cloud cannot provide (e.g. errors without truth)."""
-        model = self.combo.model()
         for row in range(self.combo.count()):
-            item = model.item(row)
+            item = self._items.item(row)
             item.setEnabled(self.combo.itemData(row) in names)
         if self.combo.currentData() not in names:
             self.combo.setToolTip("This field is not available for the current cloud")

@@ -9,6 +9,7 @@ becomes the viewpoint (a tuple, so the request stays hashable).
 from __future__ import annotations
 
 from PySide6.QtCore import Qt
+from PySide6.QtGui import QStandardItemModel
 from PySide6.QtWidgets import QComboBox
 
 from ..presenter import orientation_text
@@ -36,6 +37,8 @@ class OrientationCombo(QComboBox):
 
     def __init__(self, state, camera_position, parent=None):
         super().__init__(parent)
+        self._items = QStandardItemModel(self)  # held here: see FieldPanel (a stale wrapper from model())
+        self.setModel(self._items)
         self._state = state
         self._camera_position = camera_position
         for label, value, tooltip in CHOICES:
@@ -71,7 +74,7 @@ class OrientationCombo(QComboBox):
         index = self.findData(VIEW if isinstance(value, tuple) else value)
         keep = self.findData("keep")
         with blocked(self):
-            self.model().item(keep).setEnabled(self.keep_allowed() or value == "keep")
+            self._items.item(keep).setEnabled(self.keep_allowed() or value == "keep")
             self.setCurrentIndex(max(index, 0))
         view = self.findData(VIEW)
         tip = CHOICES[view][2] + (f"\nNow: {orientation_text(value)}" if isinstance(value, tuple) else "")
