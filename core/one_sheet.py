@@ -188,14 +188,15 @@ def fit_graph(pts, nb, k):
     """The graph ``nb`` with the rows that list another sheet among their first
     :data:`core.tuning.SEARCH_WIDTH` listing their own sheet first (over all ``k_max``
     columns), as a new graph (``nb`` is not modified: a cache may hold it); None where fewer
-    than :data:`SHEET_SHARE` of the rows do (:func:`graphs`)."""
-    made = graphs(pts, nb, k)
+    than :data:`SHEET_SHARE` of the rows do (:func:`graphs`, without the plain view: the
+    tiles' pre-pass keeps ``nb``)."""
+    made = graphs(pts, nb, k, plain=False)
     return None if made is None else made.fit
 
 
-def graphs(pts, nb, k) -> SheetGraphs | None:
-    """:func:`fit_graph`, and the plain nearest served from it: ``nb`` itself is no longer
-    needed (480 MB at 1M points, what a cloud of two sheets went over 2 GB by)."""
+def graphs(pts, nb, k, *, plain=True) -> SheetGraphs | None:
+    """:func:`fit_graph`, and (``plain``) the plain nearest served from it: ``nb`` itself is
+    no longer needed (480 MB at 1M points, what a cloud of two sheets went over 2 GB by)."""
     found = _judged(pts, nb, k)
     if found is None:
         return None
@@ -206,11 +207,12 @@ def graphs(pts, nb, k) -> SheetGraphs | None:
     tail_idx = np.empty((len(centres), nb.k_max - width), dtype=idx.dtype)
     tail_dist = np.empty((len(centres), nb.k_max - width))
     kind = np.min_scalar_type(nb.k_max - 1)  # a byte per column up to 256 (56 MB at 1M points)
-    plain = np.empty((len(centres), nb.k_max), dtype=kind)  # the plain row's j-th: column plain[r, j]
+    back = np.empty((len(centres), nb.k_max), dtype=kind) if plain else None  # plain row's j-th: column back[r, j]
     for part, at, rows, rows_dist, perm in found.ordered_in_steps(pts, lambda c: nb.rows(c, nb.k_max), centres):
         idx[at], dist[at] = rows[:, :width], rows_dist[:, :width]
         tail_idx[part], tail_dist[part] = rows[:, width:], rows_dist[:, width:]
-        np.put_along_axis(plain[part], perm, np.arange(nb.k_max, dtype=kind)[None, :], axis=1)
+        if plain:
+            np.put_along_axis(back[part], perm, np.arange(nb.k_max, dtype=kind)[None, :], axis=1)
     slot = np.full(len(pts), -1, dtype=np.int64)
     slot[centres] = np.arange(len(centres))
     if wide:
@@ -219,7 +221,7 @@ def graphs(pts, nb, k) -> SheetGraphs | None:
     else:
         fit = Neighbours(nb.points, idx, dist)
         whole = lambda c: fit.rows(c, fit.k_max)  # noqa: E731 - every column held
-    return SheetGraphs(fit, PlainNeighbours(fit, centres, plain, slot, whole))
+    return SheetGraphs(fit, PlainNeighbours(fit, centres, back, slot, whole) if plain else None)
 
 
 def _judged(pts, nb, k):

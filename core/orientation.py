@@ -280,10 +280,10 @@ def normal_sums(normals, part, n_parts) -> np.ndarray:
     return np.stack([np.bincount(part, normals[:, a], n_parts) for a in range(3)], axis=1)
 
 
-def floors_up(vote, sums, counts, beside=None) -> np.ndarray:
+def floors_up(vote, sums, counts, beside) -> np.ndarray:
     """The outward ``vote`` per part, except for open sheets that lie mostly level (a
     ground, a floor with things on it, terrain) with the cloud's centre ``beside`` them
-    (:func:`centre_beside`; default: every part): their vote is their mean normal's z, so they
+    (:func:`centre_beside`): their vote is their mean normal's z, so they
     face up. A closed surface's outward normals sum to zero (the divergence theorem); a part
     whose mean normal is longer than :data:`OPEN_SHARE` is open, has no inside, and its
     "outward" side is decided by how the cloud's centre sits above or below it: a street
@@ -294,9 +294,7 @@ def floors_up(vote, sums, counts, beside=None) -> np.ndarray:
     with np.errstate(invalid="ignore", divide="ignore"):
         mean = sums / np.maximum(counts, 1)[:, None]
     length = np.linalg.norm(mean, axis=1)
-    level = (length > OPEN_SHARE) & (np.abs(mean[:, 2]) >= np.cos(np.radians(45.0)) * length)
-    if beside is not None:
-        level &= beside
+    level = (length > OPEN_SHARE) & (np.abs(mean[:, 2]) >= np.cos(np.radians(45.0)) * length) & beside
     return np.where(level, mean[:, 2], vote)
 
 

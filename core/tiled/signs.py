@@ -147,22 +147,22 @@ def _strays_out(store, nodes, offset, centre):
     """``(kept, centre)``: the chunks of :func:`_own_chunks` with a mask of the points that
     are no strays (:data:`core.orientation.STRAY_RMS`), and their centre, as
     :func:`core.orientation.orient` finds them in memory."""
-    square, n = 0.0, 0
+    square, n, farthest = 0.0, 0, 0.0
     for chunk, _ in _own_chunks(store, nodes, offset):
-        square += float(np.sum((chunk["xyz"] - centre) ** 2))
-        n += len(chunk)
+        d2 = np.sum((chunk["xyz"] - centre) ** 2, axis=1)
+        square, n, farthest = square + float(d2.sum()), n + len(d2), max(farthest, float(d2.max(initial=0.0)))
     limit = STRAY_RMS ** 2 * square / max(n, 1)
 
     def kept():
         for chunk, node in _own_chunks(store, nodes, offset):
             yield chunk, node, np.sum((chunk["xyz"] - centre) ** 2, axis=1) <= limit
 
+    if farthest <= limit:  # none: the centre as it was (the in-memory run does not recompute it either)
+        return kept, centre
     total, m = np.zeros(3), 0
     for chunk, _, k in kept():
         total += chunk["xyz"][k].sum(axis=0)
         m += int(k.sum())
-    if m == n:  # none: the centre as it was (the in-memory run does not recompute it either)
-        return kept, centre
     return kept, total / max(m, 1)
 
 
