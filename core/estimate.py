@@ -202,7 +202,7 @@ class Prepared(NamedTuple):
     reference: object
     scale: object
     order: SpatialOrder
-    fit_nb: object = None
+    fit_nb: object
 
 
 def prepare(pts, normals, plan, neighbours, report, *, cache=None, near=False, sort_given=False) -> Prepared:
