@@ -60,7 +60,8 @@ class Settings(NamedTuple):
     robust : 0 none, 1 Huber, 2 Tukey, with ``irls`` reweighting iterations;
     degree : 1 (the paper's linear model), 2 or 3, the most a centre's fit uses;
     rcond : singularity threshold; pivot : the smallest Cholesky pivot of a determined fit
-    of degree 2 or 3 (below it the centre's fit falls a degree: :func:`solve_determined`).
+    of degree 2 or 3 (below it the centre's fit falls a degree: :func:`solve_determined`);
+    spread : the plane spread a robust reweighting must leave the neighbours (:func:`_fit_point`).
     """
 
     theta_reach: float
@@ -71,6 +72,7 @@ class Settings(NamedTuple):
     degree: int
     rcond: float
     pivot: float
+    spread: float
 
 
 class Fits(NamedTuple):
@@ -150,7 +152,11 @@ def _fit_point(f, opt, r, row, n, s):
     reweightings; returns the degree fitted, the highest up to ``opt.degree`` that the
     neighbourhood determines (at every solve: a reweighting that drops a far scan line
     can leave the rest too few lines for it), or 0 when the system is singular. Only the last solve computes the columns of G^-1 that the variances and the
-    exact constraint need."""
+    exact constraint need. A reweighting must leave the linear fit determined with
+    ``opt.spread``-wide (:func:`_spans`): where it does not, its weights left one scan line
+    (on a grid 5x sparser across its rows the Tukey weights of 20 exact neighbours kept the
+    point's own row, whose residuals are nil, and a linear fit on it passed ``opt.rcond``:
+    |H error| 1.3 with exact normals); the unweighted fit is kept."""
     gather(f, r, row, n, opt.weighting, opt.theta_reach, s)
     for j in range(n):
         s.wt[j] = s.base[j]
@@ -162,16 +168,51 @@ def _fit_point(f, opt, r, row, n, s):
             robust_weights(s, n, degree, opt.robust)
         reset(degree, s.vec, s.G, s.acc)
         accumulate(s.R, s.X, s.Y, s.wt, 0, n, degree, s.vec, s.G, s.acc)
-        if degree > 1:  # (the paper's linear fit takes the direct path: a third faster)
-            degree = solve_determined(degree, opt.rcond, opt.pivot, s.vec, s.G, s.L, s.acc, it == rounds)
-            if degree == 0:
-                return 0
-        elif it < rounds:
-            if not solve_coefficients(degree, opt.rcond, s.vec, s.G, s.L, s.acc):
-                return 0
-        elif not solve(degree, opt.rcond, s.vec, s.G, s.L, s.acc):
+        if it > 0 and not _spans(s.G, opt.spread):
+            return _unweighted(degree, opt, n, s)
+        fitted = _solve_round(degree, opt.rcond, opt.pivot, s, it == rounds)
+        if fitted == 0:
             return 0
+        degree = fitted
     return degree
+
+
+@njit(**OPTS, inline="always")
+def _spans(G, spread):
+    """Whether the weighted neighbours of the normal matrix ``G`` (its sums of 1, u, v)
+    span the plane: sqrt(lambda_min / lambda_max) of their centred offsets at least
+    ``spread`` (the plane spread of :mod:`core.plane_spread`, weighted; turning the frame
+    does not change it, unlike the pivots of the equilibrated matrix)."""
+    s1 = G[0, 0]
+    if not s1 > 0.0:
+        return False
+    mu, mv = G[1, 0] / s1, G[2, 0] / s1
+    a, b, c = G[1, 1] / s1 - mu * mu, G[2, 1] / s1 - mu * mv, G[2, 2] / s1 - mv * mv
+    half = 0.5 * (a + c)
+    root = math.sqrt(max(half * half - (a * c - b * b), 0.0))
+    return half - root >= spread * spread * (half + root)
+
+
+@njit(**OPTS, inline="always")
+def _solve_round(degree, rcond, pivot, s, last):
+    """One solve of :func:`_fit_point`: the degree fitted (0: singular), with the columns of
+    G^-1 on the ``last`` round only."""
+    if degree > 1:  # (the paper's linear fit takes the direct path: a third faster)
+        return solve_determined(degree, rcond, pivot, s.vec, s.G, s.L, s.acc, last)
+    if not last:
+        return 1 if solve_coefficients(degree, rcond, s.vec, s.G, s.L, s.acc) else 0
+    return 1 if solve(degree, rcond, s.vec, s.G, s.L, s.acc) else 0
+
+
+@njit(**OPTS)
+def _unweighted(degree, opt, n, s):
+    """The plain least squares of :func:`_fit_point` up to ``degree``, where a reweighting
+    left it undetermined."""
+    for j in range(n):
+        s.wt[j] = s.base[j]
+    reset(degree, s.vec, s.G, s.acc)
+    accumulate(s.R, s.X, s.Y, s.wt, 0, n, degree, s.vec, s.G, s.acc)
+    return _solve_round(degree, opt.rcond, opt.pivot, s, True)
 
 
 @njit(**OPTS)
