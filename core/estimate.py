@@ -20,8 +20,9 @@ from .planning import EstimatePlan
 from .result import CurvatureResult
 from .spatial_order import SpatialOrder
 from .refinement import refine, settle_signs
-from .stages import (choose_scale, crease_reference, flags, given_normals, initial_normals, orient_signs,
-                     outlier_scores, spatial_neighbours)
+from .initial_normals import initial_normals
+from .stages import (choose_scale, crease_reference, flags, given_normals, orient_signs, outlier_scores,
+                     spatial_neighbours)
 from .tuning import AUTO_PASSES, JET_DEGREE, MAX_PASSES, OUTLIER_SCORE, PASS_DECAY, PCA_K
 
 __all__ = ["estimate", "AUTO_PASSES", "MAX_PASSES", "OUTLIER_SCORE", "PASS_DECAY", "PCA_K"]

@@ -29,7 +29,8 @@ import numpy as np
 
 from . import kernels
 from .kernels.spread import plane_spread
-from .tuning import COLLINEAR, THETA_REACH, THIN_SPREAD
+from .linalg import tangent_basis
+from .tuning import COLLINEAR, INITIAL_JET_PIVOT, THETA_REACH, THIN_SPREAD
 
 
 def spreads(pts, normals, nb, k, centres=None) -> np.ndarray:
@@ -105,6 +106,42 @@ def spanning_normals(pts, normals, ok, nb, k: int, ks):
 _CHUNK = 32_768
 
 
+def determined_normals(pts, normals, undetermined, nb, k: int, ks):
+    """Initial normals where a point's ``k`` nearest span the plane but do not determine a
+    quadric (``undetermined`` (N,) bool: its initial 2-jet was refused, a pivot below
+    :data:`core.tuning.INITIAL_JET_PIVOT`): the 2-jet normal, in the frame of the weighted-PCA
+    normal (eqs. 13-14), of the smallest of ``ks`` above k whose neighbours do; as they were
+    where none does. Returns ``normals``, a new array when any changed.
+
+    Two scan lines side by side span the plane, but their PCA plane is lopsided, tilted
+    towards the other line over a curved patch, and a quadric is not determined across two
+    lines: on a sphere scanned in 30 rings of 300 points the 15 nearest at latitudes 40-60
+    degrees are the point's own ring and part of the next; their PCA normal was 11-29
+    degrees off and H 0.55 where it is 1 (a third ring, at 20-28 neighbours, determines the
+    jet: normals 0.03 degrees off)."""
+    todo = np.flatnonzero(undetermined)
+    ks = [c for c in ks if c > k]
+    if not len(todo) or not ks:
+        return normals
+    normals = normals.copy()
+    for start in range(0, len(todo), _CHUNK):
+        _determine(pts, normals, nb, todo[start:start + _CHUNK], ks)
+    return normals
+
+
+def _determine(pts, normals, nb, todo, ks) -> None:
+    """:func:`determined_normals` of the centres ``todo``, in place in ``normals``."""
+    for cand in ks:
+        idx, dist = (np.ascontiguousarray(a) for a in nb.rows(todo, cand))
+        frame, has = np.empty((len(todo), 3)), np.empty(len(todo), dtype=bool)
+        kernels.pca_normals_at(pts, todo, idx, dist, THETA_REACH, COLLINEAR, frame, has)
+        found, good = _jets(pts, todo, idx, dist, frame, has)
+        normals[todo[good]] = found[good]
+        todo = todo[~good]
+        if not len(todo):
+            return
+
+
 def _widen(pts, normals, nb, thin, ks) -> None:
     """:func:`spanning_normals` of the centres ``thin``, in place in ``normals``."""
     for cand in ks:
@@ -119,9 +156,24 @@ def _widen(pts, normals, nb, thin, ks) -> None:
         good = has & turned & ~(spread < THIN_SPREAD)
         good[good] = _flat(pts, idx[good])
         normals[thin[~good]] = before[~good]
+        jet, fitted = _jets(pts, thin, idx, dist, found, good)
+        normals[thin[fitted]] = jet[fitted]  # a curved patch's PCA plane is tilted where its rows are lopsided
         thin = thin[~good]
         if not len(thin):
             return
+
+
+def _jets(pts, centres, idx, dist, frame, has):
+    """The 2-jet normals (Cazals & Pouget; :func:`core.normals.jet_normals`) of ``centres``
+    on the rows ``idx`` / ``dist``, in the frames of the normals ``frame`` where ``has``:
+    ``(normals, good)``, good False where the jet is not determined
+    (:data:`core.tuning.INITIAL_JET_PIVOT`) or there was no frame."""
+    frame = np.where(has[:, None], frame, (0.0, 0.0, 1.0))  # any frame: a row without a normal is not kept
+    t1, t2 = tangent_basis(frame)
+    found, height, good = np.empty((len(centres), 3)), np.empty(len(centres)), np.empty(len(centres), dtype=bool)
+    kernels.jet_normals(pts, idx, np.ascontiguousarray(dist[:, -1]), centres, t1, t2, frame, INITIAL_JET_PIVOT,
+                        found, height, good)
+    return found, good & has & (dist[:, -1] > 0)
 
 
 #: a point's initial normal is looked at again (widened) where the plane spread of its k

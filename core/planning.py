@@ -68,7 +68,7 @@ class EstimatePlan:
         out against; None takes this cloud's median (``result.params["crease_typical"]``).
     fold_typical : float or None. The typical spread of the small initial normals over a
         point's wide initial neighbourhood, which a fold must fall below
-        (:func:`core.stages.unfolded`); None takes this cloud's median
+        (:func:`core.initial_normals.unfolded`); None takes this cloud's median
         (``result.params["fold_typical"]``; None where the initial scale did not grow).
     """
 

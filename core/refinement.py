@@ -13,7 +13,8 @@ from . import drift, passes
 from .frame import turned_over
 from .orientation import resettle
 from .passes import PassRule, few_fits
-from .stages import Fit, Initial, Scale, _empty_fit, _Fitter
+from .initial_normals import Initial
+from .stages import Fit, Scale, _empty_fit, _Fitter
 from .tuning import DRIFT_POOL, HOLD_TURN, IRLS_LATER, PASS_DECAY, RESETTLE_K
 from .wide_neighbours import rows_at_least
 

@@ -9,13 +9,13 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import kernels, plane_spread, scale, tuning
+from . import kernels, plane_spread, scale
 from .frame import darboux_frame
 from .kernels.permute import put_rows
 from .border import border_of_valid, served_by
 from .neighbours import Neighbours, search_neighbours
 from .normal_repair import repair_normals
-from .normals import jet_normals, pca_normals
+from .initial_normals import Initial
 from .orientation import orient
 from .patch import Chunk
 from .spatial_order import SpatialOrder, given_in_spatial_order
@@ -29,18 +29,6 @@ _CHUNK = 32_768
 #: (k = 15: 122k centres, so 100k points are one chunk, where 4 chunks cost 4 launches of each
 #: kernel and 4 rounds of numpy between them; the results do not depend on the chunks)
 _CHUNK_ENTRIES = _CHUNK * 56
-
-
-class Initial(NamedTuple):
-    """Initial normals: ``normals`` (N, 3), ``has_normal`` (N,) bool, and with k="auto"
-    the measured (or given) ``noise`` ratio, the ``k`` it chose and the ``fold_typical``
-    spread folds were judged against (:func:`unfolded`; None otherwise)."""
-
-    normals: np.ndarray
-    has_normal: np.ndarray
-    noise: float | None = None
-    k: int | None = None
-    fold_typical: float | None = None
 
 
 class Fit(NamedTuple):
@@ -130,117 +118,6 @@ def orient_signs(pts, init: Initial, idx, plan, *, rank=None) -> tuple[Initial, 
     ``rank``: the points' indices in the caller's order if they are in another."""
     out = orient(pts, init.normals, idx, plan.orientation, ok=init.has_normal, rank=rank, trust=plan.auto)
     return init._replace(normals=out.normals), out.confidence
-
-
-def initial_normals(pts, nb, plan, outlier, report) -> Initial:
-    """PCA normals (eqs. 13-14), refined by a 2-jet if ``plan.initial == "jet"``, on the
-    ``plan.k_initial`` nearest; with k="auto" on a neighbourhood that grows with the noise
-    the 2-jets measure (:func:`core.scale.initial_k`, or ``plan.noise`` when given),
-    without the known outliers in robust mode, and wider where it lies along one scan line
-    (:func:`core.plane_spread.spanning_normals`)."""
-    init = _initial_normals(pts, nb, plan, outlier, report)
-    if not plan.auto:
-        return init
-    nrm, ok = plane_spread.spanning_normals(pts, init.normals, init.has_normal, nb, init.k, plan.candidates)
-    return init._replace(normals=nrm, has_normal=ok)
-
-
-def _initial_normals(pts, nb, plan, outlier, report) -> Initial:
-    """:func:`initial_normals` before the scan lines are looked after."""
-    idx_p, dist_p = nb.take(plan.k_initial)
-    nrm, ok = pca_normals(pts, idx_p, dist_p, progress=report.sub(0.3, 0.37))
-    if not plan.auto:
-        if plan.initial == "jet":
-            nrm, _ = jet_normals(pts, nrm, ok, idx_p, dist_p, progress=report.sub(0.37, 0.43))
-        return Initial(nrm, ok)
-    jet = None
-    noise = plan.noise
-    if noise is None:
-        jet, ratio, clean = noise_samples(pts, nrm, ok, idx_p, dist_p, outlier)
-        noise = scale.noise_ratio(np.where(clean, ratio, np.nan) if clean.any() else ratio, 1.0)
-    k_init = scale.initial_k(noise, plan.k_initial, plan.k_search, plan.n_points)
-    if k_init > nb.width:  # noise this large grows most jets to k_search too: search them all once
-        del idx_p, dist_p  # views of the narrow graph would keep it alive beside the wide one
-        nb.widen(plan.k_search)
-        idx_p, dist_p = nb.take(plan.k_initial)
-    small = _small_normals(pts, nrm, ok, idx_p, dist_p, jet, plan)
-    if k_init == plan.k_initial and not (plan.robust and outlier.any()):
-        return Initial(small, ok, noise, k_init)
-    idx, dist = initial_rows(nb, k_init, outlier, plan)
-    nrm, ok = pca_normals(pts, idx, dist, progress=report.sub(0.37, 0.4))
-    if plan.initial == "jet":
-        nrm, _ = jet_normals(pts, nrm, ok, idx, dist, progress=report.sub(0.4, 0.43))
-    if k_init == plan.k_initial:  # only outliers left out: no wide plane to lie across a fold
-        return Initial(nrm, ok, noise, k_init)
-    nrm, typical = unfolded(nrm, small, *fold_spreads(small, idx, nb, k_init, outlier, plan), plan.fold_typical)
-    return Initial(nrm, ok, noise, k_init, typical)
-
-
-def initial_rows(nb, k_init, outlier, plan):
-    """The ``k_init`` nearest a point's initial normal is fitted on, without the known
-    outliers in robust mode."""
-    return nb.take_without(k_init, outlier) if plan.robust and outlier.any() else nb.take(k_init)
-
-
-def _small_normals(pts, nrm, ok, idx_p, dist_p, jet, plan):
-    """The ``plan.k_initial`` normals a fold falls back to: the 2-jet's where the plan asks
-    for jets, computed here when the noise was given (tiles, cached stages) rather than
-    measured by :func:`noise_samples`, so both paths fall back to the same normals."""
-    if plan.initial != "jet":
-        return nrm
-    return jet if jet is not None else jet_normals(pts, nrm, ok, idx_p, dist_p)[0]
-
-
-def fold_spreads(small, idx, nb, k_init, outlier, plan) -> tuple[np.ndarray, np.ndarray]:
-    """``(spread, clean)`` per point: how well the ``small`` normals of its ``idx``
-    neighbours agree (the largest eigenvalue of their unsigned scatter,
-    :func:`core.kernels.normal_spread`), and whether it counts towards the typical spread
-    (:func:`typical_spread`): in robust mode, no known outlier among its ``k_init``
-    nearest (its robust row reaches past them, and an outlier spoils the small normals
-    around it); every point otherwise. A tiled run samples the same pair."""
-    spread = np.empty(len(idx))
-    kernels.normal_spread(small, idx, spread)
-    if plan.robust and outlier.any():
-        return spread, ~outlier[nb.take(k_init)[0]].any(axis=1)
-    return spread, np.ones(len(idx), dtype=bool)
-
-
-def typical_spread(spread, clean) -> float:
-    """The median spread over the ``clean`` points, or over all points if none is clean
-    (0.0 if none is finite)."""
-    if clean.any():
-        spread = spread[clean]
-    return float(np.nanmedian(spread)) if np.isfinite(spread).any() else 0.0
-
-
-def unfolded(wide, small, spread, clean, typical=None):
-    """(``wide`` normals, but ``small``'s (the ``plan.k_initial`` neighbours') where the
-    small normals of a point's wide neighbours disagree with each other well beyond what
-    the cloud's noise makes them do (``spread``, :func:`fold_spreads`, below
-    :data:`core.tuning.FOLD_SPREAD` x ``typical``, by default :func:`typical_spread` of
-    this cloud; a tiled run fixes the whole cloud's): a fold, the rim of a part a few
-    spacings thick, where a wide PCA plane lies across both faces and the side between
-    them; the ``typical`` spread used)."""
-    if typical is None:
-        typical = typical_spread(spread, clean)
-    folded = (spread < tuning.FOLD_SPREAD * typical) & np.isfinite(small[:, 0])
-    if not folded.any():
-        return wide, typical
-    out = wide.copy()
-    out[folded] = small[folded]
-    return out, typical
-
-
-def noise_samples(pts, nrm, ok, idx_p, dist_p, outlier):
-    """What the cloud's noise ratio is the median of (:func:`core.scale.noise_ratio`):
-    ``(jet normals, ratio, clean)`` per point, ratio = 2-jet residual height over the
-    radius of the ``idx_p`` neighbours, clean = no outlier among them (an outlier inflates
-    the residuals around it; the median is taken over the clean points if any). A tiled
-    run gathers these over the whole cloud and fixes ``plan.noise``."""
-    jet, height = jet_normals(pts, nrm, ok, idx_p, dist_p)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        ratio = height / dist_p[:, -1]
-    return jet, ratio, ~outlier[idx_p].any(axis=1)
 
 
 class Residuals(NamedTuple):

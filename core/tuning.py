@@ -129,7 +129,7 @@ INITIAL_K0 = 182.0
 INITIAL_SHARE = 10
 #: with k="auto" and noise (initial normals wider than PCA_K) a point keeps its PCA_K normal
 #: where the PCA_K normals of its wide neighbourhood agree less than this share of the
-#: cloud's median (core.stages.unfolded: the largest eigenvalue of their unsigned scatter):
+#: cloud's median (core.initial_normals.unfolded: the largest eigenvalue of their unsigned scatter):
 #: at the 2-spacing rim of shapes_thin.thin_wedge the 58-neighbour plane lay across both faces
 FOLD_SPREAD = 0.8
 

@@ -21,7 +21,8 @@ from .._progress import Progress
 from .._validate import as_points
 from ..estimate import _plan, _reported
 from ..refinement import refine, settle_signs
-from ..stages import choose_scale, flags, initial_normals, orient_signs, outlier_scores, spatial_neighbours
+from ..initial_normals import initial_normals
+from ..stages import choose_scale, flags, orient_signs, outlier_scores, spatial_neighbours
 from ..stage_cache import caller_neighbours
 from ..tuning import OUTLIER_SCORE
 

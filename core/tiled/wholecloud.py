@@ -27,7 +27,8 @@ import numpy as np
 from ..normals import pca_normals
 from ..one_sheet import fit_graph, sheet_width
 from ..scale import initial_k
-from ..stages import _small_normals, fold_spreads, initial_rows, noise_samples, outlier_scores
+from ..initial_normals import _small_normals, fold_spreads, initial_rows, noise_samples
+from ..stages import outlier_scores
 from ..tuning import OUTLIER_SCORE
 from .plan import TilePlan
 from .store import TileStore
@@ -70,7 +71,7 @@ def _initial_graph(ctx):
 
 
 def _noise_samples(ctx):
-    """The noise ratios (:func:`core.stages.noise_samples`) of the tile's own points,
+    """The noise ratios (:func:`core.initial_normals.noise_samples`) of the tile's own points,
     apart for those with an outlier among their neighbours."""
     pts, plan, own = ctx.pts, ctx.plan, ctx.own
     outlier, nb = _initial_graph(ctx)
@@ -83,7 +84,7 @@ def _noise_samples(ctx):
 
 
 def _fold_samples(ctx):
-    """The fold test's spreads (:func:`core.stages.fold_spreads`) of the tile's own points,
+    """The fold test's spreads (:func:`core.initial_normals.fold_spreads`) of the tile's own points,
     at the initial scale the whole cloud's noise chose, apart for those with an outlier
     among those neighbours (their robust rows reach further than the tile loads: exact only
     where the cloud has clean points, which the median then takes alone)."""
@@ -91,7 +92,7 @@ def _fold_samples(ctx):
     outlier, nb = _initial_graph(ctx)
     idx_p, dist_p = nb.take(plan.k_initial)
     nrm, ok = pca_normals(pts, idx_p, dist_p)
-    small = _small_normals(pts, nrm, ok, idx_p, dist_p, None, plan)
+    small, _ = _small_normals(pts, nrm, ok, idx_p, dist_p, None, plan)
     idx, _ = initial_rows(nb, _k_init(plan), outlier, plan)
     spread, clean = fold_spreads(small, idx, nb, _k_init(plan), outlier, plan)
     finite = np.isfinite(spread)
@@ -104,12 +105,12 @@ def _k_init(plan) -> int:
 
 
 def _folds_tested(plan) -> bool:
-    """Whether :func:`core.stages.initial_normals` tests folds: the noise grew the initial scale."""
+    """Whether :func:`core.initial_normals.initial_normals` tests folds: the noise grew the initial scale."""
     return plan.auto and plan.fold_typical is None and plan.noise is not None and _k_init(plan) > plan.k_initial
 
 
 def _clean_median(median, counts):
-    """:func:`core.scale.noise_ratio` (or :func:`core.stages.typical_spread`) over the
+    """:func:`core.scale.noise_ratio` (or :func:`core.initial_normals.typical_spread`) over the
     clean points if any, else over all."""
     return median(["clean"] if counts["clean"] else ["clean", "other"])
 

@@ -9,7 +9,7 @@ import tracemalloc
 import numpy as np
 
 import core
-from core import noise, orientation, scale, shapes, stages
+from core import initial_normals, noise, orientation, scale, shapes, stages
 from core._progress import Progress
 from core.frame import darboux_frame, height_field_derivatives
 from core.linalg import tangent_basis
@@ -66,7 +66,7 @@ def test_the_crease_reference_keeps_only_what_flags_read():
     pts = noise.add_noise(shapes.torus(5000, seed=1).points, 0.2, seed=2)
     plan = core.plan(len(pts), k="auto")
     nb, _ = stages.spatial_neighbours(pts, plan, None, Progress(None))
-    init = stages.initial_normals(nb.points, nb, plan, np.zeros(len(pts), dtype=bool), Progress(None))
+    init = initial_normals.initial_normals(nb.points, nb, plan, np.zeros(len(pts), dtype=bool), Progress(None))
     ref = stages.crease_reference(nb.points, init.normals, init.has_normal, nb, plan, Progress(None))
     assert type(ref) is stages.Residuals
     idx, dist = nb.take(plan.k_initial)

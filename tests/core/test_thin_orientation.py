@@ -206,7 +206,7 @@ def test_thin_rims_at_auto_ten_seeds():
     """Issue 12 at k="auto", noise 0.2 spacing: its initial normals (58 neighbours there)
     lay across the wedge's 2-spacing rim, both faces and the side between them, and no
     later scale or sign repaired them (NR's fits forced to 10 neighbours there: no gain).
-    Where the PCA_K normals of the wide neighbourhood disagree (core.stages.unfolded,
+    Where the PCA_K normals of the wide neighbourhood disagree (core.initial_normals.unfolded,
     tuning.FOLD_SPREAD) a point keeps its PCA_K normal. Face share min / max before ->
     after: wedge (seeds 0-9) 99.270 / 99.435 -> 99.575 / 99.660 %, plate 99.470 / 99.680
     -> 99.585 / 99.725 %, L-bracket (seeds 0-2) 99.415 / 99.520 -> 99.525 / 99.640 %."""

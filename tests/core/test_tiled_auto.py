@@ -72,7 +72,7 @@ def test_auto_in_16_tiles_is_the_in_memory_estimate(tmp_path, small_candidates, 
 
 
 def test_a_thin_rims_fold_test_is_the_whole_clouds(tmp_path, small_candidates):
-    """The fold test (core.stages.unfolded) compares a point's spread with the whole cloud's
+    """The fold test (core.initial_normals.unfolded) compares a point's spread with the whole cloud's
     median, which a second pre-pass fixes (it depends on the noise the first one fixes):
     with each tile's own median, a noisy wedge's tiles judge folds against other values."""
     s = shapes_thin.THIN_SHAPES["thin_wedge"](6000, seed=0)
