@@ -66,7 +66,7 @@ def jet_normals(points, normals, ok, idx, dist, *, progress=None):
         hgt = np.full(len(centres), np.nan)
         good = np.empty(len(centres), dtype=bool)
         kernels.jet_normals(points, np.ascontiguousarray(idx[at]), np.ascontiguousarray(dist[at, -1]), centres,
-                            t1, t2, z, INITIAL_JET_PIVOT, res, hgt, good)
+                            t1, t2, z, INITIAL_JET_PIVOT, res, hgt, good, np.empty(len(centres)))
         out[centres[good]] = res[good]
         height[centres[good]] = hgt[good]
         if progress is not None:

@@ -12,14 +12,16 @@ from .algebra import chol_solve, cholesky, poly_row
 
 
 @njit(**OPTS, parallel=True)
-def jet_normals(points, idx, h, centres, t1, t2, z, rcond, normals, height, ok):
+def jet_normals(points, idx, h, centres, t1, t2, z, rcond, normals, height, ok, slope_se):
     """Normals of the osculating 2-jet (Cazals & Pouget 2005) in the frames given.
 
     Fits w = c0 + c1 u + c2 v + c3 u^2 + c4 uv + c5 v^2 to the neighbours (lengths / h) by
     least squares (6x6 normal equations, equilibrated, Cholesky); the normal of the graph
     at the origin is (-c1, -c2, 1) / |.|, ``height`` the RMS residual of w (in length
     units, corrected for the 6 fitted terms): the noise of the positions along the
-    normal, once the quadric has taken up the curvature. Near-singular systems leave ok False.
+    normal, once the quadric has taken up the curvature, and ``slope_se`` the standard
+    error of the slope (c1, c2), sqrt(var c1 + var c2) from that residual: how far the jet
+    could tilt the frame's normal by noise alone. Near-singular systems leave ok False.
     """
     m = len(centres)
     k = idx.shape[1]
@@ -31,6 +33,8 @@ def jet_normals(points, idx, h, centres, t1, t2, z, rcond, normals, height, ok):
         row = np.empty(6)
         d = np.empty(6)
         x = np.empty(6)
+        e = np.zeros(6)
+        col = np.empty(6)
         for r in range(blk * BLOCK, min(m, (blk + 1) * BLOCK)):
             ok[r] = False
             i = centres[r]
@@ -62,5 +66,13 @@ def jet_normals(points, idx, h, centres, t1, t2, z, rcond, normals, height, ok):
             rss = ww
             for a in range(6):
                 rss -= x[a] * b[a]
-            height[r] = hi * math.sqrt(max(rss, 0.0) / max(k - 6, 1))
+            var = max(rss, 0.0) / max(k - 6, 1)
+            height[r] = hi * math.sqrt(var)
+            inv = 0.0  # (G^-1)_11 + (G^-1)_22: the slopes' variances per unit residual variance
+            for a in (1, 2):
+                e[a] = 1.0
+                chol_solve(L, d, 6, e, col)
+                inv += col[a]
+                e[a] = 0.0
+            slope_se[r] = math.sqrt(var * max(inv, 0.0))
             ok[r] = True
