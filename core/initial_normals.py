@@ -72,7 +72,7 @@ def _initial_normals(pts, nb, plan, outlier, report) -> tuple[Initial, np.ndarra
     if k_init == plan.k_initial:  # only outliers left out: no wide plane to lie across a fold
         return Initial(nrm, ok, noise, k_init), _refused(ok, wide, plan)
     nrm, typical, folded = unfolded(nrm, small, *fold_spreads(small, idx, nb, k_init, outlier, plan),
-                                    plan.fold_typical)
+                                    plan.fold_typical, pts=pts, small_rows=idx_p)
     return Initial(nrm, ok, noise, k_init, typical), _refused(ok, np.where(folded, height, wide), plan)
 
 
@@ -120,17 +120,25 @@ def typical_spread(spread, clean) -> float:
     return float(np.nanmedian(spread)) if np.isfinite(spread).any() else 0.0
 
 
-def unfolded(wide, small, spread, clean, typical=None):
+def unfolded(wide, small, spread, clean, typical=None, *, pts=None, small_rows=None):
     """(``wide`` normals, but ``small``'s (the ``plan.k_initial`` neighbours') where the
     small normals of a point's wide neighbours disagree with each other well beyond what
     the cloud's noise makes them do (``spread``, :func:`fold_spreads`, below
     :data:`core.tuning.FOLD_SPREAD` x ``typical``, by default :func:`typical_spread` of
     this cloud; a tiled run fixes the whole cloud's): a fold, the rim of a part a few
     spacings thick, where a wide PCA plane lies across both faces and the side between
-    them; the ``typical`` spread used; where the small ones were taken)."""
+    them; the ``typical`` spread used; where the small ones were taken). Given the
+    points ``pts`` and the small normals' neighbours ``small_rows``, not where those are a
+    noisy scan line, as wide both ways across the line (:data:`core.tuning.FOLD_FLAT`) as
+    they are narrow along it (:data:`core.plane_spread.LINE_SPREAD`): there the small
+    normals disagree by the line's noise."""
     if typical is None:
         typical = typical_spread(spread, clean)
     folded = (spread < tuning.FOLD_SPREAD * typical) & np.isfinite(small[:, 0])
+    if folded.any() and pts is not None:
+        flat, line = np.empty(np.count_nonzero(folded)), np.empty(np.count_nonzero(folded))
+        kernels.scatter_shapes(pts, np.ascontiguousarray(small_rows[folded]), flat, line)
+        folded[folded] = ~((flat > tuning.FOLD_FLAT) & (line < plane_spread.LINE_SPREAD))
     if not folded.any():
         return wide, typical, folded
     out = wide.copy()

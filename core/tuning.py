@@ -132,6 +132,16 @@ INITIAL_SHARE = 10
 #: cloud's median (core.initial_normals.unfolded: the largest eigenvalue of their unsigned scatter):
 #: at the 2-spacing rim of shapes_thin.thin_wedge the 58-neighbour plane lay across both faces
 FOLD_SPREAD = 0.8
+#: ... but not where its PCA_K nearest are a noisy scan line: as wide both ways across the
+#: line, sqrt(lambda_min / lambda_mid) of their scatter above this, as they are narrow along it
+#: (sqrt(lambda_mid / lambda_max) below core.plane_spread.LINE_SPREAD); there the small normals
+#: disagree by the line's noise, not at a fold. A sphere in 30 rings of 300 points with noise
+#: 0.05 of the rings' spacing: normals 5.2 -> 1.3 degrees off at the 90th percentile (0.1 of
+#: it: 41 -> 27; a 10th percentile of 0.47-0.51 above latitude 60). The rims of the thin shapes
+#: at noise 0.1-0.3 spacing also have 6-25 % of their points above 0.45, but spread along the
+#: rim (1st percentile 0.38-0.44): they keep falling back (the fit of the wide normal to the
+#: small rows does not tell the two apart: medians 0.77-0.83 in both).
+FOLD_FLAT = 0.45
 
 # ----------------------------------------------------------------------------- automatic k (core.scale)
 

@@ -23,8 +23,9 @@ from .nf import Fits, Frames, Settings, normal_fit
 from .outliers import outlier_scores
 from .pca import normal_spread, pca_normals, pca_normals_at
 from .scale import ScaleRule, choose_scales, fold_limits
+from .spread import scatter_shapes
 
 __all__ = [
     "pca_normals", "pca_normals_at", "jet_normals", "normal_fit", "Frames", "Settings", "Fits", "ScaleRule", "choose_scales", "fold_limits",
-    "outlier_scores", "normal_spread",
+    "outlier_scores", "normal_spread", "scatter_shapes",
 ]

@@ -7,6 +7,7 @@ import math
 from numba import njit, prange
 
 from ._base import OPTS
+from .algebra import smallest_eigvec_sym3
 
 
 @njit(**OPTS, parallel=True)
@@ -43,3 +44,33 @@ def plane_spread(points, normals, centres, idx, rows, kc, out):
         half = 0.5 * tr
         top = half + math.sqrt(max(half * half - e2, 0.0))
         out[r] = math.sqrt(max(e2, 0.0) / (top * top)) if top > 0.0 else math.nan  # lambda_min = e2 / lambda_max
+
+
+@njit(**OPTS, parallel=True)
+def scatter_shapes(points, rows, flat, line):
+    """The shape of the scatter of the points ``rows[r]`` about their centroid, from its
+    eigenvalues l0 <= l1 <= l2: flat[r] = sqrt(l0 / l1), near 0 for points near a plane and
+    near 1 for a noisy line (its noise is as wide both ways across it) or a cloud with no
+    plane; line[r] = sqrt(l1 / l2), near 0 for points along a line. NaN where degenerate."""
+    k = rows.shape[1]
+    for r in prange(rows.shape[0]):
+        cx = cy = cz = 0.0
+        for j in range(k):
+            q = rows[r, j]
+            cx += points[q, 0]
+            cy += points[q, 1]
+            cz += points[q, 2]
+        cx, cy, cz = cx / k, cy / k, cz / k
+        c00 = c01 = c02 = c11 = c12 = c22 = 0.0
+        for j in range(k):
+            q = rows[r, j]
+            dx, dy, dz = points[q, 0] - cx, points[q, 1] - cy, points[q, 2] - cz
+            c00 += dx * dx
+            c01 += dx * dy
+            c02 += dx * dz
+            c11 += dy * dy
+            c12 += dy * dz
+            c22 += dz * dz
+        l0, l1, l2, _, _, _ = smallest_eigvec_sym3(c00, c01, c02, c11, c12, c22)
+        flat[r] = math.sqrt(max(l0, 0.0) / l1) if l1 > 0.0 else math.nan
+        line[r] = math.sqrt(max(l1, 0.0) / l2) if l2 > 0.0 else math.nan
