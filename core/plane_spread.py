@@ -30,7 +30,7 @@ import numpy as np
 from . import kernels
 from .kernels.spread import plane_spread
 from .linalg import tangent_basis
-from .tuning import COLLINEAR, INITIAL_JET_PIVOT, THETA_REACH, THIN_SPREAD
+from .tuning import COLLINEAR, FOLD_FLAT, INITIAL_JET_PIVOT, THETA_REACH, THIN_SPREAD
 
 
 def spreads(pts, normals, nb, k, centres=None) -> np.ndarray:
@@ -82,7 +82,8 @@ def widened(pts, normals, nb, k, ks) -> np.ndarray:
 
 def spanning_normals(pts, normals, ok, nb, k: int, ks):
     """Initial normals where a point's ``k`` nearest lie along one curved line (a scan line,
-    its neighbours' lines farther than k reach): the weighted-PCA normal (eqs. 13-14) of the
+    its neighbours' lines farther than k reach), or in a tube as wide both ways across
+    (a noisy scan line, :func:`_tubes`): the weighted-PCA normal (eqs. 13-14) of the
     smallest of ``ks`` above k whose neighbours span the plane of that normal, lie near one
     plane (:data:`FLAT_SHARE`) and are not the line's own (:data:`LINE_TURN`); as they were
     where none does. Returns ``(normals, ok)``
@@ -94,7 +95,8 @@ def spanning_normals(pts, normals, ok, nb, k: int, ks):
     no normal and keeps none, and a widened neighbourhood that is not flat is not taken:
     wires and a cube's wireframe are curves, not a surface (widened without those tests, 3.3
     and 5.5x as many of a wireframe's points got normals, and |k| of 1e5)."""
-    thin = np.flatnonzero(ok & ~spans_plane(pts, normals, nb, np.full(len(pts), k), LINE_SPREAD))
+    thin = ok & ~spans_plane(pts, normals, nb, np.full(len(pts), k), LINE_SPREAD)
+    thin = np.flatnonzero(thin | (ok & _tubes(pts, nb, k)))
     if not len(thin):
         return normals, ok
     normals = normals.copy()
@@ -209,6 +211,23 @@ JET_SIGNIFICANCE = 2.0
 #: is flat at its scale: 0.02-0.09 on the sphere above at 56-160 neighbours; a cube's
 #: wireframe corner, three edges, is not)
 FLAT_SHARE = 0.3
+
+
+def _tubes(pts, nb, k) -> np.ndarray:
+    """(N,) bool: each point's ``k`` nearest are about as wide in two directions across
+    their plane (sqrt(lambda_min / lambda_mid) of their scatter above
+    :data:`core.tuning.FOLD_FLAT`): a noisy scan line's tube, whose PCA plane is any plane
+    through the line (a sphere in rings with noise 0.1 of their spacing: normals 27 degrees
+    off at the 90th percentile, 14 widened; corpus: 1 better, none worse). A fold or a
+    corner is not flat either, but no widened neighbourhood of it is flat, so it keeps its
+    normal."""
+    out = np.zeros(len(pts), dtype=bool)
+    for start in range(0, len(pts), 131_072):
+        rows = np.ascontiguousarray(nb.take(k)[0][start:start + 131_072])
+        flat, line = np.empty(len(rows)), np.empty(len(rows))
+        kernels.scatter_shapes(pts, rows, flat, line)
+        out[start:start + len(rows)] = flat > FOLD_FLAT
+    return out
 
 
 def _flat(pts, idx) -> np.ndarray:

@@ -140,7 +140,8 @@ FOLD_SPREAD = 0.8
 #: it: 41 -> 27; a 10th percentile of 0.47-0.51 above latitude 60). The rims of the thin shapes
 #: at noise 0.1-0.3 spacing also have 6-25 % of their points above 0.45, but spread along the
 #: rim (1st percentile 0.38-0.44): they keep falling back (the fit of the wide normal to the
-#: small rows does not tell the two apart: medians 0.77-0.83 in both).
+#: small rows does not tell the two apart: medians 0.77-0.83 in both). The same width makes the
+#: initial normals of k="auto" look wider (core.plane_spread.spanning_normals).
 FOLD_FLAT = 0.45
 
 # ----------------------------------------------------------------------------- automatic k (core.scale)

@@ -121,3 +121,28 @@ def chol_solve(L, d, p, b, x):
         x[a] = s / L[a, a]
     for a in range(p):
         x[a] /= d[a]
+
+
+@njit(**OPTS, inline="always")
+def row_scatter(points, idx, r, j0, k):
+    """The centroid of the points ``idx[r, j0:k]`` and their second moments about it:
+    (cx, cy, cz, c00, c01, c02, c11, c12, c22)."""
+    m = k - j0
+    cx = cy = cz = 0.0
+    for j in range(j0, k):
+        q = idx[r, j]
+        cx += points[q, 0]
+        cy += points[q, 1]
+        cz += points[q, 2]
+    cx, cy, cz = cx / m, cy / m, cz / m
+    c00 = c01 = c02 = c11 = c12 = c22 = 0.0
+    for j in range(j0, k):
+        q = idx[r, j]
+        dx, dy, dz = points[q, 0] - cx, points[q, 1] - cy, points[q, 2] - cz
+        c00 += dx * dx
+        c01 += dx * dy
+        c02 += dx * dz
+        c11 += dy * dy
+        c12 += dy * dz
+        c22 += dz * dz
+    return cx, cy, cz, c00, c01, c02, c11, c12, c22

@@ -7,7 +7,7 @@ import math
 from numba import njit, prange
 
 from ._base import OPTS
-from .algebra import smallest_eigvec_sym3
+from .algebra import row_scatter, smallest_eigvec_sym3
 
 
 @njit(**OPTS, parallel=True)
@@ -21,31 +21,15 @@ def outlier_scores(points, idx, floor, score):
     """
     n, k = idx.shape
     for i in prange(n):
-        cx = cy = cz = 0.0
-        m = 0
-        for j in range(1, k):
-            q = idx[i, j]
-            cx += points[q, 0]
-            cy += points[q, 1]
-            cz += points[q, 2]
-            m += 1
+        m = k - 1
         if m < 3:
             score[i] = math.nan
             continue
-        cx /= m
-        cy /= m
-        cz /= m
-        c00 = c01 = c02 = c11 = c12 = c22 = 0.0
+        cx, cy, cz, c00, c01, c02, c11, c12, c22 = row_scatter(points, idx, i, 1, k)
         spread = 0.0
         for j in range(1, k):
             q = idx[i, j]
             dx, dy, dz = points[q, 0] - cx, points[q, 1] - cy, points[q, 2] - cz
-            c00 += dx * dx
-            c01 += dx * dy
-            c02 += dx * dz
-            c11 += dy * dy
-            c12 += dy * dz
-            c22 += dz * dz
             spread += math.sqrt(dx * dx + dy * dy + dz * dz)
         l0, l1, l2, x, y, z = smallest_eigvec_sym3(c00, c01, c02, c11, c12, c22)
         if not math.isfinite(x):

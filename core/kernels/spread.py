@@ -7,7 +7,7 @@ import math
 from numba import njit, prange
 
 from ._base import OPTS
-from .algebra import smallest_eigvec_sym3
+from .algebra import row_scatter, smallest_eigvec_sym3
 
 
 @njit(**OPTS, parallel=True)
@@ -54,23 +54,7 @@ def scatter_shapes(points, rows, flat, line):
     plane; line[r] = sqrt(l1 / l2), near 0 for points along a line. NaN where degenerate."""
     k = rows.shape[1]
     for r in prange(rows.shape[0]):
-        cx = cy = cz = 0.0
-        for j in range(k):
-            q = rows[r, j]
-            cx += points[q, 0]
-            cy += points[q, 1]
-            cz += points[q, 2]
-        cx, cy, cz = cx / k, cy / k, cz / k
-        c00 = c01 = c02 = c11 = c12 = c22 = 0.0
-        for j in range(k):
-            q = rows[r, j]
-            dx, dy, dz = points[q, 0] - cx, points[q, 1] - cy, points[q, 2] - cz
-            c00 += dx * dx
-            c01 += dx * dy
-            c02 += dx * dz
-            c11 += dy * dy
-            c12 += dy * dz
-            c22 += dz * dz
+        _, _, _, c00, c01, c02, c11, c12, c22 = row_scatter(points, rows, r, 0, k)
         l0, l1, l2, _, _, _ = smallest_eigvec_sym3(c00, c01, c02, c11, c12, c22)
         flat[r] = math.sqrt(max(l0, 0.0) / l1) if l1 > 0.0 else math.nan
         line[r] = math.sqrt(max(l1, 0.0) / l2) if l2 > 0.0 else math.nan

@@ -255,3 +255,16 @@ def test_a_noisy_ring_scan_keeps_its_wide_initial_normals():
     assert res.valid.mean() > 0.99
     assert np.percentile(off[res.valid], 90) < 2.5
     assert np.mean(np.abs(res.mean[res.valid] - 1.0) > 0.3) < 0.1
+
+
+def test_a_ring_scan_whose_noise_is_as_wide_as_its_points_are_apart_widens_its_initial_normals():
+    """With noise 0.1 of the rings' spacing (as wide as the points along a ring are apart
+    above latitude 60), a point's 15 nearest are a noisy tube along its ring, as wide both
+    ways across it: their PCA plane is any plane through the ring (normals 27 degrees off
+    at the 90th percentile). Such neighbourhoods (core.tuning.FOLD_FLAT) now take the
+    scan line's widening (core.plane_spread.spanning_normals): 14."""
+    base = _rings()
+    pts = base + np.random.default_rng(0).normal(scale=0.01, size=base.shape)
+    res = core.estimate(pts)
+    off = np.degrees(np.arccos(np.clip(np.abs(np.einsum("ij,ij->i", res.normals, base)), 0.0, 1.0)))
+    assert np.percentile(off[res.valid], 90) < 20.0
