@@ -145,7 +145,13 @@ def _determine(pts, normals, nb, todo, ks) -> None:
 
 
 def _widen(pts, normals, nb, thin, ks) -> None:
-    """:func:`spanning_normals` of the centres ``thin``, in place in ``normals``."""
+    """:func:`spanning_normals` of the centres ``thin``, in place in ``normals``. Where no
+    candidate turns from the line's plane, the widest that passes the other tests is taken:
+    its normal is within :data:`LINE_TURN` of the line's, and it spans more lines (a
+    rotating scanner's ground: each noisy ring is a flat strip of the scanner's cone,
+    tilted by the ray's elevation, 3-8 degrees beyond 10 m, which no candidate turns from)."""
+    last = np.full((len(thin), 3), np.nan)  # the widest candidate that passed all but the turn
+    pos = np.arange(len(thin))
     for cand in ks:
         idx, dist = (np.ascontiguousarray(a) for a in nb.rows(thin, cand))
         idx.flags.writeable = False  # the compiled signature :func:`spreads` uses
@@ -155,14 +161,19 @@ def _widen(pts, normals, nb, thin, ks) -> None:
         normals[thin] = found
         plane_spread(pts, normals, thin, idx, np.arange(len(thin)), np.full(len(thin), cand), spread)
         turned = np.abs(np.einsum("ij,ij->i", np.nan_to_num(found), before)) < np.cos(np.radians(LINE_TURN))
-        good = has & turned & ~(spread < THIN_SPREAD)
-        good[good] = _flat(pts, idx[good])
+        passed = has & ~(spread < THIN_SPREAD)
+        passed[passed] = _flat(pts, idx[passed])
+        good = passed & turned
         normals[thin[~good]] = before[~good]
-        jet, _, tilts = _jets(pts, thin, idx, dist, found, good)
-        normals[thin[tilts]] = jet[tilts]  # a curved patch's PCA plane leans where its rows are lopsided
-        thin = thin[~good]
+        jet, _, tilts = _jets(pts, thin, idx, dist, found, passed)
+        found[tilts] = jet[tilts]  # a curved patch's PCA plane leans where its rows are lopsided
+        normals[thin[good]] = found[good]
+        last[pos[passed & ~turned]] = found[passed & ~turned]
+        thin, pos = thin[~good], pos[~good]
         if not len(thin):
             return
+    held = np.isfinite(last[pos, 0])
+    normals[thin[held]] = last[pos[held]]
 
 
 def _jets(pts, centres, idx, dist, frame, has):
