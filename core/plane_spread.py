@@ -190,10 +190,12 @@ def _jets(pts, centres, idx, dist, frame, has):
     kernels.jet_normals(pts, idx, np.ascontiguousarray(dist[:, -1]), centres, t1, t2, frame, INITIAL_JET_PIVOT,
                         found, height, good, se)
     good &= has & (dist[:, -1] > 0)
+    tilts = np.zeros(m, dtype=bool)
+    cos = np.abs(np.einsum("ij,ij->i", found[good], frame[good]))  # rows not fitted hold no jet
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        cos = np.abs(np.einsum("ij,ij->i", found, frame))
         slope = np.sqrt(np.maximum(1.0 - cos * cos, 0.0)) / cos  # |(c1, c2)|: the jet's tilt
-    return found, good, good & (slope > JET_SIGNIFICANCE * se)
+        tilts[good] = slope > JET_SIGNIFICANCE * se[good]
+    return found, good, tilts
 
 
 #: a point's initial normal is looked at again (widened) where the plane spread of its k
