@@ -27,9 +27,8 @@ the quartic stays; with real noise its interval (15 terms on 20 points) is wide 
 walk ends at the cubic. Only points whose cubic stopped within the richer models' reach
 take part (where the cubic grew wider, noise, not bias, limits it). A richer model whose
 residual variance per degree of freedom exceeds the cubic's on 15 is skipped: its wider
-neighbourhood holds something no polynomial describes (an edge, a fold).
-(:mod:`core.kernels.jet_degree`, run inside the cubic's intervals on the same sums;
-``res.degree_point`` holds the degree.)
+neighbourhood holds something no polynomial describes (an edge, a fold). (:mod:`core.kernels.jet_degree`,
+run inside the cubic's intervals on the same sums; ``res.degree_point`` holds the degree.)
 
 **The model.** Where the measured noise is below :data:`JET_QUIET` (nearly noise-free) the
 jet itself is the result: it inherits no error of estimated normals (on 7 stand-in
@@ -37,9 +36,9 @@ surfaces 2-30x better than NR at the same k). Elsewhere NR fits a cubic normal f
 chosen k (at least the noise-set initial scale) and refines it: with noise it averages
 better than the jet (1.2-1.8x). Quiet but sparse points, whose 15 neighbours reach over
 0.4 of a radius of curvature (:data:`JET_REACH`), or whose jet tilts from the initial normal
-(:data:`JET_TILT`: three grid lines do not determine a cubic), use NR with the NF rule below.
-``res.k_point`` and ``res.degree_point`` hold the choice. (Values and reasons of the
-constants: :mod:`core.tuning`.)
+(:data:`JET_TILT`: three grid lines do not determine a cubic; :data:`JET_THIN_TILT` where its
+neighbours are a strip of one scan line), use NR with the NF rule below. ``res.k_point`` and
+``res.degree_point`` hold the choice. (Values and reasons of the constants: :mod:`core.tuning`.)
 
 **The principal direction with noise (measured; not solved).** With noise of 0.1-0.2 mean spacing,
 e1 is the quantity the default still loses (to a cubic jet on 240 neighbours on some hold-out
@@ -84,7 +83,7 @@ import warnings
 
 import numpy as np
 
-from . import kernels
+from . import kernels, plane_spread
 from .frame import darboux_frame, height_field_derivatives, turned_over
 from .kernels import jets as jet_kernels, pool as pool_kernels
 from .kernels.frame import intrinsic_frames
@@ -92,7 +91,7 @@ from .linalg import tangent_basis
 from .patch import Chunk
 from .tuning import (AUTO_DEGREE, AUTO_KS, DEGREE_PIVOT, FOLD_COS, FOLD_FRACTION, FOLD_MIN_BAD, FOLD_NOISE, GAMMA,
                      INITIAL_K0, INITIAL_SHARE, JET_DEGREE, JET_GAMMA, JET_DEGREES, JET_KS, JET_QUIET, JET_REACH, JET_SCORE,
-                     NEIGHBOUR_BUDGET, NOISE_KS, NOISE_POOL, RCOND, JET_RCOND, JET_TILT, ROUNDING_NOISE, WIDEN_SHARE)
+                     NEIGHBOUR_BUDGET, NOISE_KS, NOISE_POOL, RCOND, JET_RCOND, JET_THIN_TILT, JET_TILT, ROUNDING_NOISE, WIDEN_SHARE)
 
 __all__ = ["AUTO_DEGREE", "AUTO_KS", "GAMMA", "INITIAL_K0", "NEIGHBOUR_BUDGET", "JET_KS", "JET_DEGREE", "JET_SCORE",
            "candidates", "choose_k", "noise_ratio", "initial_k", "jet_candidates", "noise_variance", "choose_jets",
@@ -376,9 +375,9 @@ def aligned_jets(jets, normals):
 def choose_model(points, normals, nb, has_normal, ks, report):
     """k per point by :func:`choose_jets`, and where the cubic jet itself is the result.
 
-    Returns ``(k, on_jet, quiet, jets, degree)``: jets (aligned with ``normals``, of ``degree`` per
-    point, see :func:`choose_jets`) are kept where the noise is below :data:`JET_QUIET`, the jet
-    does not reach too far (:data:`JET_REACH`) and its normal is within :data:`JET_TILT` of ``normals``;
+    Returns ``(k, on_jet, quiet, jets, degree)``: jets (aligned with ``normals``, of ``degree`` per point, see
+    :func:`choose_jets`) are kept where the noise is below :data:`JET_QUIET`, the jet does not reach too far
+    (:data:`JET_REACH`) and its normal is within :data:`JET_TILT` (:data:`JET_THIN_TILT`) of ``normals``;
     elsewhere NR fits on k neighbours, k by the NF rule (:func:`choose_k`) where the data
     are quiet but too sparse for the jet. A cloud too small for a cubic jet or for the
     noise measurement (fewer than ``NOISE_KS[-1]`` neighbours) keeps NR on ``ks[0]`` everywhere.
@@ -392,7 +391,8 @@ def choose_model(points, normals, nb, has_normal, ks, report):
     quiet = jets[-1] & (noise <= JET_QUIET)
     reach = nb.take(jks[0])[1][:, -1] * np.maximum(np.abs(jets[1]), np.abs(jets[2]))
     tilt = np.abs(np.einsum("ij,ij->i", jets[0], np.nan_to_num(normals)))  # cos to the initial normal (NaN: no jet)
-    on_jet = quiet & (reach <= JET_REACH) & (tilt >= np.cos(np.radians(JET_TILT)))
+    limit = np.where(plane_spread.spans_plane(points, normals, nb, np.maximum(k, jks[0])), JET_TILT, JET_THIN_TILT)
+    on_jet = quiet & (reach <= JET_REACH) & (tilt >= np.cos(np.radians(limit)))
     nf_rule = quiet & ~on_jet
     if nf_rule.any():  # too few points per radius of curvature for a position jet: NF's own rule
         k_nf = choose_k(points, normals, nb, nf_rule, ks, AUTO_DEGREE, lambda *a: None)

@@ -58,6 +58,11 @@ INITIAL_JET_PIVOT = 1e-4
 #: pivots of 1e-4). Measured on the noise-free tuning shapes: at most 2.8 degrees (chirp),
 #: p99.9 1.5; the jets of the grids above: 5-80 degrees.
 JET_TILT = 5.0
+#: ... and within this many where the jet's neighbours do not span the plane of the initial
+#: normal (core.plane_spread.THIN_SPREAD): a strip of one scan line. A rotating scanner's noisy
+#: ring is a flat strip of its cone, tilted from the ground by the ray's elevation (2.6-5.1 degrees
+#: 20-40 m out): its quartic jet on 20 neighbours undid the initial normals' widening (3.6 -> 0.01).
+JET_THIN_TILT = 1.0
 
 # ----------------------------------------------------------------------------- neighbour search
 
@@ -132,16 +137,15 @@ INITIAL_SHARE = 10
 #: cloud's median (core.initial_normals.unfolded: the largest eigenvalue of their unsigned scatter):
 #: at the 2-spacing rim of shapes_thin.thin_wedge the 58-neighbour plane lay across both faces
 FOLD_SPREAD = 0.8
-#: ... but not where its PCA_K nearest are a noisy scan line: as wide both ways across the
-#: line, sqrt(lambda_min / lambda_mid) of their scatter above this, as they are narrow along it
-#: (sqrt(lambda_mid / lambda_max) below core.plane_spread.LINE_SPREAD); there the small normals
-#: disagree by the line's noise, not at a fold. A sphere in 30 rings of 300 points with noise
-#: 0.05 of the rings' spacing: normals 5.2 -> 1.3 degrees off at the 90th percentile (0.1 of
-#: it: 41 -> 27; a 10th percentile of 0.47-0.51 above latitude 60). The rims of the thin shapes
-#: at noise 0.1-0.3 spacing also have 6-25 % of their points above 0.45, but spread along the
-#: rim (1st percentile 0.38-0.44): they keep falling back (the fit of the wide normal to the
-#: small rows does not tell the two apart: medians 0.77-0.83 in both). The same width makes the
-#: initial normals of k="auto" look wider (core.plane_spread.spanning_normals).
+#: ... but not where its PCA_K nearest are a noisy scan line: as wide both ways across the line,
+#: sqrt(lambda_min / lambda_mid) of their scatter above this, as they are narrow along it (sqrt(
+#: lambda_mid / lambda_max) below core.plane_spread.LINE_SPREAD); there the small normals disagree
+#: by the line's noise (a sphere in 30 rings of 300 points, noise 0.05 of their spacing: normals
+#: 5.2 -> 1.3 degrees off at the 90th percentile; 10th percentile of the width 0.47-0.51 above
+#: latitude 60). Thin shapes' rims at noise 0.1-0.3 spacing: 6-25 % of their points above 0.45,
+#: spread along the rim (1st percentile 0.38-0.44): they keep falling back. Noisy surfaces at 15
+#: neighbours (torus, 99th percentile): 0.11 / 0.20 / 0.30 / 0.48 at noise 0.1 / 0.2 / 0.3 / 0.5
+#: spacing. The same width widens k="auto"'s initial normals (core.plane_spread.spanning_normals).
 FOLD_FLAT = 0.45
 
 # ----------------------------------------------------------------------------- automatic k (core.scale)

@@ -276,7 +276,9 @@ def test_a_rotating_scanner_s_ground_takes_the_normal_across_its_rings():
     each noisy ring is a flat strip of the scanner's cone, tilted by the ray's elevation.
     Widened across rings the normal turns by less than core.plane_spread.LINE_TURN from the
     strip's, and no candidate was taken: 6.5 degrees off at the median, |H| 0.005. Where no
-    candidate turns, the widest flat one is taken: 0.01 degrees."""
+    candidate turns, the widest flat one is taken: 0.01 degrees. 20-40 m out the quartic jet
+    on 20 neighbours of a strip then undid it (3.6 degrees, within core.tuning.JET_TILT); a
+    jet on neighbours that do not span the plane is held to core.tuning.JET_THIN_TILT: 0.01."""
     h = 1.8
     el, az = np.meshgrid(np.radians(np.linspace(-30, -3, 24)), np.radians(np.arange(0, 360, 0.2)), indexing="ij")
     rays = np.stack([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)], -1).reshape(-1, 3)
@@ -284,7 +286,9 @@ def test_a_rotating_scanner_s_ground_takes_the_normal_across_its_rings():
     pts = np.array([0.0, 0.0, h]) + reach[:, None] * rays
     pts = pts[np.hypot(pts[:, 0], pts[:, 1]) < 40]
     res = core.estimate(pts, orientation=(0.0, 0.0, h))
-    ring = (np.hypot(pts[:, 0], pts[:, 1]) >= 10) & (np.hypot(pts[:, 0], pts[:, 1]) < 20) & res.valid
-    tilt = np.degrees(np.arccos(np.clip(np.abs(res.normals[ring, 2]), 0.0, 1.0)))
-    assert ring.sum() > 8000
-    assert np.median(tilt) < 1.0 and np.median(np.abs(res.mean[ring])) < 0.002
+    out = np.hypot(pts[:, 0], pts[:, 1])
+    for near, far, count in ((10, 20, 8000), (20, 40, 3000)):
+        ring = (out >= near) & (out < far) & res.valid
+        tilt = np.degrees(np.arccos(np.clip(np.abs(res.normals[ring, 2]), 0.0, 1.0)))
+        assert ring.sum() > count
+        assert np.median(tilt) < 1.0 and np.median(np.abs(res.mean[ring])) < 0.002, (near, np.median(tilt))
