@@ -150,8 +150,12 @@ def _widen(pts, normals, nb, thin, ks) -> None:
     candidate turns from the line's plane, the widest that passes the other tests is taken:
     its normal is within :data:`LINE_TURN` of the line's, and it spans more lines (a
     rotating scanner's ground: each noisy ring is a flat strip of the scanner's cone,
-    tilted by the ray's elevation, 3-8 degrees beyond 10 m, which no candidate turns from)."""
+    tilted by the ray's elevation, 3-8 degrees beyond 10 m, which no candidate turns from).
+    A candidate whose 2-jet is not determined (two lines: their PCA plane leans towards the
+    other line) is taken only where no wider one is: near the edge of a sphere patch scanned
+    along parallels 12 apart, two lines' PCA normals were 13-15 degrees off, three lines' 0.1."""
     last = np.full((len(thin), 3), np.nan)  # the widest candidate that passed all but the turn
+    first = np.full((len(thin), 3), np.nan)  # the first that passed all, its 2-jet not determined
     pos = np.arange(len(thin))
     for cand in ks:
         idx, dist = (np.ascontiguousarray(a) for a in nb.rows(thin, cand))
@@ -161,34 +165,36 @@ def _widen(pts, normals, nb, thin, ks) -> None:
         before = normals[thin]
         normals[thin] = found
         plane_spread(pts, normals, thin, idx, np.arange(len(thin)), np.full(len(thin), cand), spread)
+        normals[thin] = before
         turned = np.abs(np.einsum("ij,ij->i", np.nan_to_num(found), before)) < np.cos(np.radians(LINE_TURN))
         passed = has & ~(spread < THIN_SPREAD)
         passed[passed] = _surface(pts, idx[passed])
-        good = passed & turned
-        normals[thin[~good]] = before[~good]
-        jet, _, tilts = _jets(pts, thin, idx, dist, found, passed)
+        jet, determined, tilts = _jets(pts, thin, idx, dist, found, passed, WIDEN_PIVOT)
         found[tilts] = jet[tilts]  # a curved patch's PCA plane leans where its rows are lopsided
+        good = passed & turned & determined
+        spare = passed & turned & ~determined & np.isnan(first[pos, 0])
+        first[pos[spare]] = found[spare]
         normals[thin[good]] = found[good]
         last[pos[passed & ~turned]] = found[passed & ~turned]
         thin, pos = thin[~good], pos[~good]
         if not len(thin):
             return
-    held = np.isfinite(last[pos, 0])
-    normals[thin[held]] = last[pos[held]]
+    held = np.where(np.isfinite(first[pos, :1]), first[pos], last[pos])
+    normals[thin[np.isfinite(held[:, 0])]] = held[np.isfinite(held[:, 0])]
 
 
-def _jets(pts, centres, idx, dist, frame, has):
+def _jets(pts, centres, idx, dist, frame, has, pivot=INITIAL_JET_PIVOT):
     """The 2-jet normals (Cazals & Pouget; :func:`core.normals.jet_normals`) of ``centres``
     on the rows ``idx`` / ``dist``, in the frames of the normals ``frame`` where ``has``:
     ``(normals, good, tilts)``, good False where the jet is not determined
-    (:data:`core.tuning.INITIAL_JET_PIVOT`) or there was no frame, tilts True where the jet
+    (its smallest equilibrated pivot at most ``pivot``) or there was no frame, tilts True where the jet
     tilts the frame's normal beyond what its residual explains (:data:`JET_SIGNIFICANCE`
     standard errors of its slope): the frame is biased, not the jet noisy."""
     frame = np.where(has[:, None], frame, (0.0, 0.0, 1.0))  # any frame: a row without a normal is not kept
     t1, t2 = tangent_basis(frame)
     m = len(centres)
     found, height, good, se = np.empty((m, 3)), np.empty(m), np.empty(m, dtype=bool), np.empty(m)
-    kernels.jet_normals(pts, idx, np.ascontiguousarray(dist[:, -1]), centres, t1, t2, frame, INITIAL_JET_PIVOT,
+    kernels.jet_normals(pts, idx, np.ascontiguousarray(dist[:, -1]), centres, t1, t2, frame, pivot,
                         found, height, good, se)
     good &= has & (dist[:, -1] > 0)
     tilts = np.zeros(m, dtype=bool)
@@ -220,6 +226,14 @@ LINE_TURN = 10.0
 #: jet's residual is nil; with noise along the lines the jet across them is the noisier of the
 #: two (stripes 20 spacings apart, noise 0.1: mean |H error| 0.13 with PCA, 0.30 with jets).
 JET_SIGNIFICANCE = 2.0
+#: a widened neighbourhood is taken where its 2-jet is determined with pivots above this
+#: (else a wider one is looked for, and it is taken only where none is): two scan lines leave
+#: the quadric's term across them undetermined, their PCA plane leans towards the other line
+#: (13-15 degrees off near the edge of a sphere patch along parallels 12 apart), and a
+#: scanner's jitter along them passes core.tuning.INITIAL_JET_PIVOT with jets 10-47 degrees
+#: off (the end ring of a cylinder scanned in rings: 8-36 % of its points at 1e-4, 1 % at 1e-2,
+#: 0 at 3e-2); three lines' pivots pass 1e-2 (all at 40+ neighbours).
+WIDEN_PIVOT = 1e-2
 #: a widened neighbourhood is a surface when its points lie this close to their plane:
 #: sqrt(lambda_min / lambda_mid) of their scatter at most this (a smooth patch of scan lines
 #: is flat at its scale: 0.02-0.09 on the sphere above at 56-160 neighbours; a cube's
