@@ -7,7 +7,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from ._base import OPTS
+from ._base import OPTS, theta
 from .algebra import chol_solve, cholesky, row_scatter, smallest_eigvec_sym3
 
 
@@ -40,11 +40,48 @@ def plane_spread(points, normals, centres, idx, rows, kc, out):
             m11 += dy * dy
             m12 += dy * dz
             m22 += dz * dz
-        tr = m00 + m11 + m22
-        e2 = m00 * m11 - m01 * m01 + m00 * m22 - m02 * m02 + m11 * m22 - m12 * m12
-        half = 0.5 * tr
-        top = half + math.sqrt(max(half * half - e2, 0.0))
-        out[r] = math.sqrt(max(e2, 0.0) / (top * top)) if top > 0.0 else math.nan  # lambda_min = e2 / lambda_max
+        out[r] = _spread(m00, m01, m02, m11, m12, m22)
+
+
+@njit(**OPTS, parallel=True)
+def weighted_plane_spread(points, normals, start, idx, dist, reach, out):
+    """:func:`plane_spread` of points ``start + i`` over row i of ``idx``, each neighbour
+    weighted by eq. 14 as in the weighted PCA (:func:`core.kernels.pca.pca_normals`, h =
+    ``reach`` x the row's last distance): the spread the PCA normal was fitted on, where the
+    farthest neighbours, weighed about 1e-3, count for little."""
+    k = idx.shape[1]
+    for i in prange(idx.shape[0]):
+        g = start + i
+        nx, ny, nz = normals[g, 0], normals[g, 1], normals[g, 2]
+        h = dist[i, k - 1] * reach
+        if not (math.isfinite(nx) and math.isfinite(ny) and math.isfinite(nz) and h > 0.0):
+            out[i] = math.nan
+            continue
+        m00 = m01 = m02 = m11 = m12 = m22 = 0.0
+        for j in range(k):
+            q = idx[i, j]
+            w = theta(dist[i, j] / h)
+            dx, dy, dz = points[q, 0] - points[g, 0], points[q, 1] - points[g, 1], points[q, 2] - points[g, 2]
+            s = dx * nx + dy * ny + dz * nz
+            dx, dy, dz = dx - s * nx, dy - s * ny, dz - s * nz
+            m00 += w * dx * dx
+            m01 += w * dx * dy
+            m02 += w * dx * dz
+            m11 += w * dy * dy
+            m12 += w * dy * dz
+            m22 += w * dz * dz
+        out[i] = _spread(m00, m01, m02, m11, m12, m22)
+
+
+@njit(**OPTS, inline="always")
+def _spread(m00, m01, m02, m11, m12, m22):
+    """sqrt(lambda_min / lambda_max) of the two non-zero eigenvalues of a projected
+    moment matrix (the roots of x^2 - tr x + e2); NaN where it is zero."""
+    tr = m00 + m11 + m22
+    e2 = m00 * m11 - m01 * m01 + m00 * m22 - m02 * m02 + m11 * m22 - m12 * m12
+    half = 0.5 * tr
+    top = half + math.sqrt(max(half * half - e2, 0.0))
+    return math.sqrt(max(e2, 0.0) / (top * top)) if top > 0.0 else math.nan  # lambda_min = e2 / lambda_max
 
 
 @njit(**OPTS, parallel=True)

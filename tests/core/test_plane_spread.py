@@ -127,3 +127,29 @@ def test_curve_share_is_small_along_one_curve_and_one_across_a_surface():
     assert curve == pytest.approx([reference(pts[r]) for r in rows], rel=1e-6)
     assert curve[0] < 0.05 and curve[1] > 0.5 and curve[2] > 0.8
     assert (flat < 0.05).all()
+
+
+def test_weighted_spread_counts_neighbours_as_the_pca_weighs_them():
+    """A line of 17 points and two points off it at the far end of the neighbourhood: they
+    span the plane unweighted, but weigh ~1e-3 in the PCA (eq. 14), and the weighted spread
+    is about that small; all around a point both are 1."""
+    from core.kernels.spread import weighted_plane_spread
+    from core.tuning import THETA_REACH
+
+    line = np.c_[np.linspace(-1, 1, 17), np.zeros(17), np.zeros(17)]
+    pts = np.vstack([line, [[0.0, 1.05, 0.0], [0.0, -1.05, 0.0]]])
+    nb = core.build_neighbours(pts, 19)
+    nrm = np.tile([0.0, 0.0, 1.0], (len(pts), 1))
+    idx, dist = nb.take(19)
+    out = np.empty(len(pts))
+    weighted_plane_spread(pts, nrm, 0, np.ascontiguousarray(idx), np.ascontiguousarray(dist), THETA_REACH, out)
+    assert plane_spread.spreads(pts, nrm, nb, 19, [8])[0] > 0.5
+    assert out[8] < 0.1
+    t = np.linspace(0, 2 * np.pi, 8, endpoint=False)
+    ring = np.vstack([[0.0, 0.0, 0.0], np.c_[np.cos(t), np.sin(t), 0 * t]])
+    nb = core.build_neighbours(ring, 9)
+    idx, dist = nb.take(9)
+    out = np.empty(9)
+    weighted_plane_spread(ring, np.tile([0.0, 0.0, 1.0], (9, 1)), 0, np.ascontiguousarray(idx), np.ascontiguousarray(dist),
+                          THETA_REACH, out)
+    assert out[0] == pytest.approx(1.0)
