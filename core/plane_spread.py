@@ -81,7 +81,7 @@ def widened(pts, normals, nb, k, ks) -> np.ndarray:
     return out
 
 
-def spanning_normals(pts, normals, ok, nb, k: int, ks):
+def spanning_normals(pts, normals, ok, nb, k: int, ks, suspect=None):
     """Initial normals where a point's ``k`` nearest lie along one curved line (a scan line,
     its neighbours' lines farther than k reach), or in a tube as wide both ways across
     (a noisy scan line, :func:`_tubes`): the weighted-PCA normal (eqs. 13-14) of the
@@ -97,7 +97,8 @@ def spanning_normals(pts, normals, ok, nb, k: int, ks):
     wires and a cube's wireframe are curves, not a surface (widened without those tests, 3.3
     and 5.5x as many of a wireframe's points got normals, and |k| of 1e5)."""
     line = ok & (~spans_plane(pts, normals, nb, np.full(len(pts), k), LINE_SPREAD) | _tubes(pts, nb, k))
-    thin = np.flatnonzero(line | (ok & _weighted_thin(pts, normals, nb, k)))
+    doubt = _weighted_thin(pts, normals, nb, k) if suspect is None else _weighted_thin(pts, normals, nb, k) | suspect
+    thin = np.flatnonzero(line | (ok & doubt))
     if not len(thin):
         return normals, ok
     normals = normals.copy()
@@ -237,6 +238,11 @@ JET_SIGNIFICANCE = 2.0
 #: off (the end ring of a cylinder scanned in rings: 8-36 % of its points at 1e-4, 1 % at 1e-2,
 #: 0 at 3e-2); three lines' pivots pass 1e-2 (all at 40+ neighbours).
 WIDEN_PIVOT = 1e-2
+#: a point's initial normal is looked at again (widened) where, with the scanner's viewpoint
+#: given, the ray to it lies within this many degrees of the normal's plane (:func:`ray_sheets`):
+#: a ring of a rotating scanner spread along its rays by range noise, 0.1-0.3 degrees; the
+#: ground it scans meets the rays at 3.6-25 degrees
+RAY_SHEET = 1.0
 #: a widened neighbourhood is a surface when its points lie this close to their plane:
 #: sqrt(lambda_min / lambda_mid) of their scatter at most this (a smooth patch of scan lines
 #: is flat at its scale: 0.02-0.09 on the sphere above at 56-160 neighbours; a cube's
@@ -267,6 +273,21 @@ def _tubes(pts, nb, k) -> np.ndarray:
         kernels.scatter_shapes(pts, rows, flat, line)
         out[start:start + len(rows)] = flat > FOLD_FLAT
     return out
+
+
+def ray_sheets(pts, normals, view) -> np.ndarray | None:
+    """(N,) bool: the plane of a point's normal holds the ray from the scanner's viewpoint
+    ``view`` (a (3,) tuple; None for any other orientation) within :data:`RAY_SHEET` degrees.
+    A surface seen from a scanner meets its rays at an angle; range noise wider than the
+    points are apart along a scan line spreads the line into a sheet along the rays (a
+    rotating scanner's ground within 10 m: normals tilted by the ray's elevation, 15-25
+    degrees, with the ray 0.1-0.3 degrees from their plane at 15-28 neighbours)."""
+    if not isinstance(view, tuple):
+        return None
+    ray = pts - np.asarray(view)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ray /= np.linalg.norm(ray, axis=1, keepdims=True)
+        return np.abs(np.einsum("ij,ij->i", ray, np.nan_to_num(normals))) < np.sin(np.radians(RAY_SHEET))
 
 
 def _weighted_thin(pts, normals, nb, k) -> np.ndarray:
