@@ -124,6 +124,13 @@ def chol_solve(L, d, p, b, x):
 
 
 @njit(**OPTS, inline="always")
+def add_outer(m00, m01, m02, m11, m12, m22, w, dx, dy, dz):
+    """The six entries of a symmetric 3x3 moment matrix plus w d d^T."""
+    return (m00 + w * dx * dx, m01 + w * dx * dy, m02 + w * dx * dz,
+            m11 + w * dy * dy, m12 + w * dy * dz, m22 + w * dz * dz)
+
+
+@njit(**OPTS, inline="always")
 def row_scatter(points, idx, r, j0, k):
     """The centroid of the points ``idx[r, j0:k]`` and their second moments about it:
     (cx, cy, cz, c00, c01, c02, c11, c12, c22)."""
@@ -139,10 +146,5 @@ def row_scatter(points, idx, r, j0, k):
     for j in range(j0, k):
         q = idx[r, j]
         dx, dy, dz = points[q, 0] - cx, points[q, 1] - cy, points[q, 2] - cz
-        c00 += dx * dx
-        c01 += dx * dy
-        c02 += dx * dz
-        c11 += dy * dy
-        c12 += dy * dz
-        c22 += dz * dz
+        c00, c01, c02, c11, c12, c22 = add_outer(c00, c01, c02, c11, c12, c22, 1.0, dx, dy, dz)
     return cx, cy, cz, c00, c01, c02, c11, c12, c22

@@ -7,7 +7,7 @@ import math
 from numba import njit, prange
 
 from ._base import OPTS, theta
-from .algebra import smallest_eigvec_sym3
+from .algebra import add_outer, smallest_eigvec_sym3
 
 
 @njit(**OPTS, parallel=True)
@@ -46,12 +46,7 @@ def _pca_row(points, g, idx, dist, i, reach, collinear, normals, ok):
         dx = (points[q, 0] - points[g, 0]) / h
         dy = (points[q, 1] - points[g, 1]) / h
         dz = (points[q, 2] - points[g, 2]) / h
-        c00 += w * dx * dx
-        c01 += w * dx * dy
-        c02 += w * dx * dz
-        c11 += w * dy * dy
-        c12 += w * dy * dz
-        c22 += w * dz * dz
+        c00, c01, c02, c11, c12, c22 = add_outer(c00, c01, c02, c11, c12, c22, w, dx, dy, dz)
     l0, l1, l2, x, y, z = smallest_eigvec_sym3(c00, c01, c02, c11, c12, c22)
     if l1 > collinear * max(l2, 1e-300) and l1 > l0 and math.isfinite(x):
         normals[i, 0], normals[i, 1], normals[i, 2] = x, y, z

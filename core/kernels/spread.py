@@ -8,7 +8,7 @@ import numpy as np
 from numba import njit, prange
 
 from ._base import OPTS, theta
-from .algebra import chol_solve, cholesky, row_scatter, smallest_eigvec_sym3
+from .algebra import add_outer, chol_solve, cholesky, row_scatter, smallest_eigvec_sym3
 
 
 @njit(**OPTS, parallel=True)
@@ -34,12 +34,7 @@ def plane_spread(points, normals, centres, idx, rows, kc, out):
             dx, dy, dz = points[q, 0] - points[i, 0], points[q, 1] - points[i, 1], points[q, 2] - points[i, 2]
             s = dx * nx + dy * ny + dz * nz
             dx, dy, dz = dx - s * nx, dy - s * ny, dz - s * nz
-            m00 += dx * dx
-            m01 += dx * dy
-            m02 += dx * dz
-            m11 += dy * dy
-            m12 += dy * dz
-            m22 += dz * dz
+            m00, m01, m02, m11, m12, m22 = add_outer(m00, m01, m02, m11, m12, m22, 1.0, dx, dy, dz)
         out[r] = _spread(m00, m01, m02, m11, m12, m22)
 
 
@@ -64,12 +59,7 @@ def weighted_plane_spread(points, normals, start, idx, dist, reach, out):
             dx, dy, dz = points[q, 0] - points[g, 0], points[q, 1] - points[g, 1], points[q, 2] - points[g, 2]
             s = dx * nx + dy * ny + dz * nz
             dx, dy, dz = dx - s * nx, dy - s * ny, dz - s * nz
-            m00 += w * dx * dx
-            m01 += w * dx * dy
-            m02 += w * dx * dz
-            m11 += w * dy * dy
-            m12 += w * dy * dz
-            m22 += w * dz * dz
+            m00, m01, m02, m11, m12, m22 = add_outer(m00, m01, m02, m11, m12, m22, w, dx, dy, dz)
         out[i] = _spread(m00, m01, m02, m11, m12, m22)
 
 
