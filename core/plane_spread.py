@@ -97,14 +97,14 @@ def spanning_normals(pts, normals, ok, nb, k: int, ks, suspect=None):
     wires and a cube's wireframe are curves, not a surface (widened without those tests, 3.3
     and 5.5x as many of a wireframe's points got normals, and |k| of 1e5)."""
     line = ok & (~spans_plane(pts, normals, nb, np.full(len(pts), k), LINE_SPREAD) | _tubes(pts, nb, k))
-    doubt = _weighted_thin(pts, normals, nb, k) if suspect is None else _weighted_thin(pts, normals, nb, k) | suspect
-    thin = np.flatnonzero(line | (ok & doubt))
+    sheet = np.zeros(len(pts), dtype=bool) if suspect is None else ok & suspect
+    thin = np.flatnonzero(line | sheet | (ok & _weighted_thin(pts, normals, nb, k)))
     if not len(thin):
         return normals, ok
     normals = normals.copy()
     for start in range(0, len(thin), _CHUNK):  # chunks: 320 neighbours of 1M thin points would be 2.5 GB
         part = thin[start:start + _CHUNK]
-        _widen(pts, normals, nb, part, [c for c in ks if c > k], line[part])
+        _widen(pts, normals, nb, part, [c for c in ks if c > k], line[part], sheet[part], nb.rows(part, k)[0])
     return normals, ok
 
 
@@ -147,7 +147,7 @@ def _determine(pts, normals, nb, todo, ks) -> None:
             return
 
 
-def _widen(pts, normals, nb, thin, ks, line) -> None:
+def _widen(pts, normals, nb, thin, ks, line, sheet, small) -> None:
     """:func:`spanning_normals` of the centres ``thin``, in place in ``normals``. Where no
     candidate turns from the line's plane and the centre is on a ``line`` ((m,) bool: its
     nearest do not span the plane unweighted, or are a tube; not only under the PCA's
@@ -157,7 +157,11 @@ def _widen(pts, normals, nb, thin, ks, line) -> None:
     tilted by the ray's elevation, 3-8 degrees beyond 10 m, which no candidate turns from).
     A candidate whose 2-jet is not determined (two lines: their PCA plane leans towards the
     other line) is taken only where no wider one is: near the edge of a sphere patch scanned
-    along parallels 12 apart, two lines' PCA normals were 13-15 degrees off, three lines' 0.1."""
+    along parallels 12 apart, two lines' PCA normals were 13-15 degrees off, three lines' 0.1.
+    A centre neither on a line nor on a ray ``sheet`` (thin only under the PCA's weights)
+    takes a candidate only where it fits the centre's own nearest ``small`` at least as well
+    as its normal did (:func:`_explains`): under a scanner's tripod, where its rings are small
+    circles, some turned candidates were 86 degrees off (|H| up to 124 per metre)."""
     last = np.full((len(thin), 3), np.nan)  # the widest candidate that passed all but the turn
     first = np.full((len(thin), 3), np.nan)  # the first that passed all, its 2-jet not determined
     pos = np.arange(len(thin))
@@ -175,8 +179,10 @@ def _widen(pts, normals, nb, thin, ks, line) -> None:
         passed[passed] = _surface(pts, idx[passed])
         jet, determined, tilts = _jets(pts, thin, idx, dist, found, passed, WIDEN_PIVOT)
         found[tilts] = jet[tilts]  # a curved patch's PCA plane leans where its rows are lopsided
-        good = passed & turned & determined
-        spare = passed & turned & ~determined & np.isnan(first[pos, 0])
+        fits = line[pos] | sheet[pos] | ~(passed & turned)
+        fits[~fits] = _explains(pts, small[pos[~fits]], found[~fits], before[~fits])
+        good = passed & turned & determined & fits
+        spare = passed & turned & ~determined & fits & np.isnan(first[pos, 0])
         first[pos[spare]] = found[spare]
         normals[thin[good]] = found[good]
         last[pos[passed & ~turned]] = found[passed & ~turned]
@@ -185,6 +191,13 @@ def _widen(pts, normals, nb, thin, ks, line) -> None:
             return
     held = np.where(np.isfinite(first[pos, :1]) | ~line[pos, None], first[pos], last[pos])
     normals[thin[np.isfinite(held[:, 0])]] = held[np.isfinite(held[:, 0])]
+
+
+def _explains(pts, rows, found, before) -> np.ndarray:
+    """(m,) bool: the points of each row of ``rows`` (a point's own nearest) lie at least as
+    close to a plane normal to ``found`` as to one normal to ``before``, in RMS."""
+    d = pts[rows] - pts[rows].mean(axis=1, keepdims=True)
+    return (np.einsum("mki,mi->mk", d, found) ** 2).sum(1) <= (np.einsum("mki,mi->mk", d, before) ** 2).sum(1)
 
 
 def _jets(pts, centres, idx, dist, frame, has, pivot=INITIAL_JET_PIVOT):

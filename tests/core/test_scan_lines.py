@@ -187,6 +187,11 @@ def test_the_floor_under_a_scanner_keeps_its_normal():
     assert near.sum() > 0.9 * np.count_nonzero(np.hypot(pts[:, 0], pts[:, 1]) < 0.2)
     assert np.median(tilt) < 10.0
     assert np.mean(np.abs(res.mean[near]) > 1.0) < 0.2
+    # a point thin only under the PCA's weights takes a widened normal only where it fits
+    # its own nearest as well (core.plane_spread._explains): some were 86 degrees off, |H|
+    # 124 per metre at the 99th percentile (measured now: 3.2; median tilt 1.8)
+    assert np.percentile(np.abs(res.mean[near]), 99) < 10.0
+    assert np.percentile(tilt, 90) < 6.0
 
 
 def _rings(n_rings=30, n_ring=300):
