@@ -50,18 +50,16 @@ def spreads(pts, normals, nb, k, centres=None) -> np.ndarray:
     return out
 
 
-def spans_plane(pts, normals, nb, k, threshold=THIN_SPREAD) -> np.ndarray:
-    """(N,) bool: each point's first ``k`` (N,) neighbours span its tangent plane, a plane
-    spread of at least ``threshold`` (True where it has no normal: nothing is fitted there
-    anyway). Judged first on the graph's held columns (a point whose nearer neighbours span
-    the plane is not re-searched)."""
-    ok = np.ones(len(pts), dtype=bool)
+def spans_plane(pts, normals, nb, k, threshold=THIN_SPREAD, centres=None) -> np.ndarray:
+    """(m,) bool: the first ``k`` (m,) neighbours of each of ``centres`` (default: every
+    point) span its tangent plane, a plane spread of at least ``threshold`` (True where it
+    has no normal: nothing is fitted there anyway). Judged first on the graph's held
+    columns (a point whose nearer neighbours span the plane is not re-searched)."""
     narrow = np.minimum(k, nb.width)
-    s = spreads(pts, normals, nb, narrow)
-    ok[s < threshold] = False
+    ok = ~(spreads(pts, normals, nb, narrow, centres) < threshold)
     again = np.flatnonzero(~ok & (k > narrow))
     if len(again):
-        ok[again] = ~(spreads(pts, normals, nb, k[again], again) < threshold)
+        ok[again] = ~(spreads(pts, normals, nb, k[again], again if centres is None else centres[again]) < threshold)
     return ok
 
 
@@ -280,8 +278,9 @@ def _tubes(pts, nb, k) -> np.ndarray:
     corner is not flat either, but no widened neighbourhood of it is flat, so it keeps its
     normal."""
     out = np.zeros(len(pts), dtype=bool)
+    idx = nb.take_indices(k)  # once: a graph served from another (one_sheet) copies it per call
     for start in range(0, len(pts), 131_072):
-        rows = np.ascontiguousarray(nb.take(k)[0][start:start + 131_072])
+        rows = np.ascontiguousarray(idx[start:start + 131_072])
         flat, line = np.empty(len(rows)), np.empty(len(rows))
         kernels.scatter_shapes(pts, rows, flat, line)
         out[start:start + len(rows)] = flat > FOLD_FLAT
@@ -311,8 +310,9 @@ def _weighted_thin(pts, normals, nb, k) -> np.ndarray:
     of the initial normals more than 5 degrees off, half of them not thin unweighted).
     Honest samplings at 15-28 neighbours, noise 0-0.5: below 0.3 at most 0.08 %."""
     out = np.zeros(len(pts), dtype=bool)
+    rows = nb.take(k)  # once, as in :func:`_tubes`
     for start in range(0, len(pts), 131_072):
-        idx, dist = (np.ascontiguousarray(a[start:start + 131_072]) for a in nb.take(k))
+        idx, dist = (np.ascontiguousarray(a[start:start + 131_072]) for a in rows)
         spread = np.empty(len(idx))
         weighted_plane_spread(pts, np.ascontiguousarray(normals, dtype=np.float64), start, idx, dist, THETA_REACH, spread)
         out[start:start + len(idx)] = spread < LINE_SPREAD

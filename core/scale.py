@@ -58,9 +58,8 @@ fitting the hold-out; the jet's relative error does not fall with its reach h|k|
 per-point choice follows; (4) *a wider scale for the direction alone* (NR's shape operator averaged
 over nearby points): worse, 1.6x on the torus with 8 points, because the lines of curvature turn by
 about 2 degrees between nearest neighbours there, more than the 0.4 degree error being averaged.
-What remains is a model difference that depends on the surface; choosing between the two models per
-point would need NR's own variance, which its least squares underestimates (neighbouring estimated
-normals share their neighbours).
+What remains is a model difference that depends on the surface; choosing between the two models per point
+would need NR's own variance, which its least squares underestimates (estimated normals share neighbours).
 
 **The NF rule** (:func:`choose_k`, issue 4; now only for those sparse points): small
 neighbourhoods give unbiased but noisy normal derivatives; large ones average the
@@ -378,10 +377,9 @@ def choose_model(points, normals, nb, has_normal, ks, report):
     Returns ``(k, on_jet, quiet, jets, degree)``: jets (aligned with ``normals``, of ``degree`` per point, see
     :func:`choose_jets`) are kept where the noise is below :data:`JET_QUIET`, the jet does not reach too far
     (:data:`JET_REACH`) and its normal is within :data:`JET_TILT` (:data:`JET_THIN_TILT`) of ``normals``;
-    elsewhere NR fits on k neighbours, k by the NF rule (:func:`choose_k`) where the data
-    are quiet but too sparse for the jet. A cloud too small for a cubic jet or for the
-    noise measurement (fewer than ``NOISE_KS[-1]`` neighbours) keeps NR on ``ks[0]`` everywhere.
-    """
+    elsewhere NR fits on k neighbours, k by the NF rule (:func:`choose_k`) where the data are quiet but too
+    sparse for the jet. A cloud too small for a cubic jet or for the noise measurement (fewer than
+    ``NOISE_KS[-1]`` neighbours) keeps NR on ``ks[0]`` everywhere."""
     n = len(points)
     jks = tuple(k for k in jet_candidates(n) if k <= ks[-1])
     if not jks or ks[-1] < NOISE_KS[-1]:
@@ -391,7 +389,9 @@ def choose_model(points, normals, nb, has_normal, ks, report):
     quiet = jets[-1] & (noise <= JET_QUIET)
     reach = nb.take(jks[0])[1][:, -1] * np.maximum(np.abs(jets[1]), np.abs(jets[2]))
     tilt = np.abs(np.einsum("ij,ij->i", jets[0], np.nan_to_num(normals)))  # cos to the initial normal (NaN: no jet)
-    limit = np.where(plane_spread.spans_plane(points, normals, nb, np.maximum(k, jks[0])), JET_TILT, JET_THIN_TILT)
+    limit = np.full(n, JET_TILT)
+    doubt = np.flatnonzero(quiet & (reach <= JET_REACH) & (tilt < np.cos(np.radians(JET_THIN_TILT))))  # where it matters
+    limit[doubt[~plane_spread.spans_plane(points, normals, nb, np.maximum(k[doubt], jks[0]), centres=doubt)]] = JET_THIN_TILT
     on_jet = quiet & (reach <= JET_REACH) & (tilt >= np.cos(np.radians(limit)))
     nf_rule = quiet & ~on_jet
     if nf_rule.any():  # too few points per radius of curvature for a position jet: NF's own rule
