@@ -124,6 +124,20 @@ def chol_solve(L, d, p, b, x):
 
 
 @njit(**OPTS, inline="always")
+def tangent_pair(nx, ny, nz):
+    """An orthonormal tangent basis of the unit normal n: t1 = n x a / |n x a| (a the x axis,
+    or the y axis where n is near x) and t2 = n x t1; (t1x, t1y, t1z, t2x, t2y, t2z)."""
+    if abs(nx) < 0.9:
+        ax, ay, az = 1.0, 0.0, 0.0
+    else:
+        ax, ay, az = 0.0, 1.0, 0.0
+    t1x, t1y, t1z = ny * az - nz * ay, nz * ax - nx * az, nx * ay - ny * ax
+    s = math.sqrt(t1x * t1x + t1y * t1y + t1z * t1z)
+    t1x, t1y, t1z = t1x / s, t1y / s, t1z / s
+    return t1x, t1y, t1z, ny * t1z - nz * t1y, nz * t1x - nx * t1z, nx * t1y - ny * t1x
+
+
+@njit(**OPTS, inline="always")
 def add_outer(m00, m01, m02, m11, m12, m22, w, dx, dy, dz):
     """The six entries of a symmetric 3x3 moment matrix plus w d d^T."""
     return (m00 + w * dx * dx, m01 + w * dx * dy, m02 + w * dx * dz,

@@ -9,6 +9,7 @@ from numba import njit, prange
 
 from ._base import BLOCK
 from ._base import OPTS as _OPTS
+from .algebra import tangent_pair
 
 
 @njit(**_OPTS, parallel=True)
@@ -40,15 +41,7 @@ def _extent(points, normals, idx, i, p, dirs, scratch, gap, reach):
     nx, ny, nz = normals[p, 0], normals[p, 1], normals[p, 2]
     if not (math.isfinite(nx) and math.isfinite(ny) and math.isfinite(nz)):
         return
-    # tangent basis: t1 = n x (axis least aligned with n), t2 = n x t1
-    if abs(nx) < 0.9:
-        ax, ay, az = 1.0, 0.0, 0.0
-    else:
-        ax, ay, az = 0.0, 1.0, 0.0
-    t1x, t1y, t1z = ny * az - nz * ay, nz * ax - nx * az, nx * ay - ny * ax
-    s = math.sqrt(t1x * t1x + t1y * t1y + t1z * t1z)
-    t1x, t1y, t1z = t1x / s, t1y / s, t1z / s
-    t2x, t2y, t2z = ny * t1z - nz * t1y, nz * t1x - nx * t1z, nx * t1y - ny * t1x
+    t1x, t1y, t1z, t2x, t2y, t2z = tangent_pair(nx, ny, nz)
     xs, ys, ang = scratch[0], scratch[1], scratch[2]
     m = 0
     r = 0.0

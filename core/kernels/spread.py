@@ -8,7 +8,7 @@ import numpy as np
 from numba import njit, prange
 
 from ._base import OPTS, theta
-from .algebra import add_outer, chol_solve, cholesky, row_scatter, smallest_eigvec_sym3
+from .algebra import add_outer, chol_solve, cholesky, row_scatter, smallest_eigvec_sym3, tangent_pair
 
 
 @njit(**OPTS, parallel=True)
@@ -107,13 +107,7 @@ def curve_shares(points, rows, flat, curve):
         curve[r] = math.nan
         if not math.isfinite(nx):
             continue
-        if abs(nx) < 0.9:  # a tangent basis (ax, ay, az), n x a of the plane normal to n
-            s = math.sqrt(ny * ny + nz * nz)
-            ax, ay, az = 0.0, nz / s, -ny / s
-        else:
-            s = math.sqrt(nx * nx + nz * nz)
-            ax, ay, az = -nz / s, 0.0, nx / s
-        bx, by, bz = ny * az - nz * ay, nz * ax - nx * az, nx * ay - ny * ax
+        ax, ay, az, bx, by, bz = tangent_pair(nx, ny, nz)  # of the plane normal to n
         saa = ax * (c00 * ax + c01 * ay + c02 * az) + ay * (c01 * ax + c11 * ay + c12 * az) + az * (c02 * ax + c12 * ay + c22 * az)
         sbb = bx * (c00 * bx + c01 * by + c02 * bz) + by * (c01 * bx + c11 * by + c12 * bz) + bz * (c02 * bx + c12 * by + c22 * bz)
         sab = ax * (c00 * bx + c01 * by + c02 * bz) + ay * (c01 * bx + c11 * by + c12 * bz) + az * (c02 * bx + c12 * by + c22 * bz)
