@@ -30,7 +30,10 @@ class CurvatureResult:
         neighbourhood determines: on two or three scan lines a cubic falls to 2 or 1), of the position jet where ``k="auto"`` kept a jet (see
         :mod:`core.scale`); -1 for methods without the option.
     outlier_score : (N,) distance of each point from its neighbours' plane in units of
-        their spread; :attr:`outlier` is ``outlier_score > 4``.
+        their spread; ``inf`` for the points of a group of fewer points than a
+        neighbourhood, apart from the rest (:func:`core.kernels.isolated_groups`: a floating
+        clump whose own points made up its neighbours' plane); :attr:`outlier` is
+        ``outlier_score > 4``.
     crease : (N,) bool, points where the linear normal model fails (RMS residual of the
         normal fit > 0.25 of the normals' spread, and > 3x the cloud's median residual, so
         that noise is not taken for edges): sharp edges and corners, flagged rather than trusted.

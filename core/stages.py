@@ -97,9 +97,16 @@ def search_width(plan) -> int | None:
 
 
 def outlier_scores(pts, idx) -> np.ndarray:
-    """Distance of each point from its neighbours' plane in units of their spread."""
+    """Distance of each point from its neighbours' plane in units of their spread; inf for
+    the points of a group smaller than a neighbourhood, apart from the rest
+    (:func:`core.kernels.isolated_groups`: a clump floating off the surface, whose own
+    points made up its neighbours' plane)."""
+    idx = np.ascontiguousarray(idx)
     scores = np.full(len(pts), np.nan)
-    kernels.outlier_scores(pts, np.ascontiguousarray(idx), OUTLIER_FLOOR, scores)
+    kernels.outlier_scores(pts, idx, OUTLIER_FLOOR, scores)
+    apart = np.zeros(len(pts), dtype=bool)
+    kernels.isolated_groups(pts, idx, apart)
+    scores[apart] = np.inf
     return scores
 
 

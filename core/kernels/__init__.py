@@ -20,12 +20,12 @@ argument lists.
 
 from .jet import jet_normals
 from .nf import Fits, Frames, Settings, normal_fit
-from .outliers import outlier_scores
+from .outliers import isolated_groups, outlier_scores
 from .pca import normal_spread, pca_normals, pca_normals_at
 from .scale import ScaleRule, choose_scales, fold_limits
 from .spread import scatter_shapes
 
 __all__ = [
     "pca_normals", "pca_normals_at", "jet_normals", "normal_fit", "Frames", "Settings", "Fits", "ScaleRule", "choose_scales", "fold_limits",
-    "outlier_scores", "normal_spread", "scatter_shapes",
+    "outlier_scores", "isolated_groups", "normal_spread", "scatter_shapes",
 ]

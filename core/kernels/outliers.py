@@ -1,13 +1,15 @@
-"""Outlier scores: distance from the neighbours' plane in units of their spread."""
+"""Outlier scores: distance from the neighbours' plane in units of their spread; groups too small to be a surface."""
 
 from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit, prange
 
 from ._base import OPTS
 from .algebra import row_scatter, smallest_eigvec_sym3
+from .union_find import root
 
 
 @njit(**OPTS, parallel=True)
@@ -38,3 +40,48 @@ def outlier_scores(points, idx, floor, score):
         d = abs((points[i, 0] - cx) * x + (points[i, 1] - cy) * y + (points[i, 2] - cz) * z)
         unit = math.sqrt(max(l0, 0.0) / m) + floor * spread / m
         score[i] = d / unit if unit > 0.0 else (0.0 if d == 0.0 else math.inf)
+
+
+@njit(**OPTS, parallel=True)
+def isolated_groups(points, idx, out):
+    """Mark (``out[i] = True``) the points of groups too small to be a surface of their own.
+
+    Two points are joined when each lies within the other's reach (the distance to the
+    last neighbour of its row ``idx[i]``, which holds the point itself first): a surface's
+    neighbouring points reach each other however dense or sparse its sampling, while a
+    clump floating a few reaches off it is reached by none of the surface's points. A
+    connected group of fewer points than a row holds (and smaller than the largest group)
+    has no neighbourhood of its own: the plane its neighbours span is a mix of itself
+    and the surface below, and its distance from that plane says nothing. The joins are
+    tested in parallel, the groups found by one union-find over them.
+    """
+    n, k = idx.shape
+    reach = np.empty(n)
+    for i in prange(n):
+        reach[i] = _distance(points, i, idx[i, k - 1])
+    joined = np.zeros((n, k), dtype=np.bool_)
+    for i in prange(n):
+        for m in range(1, k):
+            j = idx[i, m]
+            if j != i and j >= 0:
+                d = _distance(points, i, j)
+                joined[i, m] = d <= reach[i] and d <= reach[j]
+    parent = np.arange(n)
+    for i in range(n):
+        for m in range(1, k):
+            if joined[i, m]:
+                ri, rj = root(parent, i), root(parent, idx[i, m])
+                if ri != rj:
+                    parent[max(ri, rj)] = min(ri, rj)
+    size = np.zeros(n, dtype=np.int64)
+    for i in range(n):
+        size[root(parent, i)] += 1
+    least = min(k, size.max())
+    for i in range(n):
+        out[i] = size[root(parent, i)] < least
+
+
+@njit(**OPTS, inline="always")
+def _distance(points, i, j):
+    dx, dy, dz = points[i, 0] - points[j, 0], points[i, 1] - points[j, 1], points[i, 2] - points[j, 2]
+    return math.sqrt(dx * dx + dy * dy + dz * dz)
