@@ -14,7 +14,7 @@ from . import __version__, _cli_commands
 from ._validate import word
 from .tiled import cli as tiled_cli
 
-BENCHES = ("paper", "perf", "accuracy", "tiled", "stability", "teach", "holdout")
+BENCHES = ("paper", "perf", "accuracy", "tiled", "stability", "teach", "holdout", "scanlines")
 PROG = "darboux-cli"
 _NONE = ("none", "null")
 _BOOLS = {"true": True, "false": False}
@@ -124,7 +124,7 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("-q", "--quiet", action="store_true")
     w.set_defaults(func=_cli_commands.cmd_warmup)
 
-    b = sub.add_parser("bench", help="benchmarks: paper (torus experiment), perf (speed/memory), accuracy, tiled, stability, teach, holdout (auto scale on unseen surfaces)")
+    b = sub.add_parser("bench", help="benchmarks: paper (torus experiment), perf (speed/memory), accuracy, tiled, stability, teach, holdout (auto scale on unseen surfaces), scanlines (scanner-sampled clouds)")
     b.add_argument("which", choices=BENCHES)
     b.add_argument("rest", nargs=argparse.REMAINDER, help="options of the benchmark (see --help)")
     b.set_defaults(func=_cmd_bench)
