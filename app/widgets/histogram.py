@@ -143,22 +143,22 @@ class Histogram(FigureCanvasQTAgg):
         The bars, limit lines and ticks are made once and updated in place (``ax.clear()``
         and new bars cost the GUI thread ~0.1 s a change; updating them a few ms)."""
         values = np.asarray(values, dtype=float)
-        n_finite = int(np.count_nonzero(np.isfinite(values)))
-        n_nan = values.size - n_finite
-        finite = subsample(values, SAMPLE)
-        finite = finite[np.isfinite(finite)]
+        n_shown = int(np.count_nonzero(~np.isnan(values)))  # +-inf (an outlier score's lone points) fall in the end bars
+        n_nan = values.size - n_shown
+        shown = subsample(values, SAMPLE)
+        shown = shown[~np.isnan(shown)]
         lo, hi = float(clim[0]), float(clim[1])
-        if finite.size == 0 or not hi > lo:
+        if shown.size == 0 or not hi > lo:
             self.counts = np.zeros(0)
-            self._show_bars(False, "no finite values")
+            self._show_bars(False, "no values")
             self.ax.set_title("")
             self.draw_later()
             return
         pad = 0.1 * (hi - lo)
         # a bin count and range, not an array of edges: numpy's equal-bin path (no sort of the values)
-        counts, edges = np.histogram(np.clip(finite, lo - pad, hi + pad), bins=self.bins, range=(lo - pad, hi + pad))
+        counts, edges = np.histogram(np.clip(shown, lo - pad, hi + pad), bins=self.bins, range=(lo - pad, hi + pad))
         if values.size > SAMPLE:  # counted on a fixed random subset: scaled to the whole
-            counts = np.rint(counts * (n_finite / finite.size)).astype(np.int64)
+            counts = np.rint(counts * (n_shown / shown.size)).astype(np.int64)
         centres = 0.5 * (edges[:-1] + edges[1:])
         colours = matplotlib.colormaps[cmap](np.clip((centres - lo) / (hi - lo), 0.0, 1.0))
         width = edges[1] - edges[0]
@@ -171,7 +171,7 @@ class Histogram(FigureCanvasQTAgg):
         self._show_bars(True)
         self.ax.set_xlim(edges[0], edges[-1])
         self.ax.set_ylim(0.0, 1.05 * max(int(counts.max()), 1))
-        title = f"{label}   ({n_finite:,} pts"
+        title = f"{label}   ({n_shown:,} pts"
         title += f", {n_nan:,} nan)" if n_nan else ")"
         self.ax.set_title(title, fontsize=8, color=self.text_colour)
         self.counts = counts

@@ -147,6 +147,17 @@ def test_histogram_and_limits_of_many_values_use_a_random_subset_scaled_to_the_w
     assert look.clim[1] == pytest.approx(truth, rel=0.1) and look.clim[0] == -look.clim[1]
 
 
+def test_histogram_puts_infinite_outlier_scores_in_the_top_bar_not_with_nan(qapp):
+    """A lone point's outlier score is inf (core.kernels.isolated_groups): an outlier, not a missing value."""
+    import app.widgets.histogram as hist
+
+    h = hist.Histogram()
+    v = np.r_[np.linspace(0.0, 3.0, 100), [np.inf] * 7, [np.nan] * 2]
+    h.set_data(v, clim=(0.0, 8.0), cmap="RdBu_r", label="Outlier score")
+    assert h.counts.sum() == 107 and h.counts[-1] == 7
+    assert "107 pts, 2 nan" in h.ax.get_title()
+
+
 def test_histogram_draws_in_a_turn_of_its_own_after_the_3d_frame(qtbot, monkeypatch):
     """A changed histogram is drawn later, never while a 3D frame is still due: the two
     heavy GUI steps of one change are two turns of the event loop (issue 11, GUI stall)."""
