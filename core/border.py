@@ -18,16 +18,26 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import plane_spread
 from .duplicates import find_duplicates
 from .kernels import border as kern
 from ._validate import as_points
 from .neighbours import search_in_spatial_order
+from .tuning import THIN_SPREAD
 
 #: neighbours per point for the test (the point itself included). With 30 the disc of
 #: neighbours reaches ~3.1 spacings, so that a point 1 spacing from a rim has a clear
 #: empty side while the chance that random sampling leaves one inside is ~1e-3
 #: (measured: tests/core/test_border.py, random planes, noise 0 and 0.2 spacing).
 BORDER_K = 30
+#: wider neighbourhoods of the test where the BORDER_K nearest lie along one scan line (:func:`across_lines`)
+WIDE_KS = (60, 120, 240, 320)
+#: ... judged by a plane spread (core.plane_spread) of the BORDER_K nearest below this: a scan
+#: line with range noise spreads to 0.10-0.15 (a rotating LiDAR's ring 5-10 m out), the fit's
+#: THIN_SPREAD (0.1) left those flagged; the half disc of a straight rim spreads ~0.53, so a
+#: uniformly sampled rim is not read again (reading it again would not clear it: a wider
+#: neighbourhood of a rim keeps its empty side)
+LINE_SPREAD = 0.3
 #: rows per step of the border test (bounds its int64 copy of the graph)
 _ROWS = 131_072
 #: flag when the widest empty angle between neighbour directions exceeds this (degrees);
@@ -72,10 +82,11 @@ def border_flags(points, normals, idx):
 
 def border_of(points, normals, nb):
     """:func:`border_flags` with :data:`BORDER_K` neighbours from ``nb`` (a
-    :class:`core.Neighbours`), or from a search of their own when ``nb`` holds fewer (or is None)."""
+    :class:`core.Neighbours`), or from a search of their own when ``nb`` holds fewer (or is None);
+    read again across scan lines (:func:`across_lines`) where ``nb`` reaches that far."""
     k = min(BORDER_K, len(points))
     if served_by(nb, len(points)):
-        return border_flags(points, normals, nb.take_indices(k))[0]
+        return across_lines(points, normals, nb, border_flags(points, normals, nb.take_indices(k))[0])
     # e.g. an integer k < 30: one more search, the test is meaningless on fewer. In spatial
     # order (the same rows as build_neighbours, 5x faster at 100k points); each point's test
     # reads only its own row, so the flags are the same
@@ -88,6 +99,36 @@ def border_of(points, normals, nb):
         return border_flags(pts, normals, own.take(k)[0])[0]
     border = np.empty(len(pts), dtype=bool)
     border[order] = border_flags(own.points, np.asarray(normals)[order], own.take(k)[0])[0]
+    return border
+
+
+def across_lines(points, normals, nb, border):
+    """``border`` read again where a flagged point's :data:`BORDER_K` nearest lie along one
+    line (plane spread below :data:`LINE_SPREAD`, :mod:`core.plane_spread`): on
+    each of :data:`WIDE_KS` (up to what ``nb`` serves) whose neighbours span the tangent
+    plane, every s-th of them (sorted by distance: the disc keeps its shape) so that about
+    2 x BORDER_K are read; the point is a border only if every one of them leaves an empty
+    side (unevenly spaced lines are reached on the nearer side first: the 120 nearest on a
+    LiDAR's ground span the plane with one neighbouring ring, the 240 with both). Scan
+    lines farther apart than the 30 nearest reach (a rotating LiDAR's rings 15-50 points
+    apart) left every point with an empty side: all of its ground 5-40 m out was flagged."""
+    todo = np.flatnonzero(border)
+    if not len(todo):
+        return border
+    nrm = np.ascontiguousarray(normals, dtype=np.float64)
+    thin = todo[~plane_spread.spans_plane(points, nrm, nb, np.full(len(todo), BORDER_K), LINE_SPREAD, todo)]
+    border = border.copy()
+    for k in (c for c in WIDE_KS if c <= min(nb.k_max, len(points))):
+        if not len(thin):
+            break
+        at = thin[~(plane_spread.spreads(points, nrm, nb, k, thin) < THIN_SPREAD)]
+        if len(at):
+            idx = np.ascontiguousarray(nb.rows(at, k)[0][:, ::max(k // (2 * BORDER_K), 1)], dtype=np.int64)
+            gap, reach = np.empty(len(at)), np.empty(len(at))
+            kern.tangent_extent_at(np.ascontiguousarray(points, dtype=np.float64), nrm, idx, at, N_DIRS, gap, reach)
+            with np.errstate(invalid="ignore"):
+                border[at] = (np.degrees(gap) > GAP) | (reach < REACH)
+            thin = thin[border[thin]]
     return border
 
 

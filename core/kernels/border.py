@@ -12,7 +12,7 @@ from ._base import OPTS as _OPTS
 from .algebra import tangent_pair
 
 
-@njit(**_OPTS, parallel=True)
+@njit(**_OPTS)
 def tangent_extent(points, normals, idx, n_dirs, gap, reach, start):
     """Per point, from its neighbours projected on its tangent plane:
 
@@ -23,14 +23,28 @@ def tangent_extent(points, normals, idx, n_dirs, gap, reach, start):
     NaN where the point has no normal or no distinct neighbour. Row r of ``idx``, ``gap`` and
     ``reach`` is point ``start + r`` (a step of the whole cloud's rows).
     """
+    tangent_extent_at(points, normals, idx, np.arange(start, start + idx.shape[0]), n_dirs, gap, reach)
+
+
+@njit(**_OPTS, parallel=True)
+def tangent_extent_at(points, normals, idx, centres, n_dirs, gap, reach):
+    """:func:`tangent_extent` of the points ``centres`` (M,), row r of ``idx`` holding the
+    neighbours of ``centres[r]``."""
     n, k = idx.shape
-    dirs = np.empty((n_dirs, 2))  # the same directions for every point: computed once
-    for d in range(n_dirs):
-        dirs[d, 0], dirs[d, 1] = math.cos(2 * math.pi * d / n_dirs), math.sin(2 * math.pi * d / n_dirs)
+    dirs = _directions(n_dirs)  # the same directions for every point: computed once
     for blk in prange((n + BLOCK - 1) // BLOCK):
         scratch = np.empty((3, k))  # xs, ys, angles: once per block, not per point
         for i in range(blk * BLOCK, min(n, (blk + 1) * BLOCK)):
-            _extent(points, normals, idx, i, start + i, dirs, scratch, gap, reach)
+            _extent(points, normals, idx, i, centres[i], dirs, scratch, gap, reach)
+
+
+@njit(**_OPTS)
+def _directions(n_dirs):
+    """(n_dirs, 2) unit vectors evenly around the circle."""
+    dirs = np.empty((n_dirs, 2))
+    for d in range(n_dirs):
+        dirs[d, 0], dirs[d, 1] = math.cos(2 * math.pi * d / n_dirs), math.sin(2 * math.pi * d / n_dirs)
+    return dirs
 
 
 @njit(**_OPTS)

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import core
+from core.bench import scan_clouds
 from core import border, build_neighbours, shapes, shapes_thin
 
 SIZE, N = 2.0, 20000
@@ -91,3 +92,23 @@ def test_estimate_result_carries_the_border_flag(k):
     assert not r.border[~r.valid].any()
     closed = core.estimate(shapes.sphere(3000, seed=2).points, k=k)
     assert closed.border.mean() <= 0.01
+
+
+@pytest.mark.parametrize("make, interior", [
+    (lambda: scan_clouds.stripes(24, 0.1), None),  # lines 24 x their spacing apart
+    (lambda: scan_clouds.lidar_ground(5, 20), (5.0, 20.0)),  # a rotating LiDAR's rings, 15-50 x apart
+])
+def test_scan_lines_far_apart_are_not_all_border(make, interior):
+    """The 30 nearest of a point on such lines lie on its own line, one side empty: every
+    point was flagged (stripes 100 %, LiDAR ground 5-20 m 98-99 %). The flag is read again on
+    neighbourhoods wide enough to reach across the lines; the outer lines stay flagged."""
+    c = make()
+    r = core.estimate(c.points) if c.view is None else core.estimate(c.points, orientation=c.view)
+    if interior is None:
+        y = c.points[:, 1]
+        assert r.border[c.use].mean() < 0.01
+        assert r.border[np.abs(y - y.min()) < 1e-2].mean() > 0.95 and r.border[np.abs(y - y.max()) < 1e-2].mean() > 0.95
+    else:
+        d = np.hypot(c.points[:, 0], c.points[:, 1])
+        assert r.border[(d > interior[0]) & (d < interior[1])].mean() < 0.05
+        assert r.border[d < 3.2].mean() > 0.7  # the innermost ring: nothing inside it
