@@ -23,6 +23,7 @@ import numpy as np
 
 from ..estimate import estimate
 from ..io.atomic import atomic_write
+from ..passes import turn_angles
 from ._table import fmt, text_table
 from .scan_clouds import cases
 
@@ -32,8 +33,7 @@ HEADER = ("cloud", "points", "mean |H err|", "normal err p50", "p90", "valid", "
 def score(cloud, res) -> dict:
     """The row's numbers for the estimate ``res`` of the :class:`ScanCloud` ``cloud``."""
     v = cloud.use & res.valid
-    nrm = cloud.normals[v] / np.linalg.norm(cloud.normals[v], axis=1, keepdims=True)
-    ang = np.degrees(np.arccos(np.clip(np.abs(np.einsum("ij,ij->i", res.normals[v], nrm)), 0.0, 1.0)))
+    ang = turn_angles(res.normals, cloud.normals / np.linalg.norm(cloud.normals, axis=1, keepdims=True), v)
     h = np.abs(np.abs(res.mean[v]) - np.abs(cloud.mean[v]))
     out = {"points": len(cloud.points), "h_error": float(h.mean()) if len(h) else float("nan"),
            "normal_p50": float(np.median(ang)) if len(ang) else float("nan"),

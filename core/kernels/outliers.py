@@ -9,7 +9,8 @@ from numba import njit, prange
 
 from ._base import OPTS
 from .algebra import row_scatter, smallest_eigvec_sym3
-from .union_find import root
+from .kdtree import _distance
+from .union_find import join, root
 
 
 @njit(**OPTS, parallel=True)
@@ -70,18 +71,11 @@ def isolated_groups(points, idx, out):
     for i in range(n):
         for m in range(1, k):
             if joined[i, m]:
-                ri, rj = root(parent, i), root(parent, idx[i, m])
-                if ri != rj:
-                    parent[max(ri, rj)] = min(ri, rj)
+                join(parent, i, idx[i, m])
     size = np.zeros(n, dtype=np.int64)
     for i in range(n):
-        size[root(parent, i)] += 1
+        parent[i] = root(parent, i)
+        size[parent[i]] += 1
     least = min(k, size.max())
     for i in range(n):
-        out[i] = size[root(parent, i)] < least
-
-
-@njit(**OPTS, inline="always")
-def _distance(points, i, j):
-    dx, dy, dz = points[i, 0] - points[j, 0], points[i, 1] - points[j, 1], points[i, 2] - points[j, 2]
-    return math.sqrt(dx * dx + dy * dy + dz * dz)
+        out[i] = size[parent[i]] < least

@@ -6,7 +6,7 @@ import numpy as np
 from numba import njit
 
 from ._base import OPTS as _OPTS
-from .union_find import root
+from .union_find import join, root
 
 
 @njit(**_OPTS)
@@ -38,8 +38,7 @@ def _patches(points, normals, idx, ok, sign, min_cos, max_tilt):
         for m in range(k):
             j = idx[i, m]
             if j != i and ok[j] and _same_face(points, normals, sign, i, j, min_cos, max_tilt):
-                ri, rj = root(parent, i), root(parent, j)
-                parent[max(ri, rj)] = min(ri, rj)
+                join(parent, i, j)
     size = np.zeros(n, dtype=np.int64)
     for i in range(n):
         parent[i] = root(parent, i)

@@ -6,7 +6,7 @@ import numpy as np
 from numba import njit, prange
 
 from ._base import OPTS as _OPTS
-from .union_find import find_signed, join_signed, part_size, root
+from .union_find import find_signed, join, join_signed, part_size, root
 
 
 @njit(**_OPTS, parallel=True)
@@ -186,12 +186,7 @@ def knn_components(idx, source, ok, width):
             j = idx[i, m]
             if j == i or not ok[j]:
                 continue
-            ri = root(parent, i)
-            rj = root(parent, j)
-            if ri < rj:
-                parent[rj] = ri
-            elif rj < ri:
-                parent[ri] = rj
+            join(parent, i, j)
     roots = np.full(n, -1, dtype=np.int64)
     for x in range(n):
         if ok[x]:

@@ -35,6 +35,14 @@ def root(parent, x):
 
 
 @njit(**_OPTS)
+def join(parent, a, b):
+    """Join the parts of a and b in the plain forest ``parent``: the larger root hangs
+    under the smaller, so each part's root stays its lowest index."""
+    ra, rb = root(parent, a), root(parent, b)
+    parent[max(ra, rb)] = min(ra, rb)
+
+
+@njit(**_OPTS)
 def find_signed(link, x):
     """Root of x in the signed forest ``link`` and the parity of x relative to it;
     compresses the path (every node on it pointed straight at the root, its parity
