@@ -31,8 +31,8 @@ ROW_DTYPE = np.dtype([("index", "<i8"), ("xyz", "<f8", 3), ("n", "<f8", 3), ("k1
                       ("outlier_score", "<f4"), ("crease", "u1"), ("anisotropy", "<f4")])
 #: the result's per-point flags a tile keeps (row field -> CurvatureResult attribute); the border
 #: and the anisotropy are judged on the tile's points and its halo (>= 2 k-th-neighbour
-#: distances wide: the border's 30 neighbours reach ~1.4, the anisotropy's 15 + 4 nearest
-#: lie within the exact rings)
+#: distances wide, first margin 3.75: the border's 30 neighbours reach ~1.4, the 60 a flagged
+#: point is read again on ~2, the anisotropy's 15 + 4 nearest lie within the exact rings)
 ROW_FLAGS = {"degree": "degree_point", "border": "border", "orientation_confidence": "orientation_confidence",
              "outlier_score": "outlier_score", "crease": "crease", "anisotropy": "anisotropy"}
 #: a halo point near the tile: how this tile orients it (for sign agreement with its owner)
