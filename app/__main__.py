@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import signal
 import sys
 from pathlib import Path
@@ -21,12 +22,13 @@ from core.tuning import AUTO_PASSES
 
 from . import DEFAULT_CLOUD
 from .fields import resolve_field
+from .jobs import live_job_threads
 from .persist import restore_layout, restore_state
 from .state import ORIENTATIONS, ViewerState
 
 from .teach import cli as teach_cli
 
-__all__ = ["main", "build_parser"]
+__all__ = ["main", "run", "build_parser"]
 
 
 def _viewpoint(text: str) -> tuple:
@@ -183,7 +185,7 @@ def _quit_on_sigint(app: QApplication, outcome: dict) -> QTimer:
 
     def on_sigint(*_args):
         outcome["code"] = 130
-        app.quit()
+        QTimer.singleShot(0, app.quit)  # queued: a quit() before exec() starts the loop is lost (Ctrl-C ignored)
 
     signal.signal(signal.SIGINT, on_sigint)
     timer = QTimer()
@@ -279,6 +281,14 @@ def _size_note(window, width: int, height: int, view_only: bool) -> None:
               file=sys.stderr)
 
 
+def _exit_at_once(*_args) -> None:
+    """Ctrl-C before the window's event loop runs: nothing to save yet, end with status 130
+    (a KeyboardInterrupt raised inside VTK's imports or a Qt call printed a traceback, or
+    was swallowed by Qt and the viewer went on)."""
+    sys.stderr.flush()
+    os._exit(130)
+
+
 def main(argv: list[str] | None = None) -> int:
     args_list = sys.argv[1:] if argv is None else list(argv)
     parser = build_parser()
@@ -286,6 +296,16 @@ def main(argv: list[str] | None = None) -> int:
     width, height = _check_args(args, parser)
     state = _state_from_args(args, parser)
     teach = teach_cli.settings_from_args(args, parser)
+    before = signal.signal(signal.SIGINT, _exit_at_once)
+    try:
+        return _run_window(args, args_list, state, teach, (width, height))
+    finally:
+        signal.signal(signal.SIGINT, before)
+
+
+def _run_window(args, args_list, state, teach, size) -> int:
+    """The window's life: build it, open the first cloud, run the event loop, shut down."""
+    width, height = size
     from .window import MainWindow  # noqa: PLC0415 - pyvistaqt/VTK only once the arguments are valid
 
     app = QApplication.instance() or QApplication([sys.argv[0], *args_list])
@@ -320,5 +340,19 @@ def main(argv: list[str] | None = None) -> int:
     return outcome["code"] or code
 
 
+def run() -> None:
+    """The ``darboux`` command: :func:`main`, then exit. Where a background job is still
+    running (abandoned by the window's shutdown, e.g. numba compiling a kernel when Ctrl-C
+    or a close came), the process ends at once instead of finalising the interpreter around
+    it, which crashed (SIGSEGV, an LLVM assertion: 2 of 13 Ctrl-C tries). The window has saved
+    its settings by then, and jobs only read (an export runs on the GUI thread)."""
+    code = main()
+    if live_job_threads():
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+    sys.exit(code)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    run()

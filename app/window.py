@@ -337,6 +337,7 @@ class MainWindow(WindowActions, WindowStatus, QMainWindow):
         self._closed = True
         save_state(self.state, self.settings)
         save_layout(self, self.settings)
+        self.settings.sync()  # on disk now: the process may end without destructors (app.__main__.run)
         self._debounce.stop()
         self.teach.shutdown()
         self._render_timer.stop()

@@ -7,6 +7,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from app_testutils import colour_stats, image_array, run_app_cli
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -56,3 +58,53 @@ def test_ctrl_c_quits_the_viewer_with_130(tmp_path):
             proc.kill()
     assert proc.returncode == 130, err
     assert "Traceback" not in err, err
+
+
+def test_ctrl_c_before_the_event_loop_runs_still_quits(qapp):
+    """Ctrl-C between the handler's installation and ``exec()`` (the window being built, the
+    first cloud opening) quits once the loop starts: a plain ``quit()`` there was lost and
+    the viewer ran on, deaf to Ctrl-C."""
+    import signal
+    import time
+
+    from PySide6.QtCore import QTimer
+
+    from app.__main__ import _quit_on_sigint
+
+    before = signal.getsignal(signal.SIGINT)
+    outcome = {"code": 0}
+    timer = _quit_on_sigint(qapp, outcome)
+    guard = QTimer()
+    guard.setSingleShot(True)
+    guard.timeout.connect(qapp.quit)
+    try:
+        signal.raise_signal(signal.SIGINT)  # the Python handler runs here, before exec()
+        guard.start(5000)
+        start = time.perf_counter()
+        qapp.exec()
+        took = time.perf_counter() - start
+    finally:
+        timer.stop()
+        guard.stop()
+        signal.signal(signal.SIGINT, before)
+    assert outcome["code"] == 130 and took < 2.0, took
+
+
+def test_run_ends_the_process_at_once_when_a_job_is_still_running(monkeypatch):
+    """``darboux`` (app.__main__.run) does not finalise the interpreter around a background
+    job that is still running (numba compiling when Ctrl-C came crashed it): it ends the
+    process with the viewer's status; with no job left it exits normally."""
+    import app.__main__ as entry
+
+    ended = []
+    monkeypatch.setattr(entry, "main", lambda: 130)
+    monkeypatch.setattr(entry.os, "_exit", lambda code: ended.append(code))
+    monkeypatch.setattr(entry, "live_job_threads", lambda: ["darboux-estimate"])
+    with pytest.raises(SystemExit):  # the stand-in os._exit returns: run() goes on to sys.exit
+        entry.run()
+    assert ended == [130]
+    ended.clear()
+    monkeypatch.setattr(entry, "live_job_threads", lambda: [])
+    with pytest.raises(SystemExit) as exc:
+        entry.run()
+    assert exc.value.code == 130 and not ended
