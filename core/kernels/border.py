@@ -34,21 +34,23 @@ def tangent_extent_at(points, normals, idx, centres, n_dirs, gap, reach):
     dirs = _directions(n_dirs)  # the same directions for every point: computed once
     for blk in prange((n + BLOCK - 1) // BLOCK):
         scratch = np.empty((3, k))  # xs, ys, angles: once per block, not per point
+        far = np.empty(n_dirs)
         for i in range(blk * BLOCK, min(n, (blk + 1) * BLOCK)):
-            _extent(points, normals, idx, i, centres[i], dirs, scratch, gap, reach)
+            _extent(points, normals, idx, i, centres[i], dirs, scratch, far, gap, reach)
 
 
 @njit(**_OPTS)
 def _directions(n_dirs):
-    """(n_dirs, 2) unit vectors evenly around the circle."""
-    dirs = np.empty((n_dirs, 2))
+    """(2, n_dirs): the x and y rows of unit vectors evenly around the circle (contiguous rows:
+    the reach loop over them is vectorised)."""
+    dirs = np.empty((2, n_dirs))
     for d in range(n_dirs):
-        dirs[d, 0], dirs[d, 1] = math.cos(2 * math.pi * d / n_dirs), math.sin(2 * math.pi * d / n_dirs)
+        dirs[0, d], dirs[1, d] = math.cos(2 * math.pi * d / n_dirs), math.sin(2 * math.pi * d / n_dirs)
     return dirs
 
 
 @njit(**_OPTS)
-def _extent(points, normals, idx, i, p, dirs, scratch, gap, reach):
+def _extent(points, normals, idx, i, p, dirs, scratch, far, gap, reach):
     """:func:`tangent_extent` at point ``p``, row ``i``."""
     gap[i] = math.nan
     reach[i] = math.nan
@@ -80,13 +82,15 @@ def _extent(points, normals, idx, i, p, dirs, scratch, gap, reach):
     for c in range(1, m):
         g = max(g, a[c] - a[c - 1])
     gap[i] = g
+    far[:] = 0.0  # the point itself is at the origin; directions innermost: independent maxima (vectorised)
+    ux, uy = dirs[0], dirs[1]
+    for c in range(m):
+        x, y = xs[c], ys[c]
+        for d in range(len(ux)):
+            far[d] = max(far[d], x * ux[d] + y * uy[d])
     low = math.inf
-    for d in range(len(dirs)):
-        ux, uy = dirs[d, 0], dirs[d, 1]
-        far = 0.0  # the point itself is at the origin
-        for c in range(m):
-            far = max(far, xs[c] * ux + ys[c] * uy)
-        low = min(low, far)
+    for d in range(len(ux)):
+        low = min(low, far[d])
     reach[i] = low / r
 
 
