@@ -104,7 +104,7 @@ def border_of(points, normals, nb):
     k = min(BORDER_K, len(points))
     if served_by(nb, len(points)):
         return read_again(points, normals, nb, border_flags(points, normals, nb.take_indices(k))[0])
-    # e.g. an integer k < 30: one more search, the test is meaningless on fewer. In spatial
+    # e.g. an integer k < 60: one more search (30 columns held, 60 for the flagged rows). In spatial
     # order (the same rows as build_neighbours, 5x faster at 100k points); each point's test
     # reads only its own row, so the flags are the same
     pts, _ = as_points(points)
@@ -154,9 +154,9 @@ def _flags_at(points, normals, idx, at, reach_below=REACH):
 
 
 def across_lines(points, normals, nb, border, thin):
-    """``border`` read again at the flagged points ``thin``, whose :data:`BORDER_K` nearest lie
-    along one line (plane spread below :data:`LINE_SPREAD`, :mod:`core.plane_spread`): on
-    each of :data:`WIDE_KS` (up to what ``nb`` serves) whose neighbours span the tangent
+    """``border`` (changed in place, returned) read again at the flagged points ``thin``, whose
+    :data:`BORDER_K` nearest lie along one line (plane spread below :data:`LINE_SPREAD`,
+    :mod:`core.plane_spread`): on each of :data:`WIDE_KS` (up to what ``nb`` serves) whose neighbours span the tangent
     plane, every s-th of them (sorted by distance: the disc keeps its shape) so that about
     2 x BORDER_K are read; the point is a border only if every one of them leaves an empty
     side (unevenly spaced lines are reached on the nearer side first: the 120 nearest on a
