@@ -91,9 +91,14 @@ def border_flags(points, normals, idx):
         rows = slice(start, start + _ROWS)
         kern.tangent_extent(pts, nrm, graph[rows].astype(np.int64, copy=False), N_DIRS, gap[rows], reach[rows], start)
     gap = np.degrees(gap)
+    return _flagged(gap, reach), gap, reach
+
+
+def _flagged(gap_deg, reach, reach_below=REACH):
+    """The test's verdict: a gap over :data:`GAP` degrees or a reach below ``reach_below``
+    (False where there is no normal: NaN)."""
     with np.errstate(invalid="ignore"):
-        border = (gap > GAP) | (reach < REACH)
-    return border, gap, reach
+        return (gap_deg > GAP) | (reach < reach_below)
 
 
 def border_of(points, normals, nb):
@@ -136,9 +141,10 @@ def read_again(points, normals, nb, border):
 
 def confirmed(points, normals, nb, border, at):
     """``border[at]`` kept only where the test on every 2nd of the :data:`CONFIRM_K` nearest
-    flags it too, with :data:`CONFIRM_REACH` (in place; nothing where ``nb`` serves fewer)."""
+    flags it too, with :data:`CONFIRM_REACH` (in place; ``nb`` serves that many: :func:`served_by`,
+    or :func:`border_of`'s own search; nothing on a cloud of fewer than 2 x BORDER_K points)."""
     k = min(CONFIRM_K, len(points))
-    if not len(at) or nb.k_max < k or k < 2 * BORDER_K:
+    if not len(at) or k < 2 * BORDER_K:
         return
     border[at] = _flags_at(points, normals, np.ascontiguousarray(nb.rows(at, k)[0][:, ::2], dtype=np.int64), at,
                            CONFIRM_REACH)
@@ -149,8 +155,7 @@ def _flags_at(points, normals, idx, at, reach_below=REACH):
     below ``reach_below`` flags)."""
     gap, reach = np.empty(len(at)), np.empty(len(at))
     kern.tangent_extent_at(np.ascontiguousarray(points, dtype=np.float64), normals, idx, at, N_DIRS, gap, reach)
-    with np.errstate(invalid="ignore"):
-        return (np.degrees(gap) > GAP) | (reach < reach_below)
+    return _flagged(np.degrees(gap), reach, reach_below)
 
 
 def across_lines(points, normals, nb, border, thin):
