@@ -15,7 +15,7 @@ from .orientation import resettle
 from .passes import PassRule, few_fits
 from .initial_normals import Initial
 from .stages import Fit, Scale, _empty_fit, _Fitter
-from .tuning import DRIFT_POOL, HOLD_TURN, IRLS_LATER, PASS_DECAY, RESETTLE_K
+from .tuning import DRIFT_POOL, HOLD_TURN, IRLS_LATER, PASS_DECAY, RESETTLE_K, ROWS_LATER
 from .wide_neighbours import rows_at_least
 
 
@@ -84,7 +84,7 @@ def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n
         yield p, fit, nrm, complete
         complete()
         if p == 0:
-            fitter = _refining(fitter)
+            fitter = _refining(fitter, plan)
         new = np.where(fit.valid[:, None], fit.normals, nrm)
         if plan.robust and p == 0:  # outliers leave their neighbours' fits (and are not estimated)
             has_normal = has_normal & ~outlier
@@ -92,12 +92,17 @@ def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n
         nrm = new
 
 
-def _refining(fitter: _Fitter) -> _Fitter:
+def _refining(fitter: _Fitter, plan) -> _Fitter:
     """The fitter of the refinement passes: a robust fit reweights :data:`~core.tuning.IRLS_LATER`
-    times (its input normals are the previous fit's, cleaned by that fit's weights)."""
-    if not fitter.options.get("robust"):
-        return fitter
-    return fitter._replace(options={**fitter.options, "reweightings": IRLS_LATER})
+    times (its input normals are the previous fit's, cleaned by that fit's weights); with
+    k="auto" a neighbourhood of at least twice :data:`~core.tuning.ROWS_LATER` is thinned
+    (the same reach, fewer rows: the input normals are already smooth)."""
+    options = dict(fitter.options)
+    if options.get("robust"):
+        options["reweightings"] = IRLS_LATER
+    if plan.auto:  # (NF and NR only: the methods k="auto" runs)
+        options["rows"] = ROWS_LATER
+    return fitter._replace(options=options)
 
 
 def finish(best: Refined, sc: Scale, outlier, plan) -> Refined:

@@ -17,17 +17,15 @@ from __future__ import annotations
 #: neighbourhoods while keeping thin but honest ones (measured: no valid point of the
 #: torus, saddle or cube is lost at k = 15).
 RCOND = 1e-10
-#: the same threshold for the position jets of k="auto" (core.scale.choose_jets, their cubic
-#: and quartic fits). On an exact grid whose spacing differs between its two directions (a UV
-#: sphere's vertices, a parametric torus, gridded terrain) the k nearest can lie on three grid
-#: lines, where a cubic is not determined (u^3 is a combination of 1, u, u^2 on three values of
-#: u); rounding and the surface's bend leave pivots of 1e-15 to 1e-6 there, which RCOND passed:
-#: normals 25-76 degrees off, valid. Honest samplings (uniform random, hex, square grid; 300
-#: centres each, torus and chirp, 15-56 neighbours): cubic pivots >= 6e-4, quartic >= 1e-5.
-#: The hold-out race is unchanged cell for cell. 1e-6 -> 1e-5 (2026-12-05): on an exact grid
-#: 5x sparser across its rows, turned 22.5 degrees and rotated in space, two cubic jets on 40
-#: neighbours passed 1e-6 with |H| errors of 8 and 13 (normals right); at 1e-5 the turned
-#: cloud's errors equal the unturned one's (mean 5.3e-4, largest 0.03). Both races unchanged.
+#: the same threshold for the position jets of k="auto" (core.scale.choose_jets, their cubic and quartic fits). On an
+#: exact grid whose spacing differs between its two directions (a UV sphere's vertices, a parametric torus, gridded
+#: terrain) the k nearest can lie on three grid lines, where a cubic is not determined (u^3 is a combination of 1, u,
+#: u^2 on three values of u); rounding and the surface's bend leave pivots of 1e-15 to 1e-6 there, which RCOND passed:
+#: normals 25-76 degrees off, valid. Honest samplings (uniform random, hex, square grid; 300 centres each, torus and
+#: chirp, 15-56 neighbours): cubic pivots >= 6e-4, quartic >= 1e-5. The hold-out race is unchanged cell for cell.
+#: 1e-6 -> 1e-5 (2026-12-05): on an exact grid 5x sparser across its rows, turned 22.5 degrees and rotated in space, two
+#: cubic jets on 40 neighbours passed 1e-6 with |H| errors of 8 and 13 (normals right); at 1e-5 the turned cloud's
+#: errors equal the unturned one's (mean 5.3e-4, largest 0.03). Both races unchanged.
 JET_RCOND = 1e-5
 #: the smallest Cholesky pivot (equilibrated normal matrix) of a normal fit of degree 2 or
 #: 3 (k="auto"'s cubic normal field, or options={"degree": ...}); below it the point's fit
@@ -196,15 +194,18 @@ THIN_SPREAD = 0.1
 
 #: reweighting iterations of the robust fits (each one re-solves the least squares)
 IRLS_ITERATIONS = 2
-#: ... of the refinement passes after the first fit. Their input normals are the previous
-#: fit's, smooth, with the outliers flagged and (robust mode) left out, so one reweighting
-#: finds the same weights. 2026-12-04, k="auto", 6000 points of torus, ellipsoid, saddle,
-#: chirp, sphere, cylinder, graded, range scan at noise 0.1/0.2/0.5 spacing and 0.2 with 3 %
-#: outliers (32 cells): H, K, e1 errors 0.83-1.03x those with 2 (the gains at 0.5 spacing and
-#: with outliers); hold-out race unchanged (3/84 cells lost, geometric mean 0.456x), tuning
-#: race 0/72; noisy 100k torus (0.2 spacing) 13 % less wall time. Zero reweightings: 30 %
-#: less time but 1.2-2.2x the errors with outliers.
+#: ... of the refinement passes after the first fit. Their input normals are the previous fit's, smooth, with the
+#: outliers flagged and (robust mode) left out, so one reweighting finds the same weights. 2026-12-04, k="auto", 6000
+#: points of torus, ellipsoid, saddle, chirp, sphere, cylinder, graded, range scan at noise 0.1/0.2/0.5 spacing and 0.2
+#: with 3 % outliers (32 cells): H, K, e1 errors 0.83-1.03x those with 2 (the gains at 0.5 spacing and with outliers);
+#: hold-out race unchanged (3/84 cells lost, geometric mean 0.456x), tuning race 0/72; noisy 100k torus (0.2 spacing)
+#: 13 % less wall time. Zero reweightings: 30 % less time but 1.2-2.2x the errors with outliers.
 IRLS_LATER = 1
+#: ... and the fewest rows they fit on (k="auto"): of k >= 2 x ROWS_LATER neighbours, every (k // ROWS_LATER)-th by
+#: distance (the same disc); a pass fits the previous fit's normals, each already a wide average, so half of them
+#: determine the cubic as well. 2026-12-05: hold-out 0.445x -> 0.444x (3/84 lost; e1 1-3 % worse on 9 cells), tuning
+#: 0.470x -> 0.471x, NF on a noisy 100k torus 6.5 -> 3.9 s; 80 rows: hold-out 5/84, tuning 0.481x; first fit too 0.478x
+ROWS_LATER = 160
 #: most NR refinement passes a user may ask for
 MAX_PASSES = 20
 # ----------------------------------------------------------------------------- the jet rule (issue 15, core.scale)
@@ -292,11 +293,11 @@ PASS_DECAY = 0.7
 #: plate the same face agreement (to 0.03 %); the bunny's 50 % subsample |dH|/|H| is 0.182 with
 #: the hold and without it
 HOLD_TURN = 5.0
-#: points the pass-stop rule is judged on (core.passes): about RULE_SAMPLE points of a larger
-#: cloud, chosen by a hash of their coordinates (the same in any order and in tiles). The
-#: turns of a pass have a spread about 0.55 x their mean (measured on noisy tori, saddles
-#: and ellipsoids), so 16384 points measure the mean to 0.4 %: only a pass within about
-#: 1 % of the threshold can be judged otherwise than on all points, and such a pass turns the normals by a few hundredths of a degree either way.
+#: points the pass-stop rule is judged on (core.passes): about RULE_SAMPLE points of a larger cloud, chosen by a hash of
+#: their coordinates (the same in any order and in tiles). The turns of a pass have a spread about 0.55 x their mean
+#: (measured on noisy tori, saddles and ellipsoids), so 16384 points measure the mean to 0.4 %: only a pass within about
+#: 1 % of the threshold can be judged otherwise than on all points, and such a pass turns the normals by a few
+#: hundredths of a degree either way.
 RULE_SAMPLE = 16_384
 #: when the pass rule keeps one refinement pass and undoes the 2nd, points where the 2nd repeats
 #: more than DRIFT_SHARE of the change the 1st made to H (pooled over the DRIFT_POOL nearest)

@@ -61,7 +61,9 @@ class Settings(NamedTuple):
     degree : 1 (the paper's linear model), 2 or 3, the most a centre's fit uses;
     rcond : singularity threshold; pivot : the smallest Cholesky pivot of a determined fit
     of degree 2 or 3 (below it the centre's fit falls a degree: :func:`solve_determined`);
-    spread : the plane spread a robust reweighting must leave the neighbours (:func:`_fit_point`).
+    spread : the plane spread a robust reweighting must leave the neighbours (:func:`_fit_point`);
+    rows : 0 (all), or the fewest neighbours a centre fits on: of k >= 2 x rows it fits
+    every (k // rows)-th by distance (the same reach, :func:`thinned`).
     """
 
     theta_reach: float
@@ -73,6 +75,7 @@ class Settings(NamedTuple):
     rcond: float
     pivot: float
     spread: float
+    rows: int
 
 
 class Fits(NamedTuple):
@@ -91,7 +94,7 @@ class Fits(NamedTuple):
 
 
 @njit(**OPTS, inline="always")
-def gather(f, r, row, n, weighting, theta_reach, s):
+def gather(f, r, row, n, weighting, theta_reach, s, stride=1):
     """Neighbours 0..n-1 of centre r of the :class:`Frames` ``f`` (row ``row`` of
     ``f.idx``) in its frame, into the scratch ``s``: offsets (u, v) / h, normal components
     (X, Y) flipped to agree with the frame's z (§4.3), and base weights (0 without a normal)."""
@@ -103,7 +106,7 @@ def gather(f, r, row, n, weighting, theta_reach, s):
     b0, b1, b2 = f.t2[r, 0], f.t2[r, 1], f.t2[r, 2]
     c0, c1, c2 = f.z[r, 0], f.z[r, 1], f.z[r, 2]
     for j in range(n):
-        q = idx[row, j]
+        q = idx[row, j * stride]
         nx, ny, nz = normals[q, 0], normals[q, 1], normals[q, 2]
         dx = (points[q, 0] - points[i, 0]) / hi
         dy = (points[q, 1] - points[i, 1]) / hi
@@ -139,15 +142,16 @@ def _fit_block(f, opt, out, rows, start, stop, s):
     """NF at centres start..stop-1 with the scratch ``s`` (allocated once per block: a
     per-point allocation would cost more than the fit)."""
     for r in range(start, stop):
-        n = f.kc[r]
-        degree = _fit_point(f, opt, r, rows[r], n, s)
+        stride = thinned(f.kc[r], opt.rows)
+        n = (f.kc[r] + stride - 1) // stride
+        degree = _fit_point(f, opt, r, rows[r], n, s, stride)
         out.degree[r] = degree
         if degree > 0:
             _store(opt, degree, r, n, s, out)
 
 
 @njit(**OPTS, inline="always")
-def _fit_point(f, opt, r, row, n, s):
+def _fit_point(f, opt, r, row, n, s, stride):
     """Least squares (eqs. 25-26) of centre r's n neighbours (row ``row`` of f.idx), then ``opt.irls`` robust
     reweightings; returns the degree fitted, the highest up to ``opt.degree`` that the
     neighbourhood determines (at every solve: a reweighting that drops a far scan line
@@ -157,7 +161,7 @@ def _fit_point(f, opt, r, row, n, s):
     (on a grid 5x sparser across its rows the Tukey weights of 20 exact neighbours kept the
     point's own row, whose residuals are nil, and a linear fit on it passed ``opt.rcond``:
     |H error| 1.3 with exact normals); the unweighted fit is kept."""
-    gather(f, r, row, n, opt.weighting, opt.theta_reach, s)
+    gather(f, r, row, n, opt.weighting, opt.theta_reach, s, stride)
     for j in range(n):
         s.wt[j] = s.base[j]
     monomials(s.u, s.v, n, opt.degree, s.R)
@@ -175,6 +179,12 @@ def _fit_point(f, opt, r, row, n, s):
             return 0
         degree = fitted
     return degree
+
+
+@njit(**OPTS, inline="always")
+def thinned(k, rows):
+    """The stride of a centre's k neighbours when it fits on at least ``rows`` (0: all)."""
+    return max(1, k // rows) if rows > 0 else 1
 
 
 @njit(**OPTS, inline="always")

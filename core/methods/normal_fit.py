@@ -51,11 +51,13 @@ def min_k(degree=1, **_):
     return (degree + 1) * (degree + 2) // 2 + 1
 
 
-def fit(chunk, *, weights="uniform", constraint="project", robust=None, degree=1, reweightings=IRLS_ITERATIONS):
+def fit(chunk, *, weights="uniform", constraint="project", robust=None, degree=1, reweightings=IRLS_ITERATIONS, rows=0):
     """Fit (mu, W) per point of a :class:`core.patch.Chunk`; see :data:`NF_DOC`.
 
     ``reweightings`` (internal, not a user option): IRLS iterations when ``robust``; the
-    refinement passes use fewer (:data:`core.tuning.IRLS_LATER`).
+    refinement passes use fewer (:data:`core.tuning.IRLS_LATER`). ``rows`` (internal): 0, or
+    the fewest neighbours a centre fits on, every (k // rows)-th (k="auto"'s refinement
+    passes: :data:`core.tuning.ROWS_LATER`).
 
     Returns a :class:`MethodFit` whose ``diag`` holds the least-squares variances of
     W11, (W12 + W21)/2, W22 ("var", units of 1/h^2), the RMS residual of the normal components ("rms") and
@@ -70,6 +72,6 @@ def fit(chunk, *, weights="uniform", constraint="project", robust=None, degree=1
     spread = np.full(m, np.nan)
     fitted = np.zeros(m, dtype=np.int8)
     settings = kernels.Settings(THETA_REACH, _WEIGHTS.index(weights), _CONSTRAINTS.index(constraint),
-                                _ROBUST.index(robust), reweightings, degree, RCOND, DEGREE_PIVOT, THIN_SPREAD)
+                                _ROBUST.index(robust), reweightings, degree, RCOND, DEGREE_PIVOT, THIN_SPREAD, rows)
     kernels.normal_fit(chunk.frames(), settings, kernels.Fits(mu, W, var, rms, spread, fitted), chunk.kernel_rows())
     return MethodFit(mu, W, fitted > 0, {"var": var, "rms": rms, "spread": spread, "degree": fitted})

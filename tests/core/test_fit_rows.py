@@ -41,3 +41,25 @@ def test_the_fitter_reads_a_contiguous_graph_in_place():
     chunk = fitter._chunk(nrm, c, True)
     assert chunk.idx is idx and np.array_equal(chunk.rows, c)
     assert fitter._chunk(nrm, c, False).rows is None
+
+
+@pytest.mark.parametrize("rows", [20, 25])
+def test_thinned_rows_are_the_fit_of_every_stride_th_neighbour(rows):
+    """``rows`` (k="auto"'s refinement passes, core.tuning.ROWS_LATER): a centre of k >= 2 x rows
+    neighbours fits every (k // rows)-th of them by distance, the same numbers as a fit of those."""
+    p, nrm, idx, dist = _cloud()
+    centres = np.array([7, 1500, 33, 800])
+    kc = np.array([60, 41, 30, 39])  # strides 3, 2, 1, 1 at rows=20; 2, 1, 1, 1 at rows=25
+    opts = {"degree": 3, "robust": "tukey"}
+    h = dist[centres, -1]
+    thinned = get_method("nf").fit(Chunk.build(p, nrm, idx[centres], h, centres, kc), **opts, rows=rows)
+    for r, (c, k) in enumerate(zip(centres, kc)):
+        stride = max(1, k // rows)
+        cols = idx[c, :k:stride][None]
+        one = get_method("nf").fit(Chunk.build(p, nrm, np.ascontiguousarray(cols), h[r:r + 1], c[None],
+                                               np.array([cols.shape[1]])), **opts)
+        for x, y in zip(thinned[:2], one[:2]):
+            assert np.allclose(x[r], y[0], rtol=0, atol=1e-12)
+    full = get_method("nf").fit(Chunk.build(p, nrm, idx[centres], h, centres, kc), **opts)
+    for r, k in enumerate(kc):  # a centre is thinned only where it has 2 x rows neighbours
+        assert np.array_equal(full.W[r], thinned.W[r]) == (k < 2 * rows)
