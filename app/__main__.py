@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 import signal
 import sys
 from pathlib import Path
@@ -23,6 +22,7 @@ from core.tuning import AUTO_PASSES
 from . import DEFAULT_CLOUD
 from .fields import resolve_field
 from .jobs import live_job_threads
+from .launch import end_now, exit_at_once
 from .persist import restore_layout, restore_state
 from .state import ORIENTATIONS, ViewerState
 
@@ -281,21 +281,6 @@ def _size_note(window, width: int, height: int, view_only: bool) -> None:
               file=sys.stderr)
 
 
-def _end_now(code: int) -> None:
-    """End the process with ``code`` without finalising the interpreter (what was printed
-    is flushed first)."""
-    sys.stdout.flush()
-    sys.stderr.flush()
-    os._exit(code)
-
-
-def _exit_at_once(*_args) -> None:
-    """Ctrl-C before the window's event loop runs: nothing to save yet, end with status 130
-    (a KeyboardInterrupt raised inside VTK's imports or a Qt call printed a traceback, or
-    was swallowed by Qt and the viewer went on)."""
-    _end_now(130)
-
-
 def main(argv: list[str] | None = None) -> int:
     args_list = sys.argv[1:] if argv is None else list(argv)
     parser = build_parser()
@@ -303,7 +288,7 @@ def main(argv: list[str] | None = None) -> int:
     width, height = _check_args(args, parser)
     state = _state_from_args(args, parser)
     teach = teach_cli.settings_from_args(args, parser)
-    before = signal.signal(signal.SIGINT, _exit_at_once)
+    before = signal.signal(signal.SIGINT, exit_at_once)
     try:
         return _run_window(args, args_list, state, teach, (width, height))
     finally:
@@ -356,7 +341,7 @@ def run() -> None:
     thread)."""
     code = main()
     if live_job_threads():
-        _end_now(code)
+        end_now(code)
     sys.exit(code)
 
 

@@ -98,7 +98,7 @@ def test_run_ends_the_process_at_once_when_a_job_is_still_running(monkeypatch):
 
     ended = []
     monkeypatch.setattr(entry, "main", lambda: 130)
-    monkeypatch.setattr(entry.os, "_exit", lambda code: ended.append(code))
+    monkeypatch.setattr(os, "_exit", lambda code: ended.append(code))
     monkeypatch.setattr(entry, "live_job_threads", lambda: ["darboux-estimate"])
     with pytest.raises(SystemExit):  # the stand-in os._exit returns: run() goes on to sys.exit
         entry.run()
@@ -108,3 +108,33 @@ def test_run_ends_the_process_at_once_when_a_job_is_still_running(monkeypatch):
     with pytest.raises(SystemExit) as exc:
         entry.run()
     assert exc.value.code == 130 and not ended
+
+
+def test_darboux_quiets_ctrl_c_before_the_viewer_loads(monkeypatch):
+    """The ``darboux`` command (app.launch.run) sets Ctrl-C to end the process before it
+    imports the viewer (Qt, VTK, numba: a second or more, where a Ctrl-C printed a
+    KeyboardInterrupt traceback)."""
+    import signal
+    import types
+
+    import app.launch as launch
+
+    seen = {}
+    viewer = types.ModuleType("app.__main__")
+    viewer.run = lambda: seen.setdefault("handler", signal.getsignal(signal.SIGINT))
+    monkeypatch.setitem(sys.modules, "app.__main__", viewer)
+    before = signal.getsignal(signal.SIGINT)
+    try:
+        launch.run()
+    finally:
+        signal.signal(signal.SIGINT, before)
+    assert seen["handler"] is launch.exit_at_once
+
+
+def test_ctrl_c_while_the_viewer_loads_ends_with_130_and_no_traceback():
+    code = ("import os, signal, time\nimport app.launch\napp.launch.quiet_ctrl_c()\n"
+            "os.kill(os.getpid(), signal.SIGINT)\ntime.sleep(20)\nprint('not ended')")
+    env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    proc = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 130, proc.stderr
+    assert proc.stdout == "" and "Traceback" not in proc.stderr, proc.stderr
