@@ -61,6 +61,28 @@ def test_preview_comes_first_then_the_full_result(make_window, qtbot, monkeypatc
     assert "initial normals, orientation, chosen k re-used" in window.status_label.text()
 
 
+def test_border_flags_are_computed_on_the_job_thread(make_window, qtbot, monkeypatch):
+    """An integer k's border flags are computed on first use where its graph is narrower
+    than the test's 60 (core.CurvatureResult.border: a search of their own, 0.26 s per 100k
+    points; the viewer searches 32 at k = 15); the worker computes them, so the GUI thread
+    that greys them does not wait."""
+    import threading
+
+    import core.result
+
+    seen = []
+    real = core.result.border_of_valid
+
+    def recorded(*args):
+        seen.append(threading.current_thread())
+        return real(*args)
+
+    monkeypatch.setattr(core.result, "border_of_valid", recorded)
+    window = make_window(make_shape("torus", 2000), timeout=60_000, k_auto=False, k=15)  # a graph of 32: lazy
+    assert window.output.result.k == 15 and seen
+    assert threading.main_thread() not in seen
+
+
 def test_cancel_idles_at_once_and_a_cancelled_first_estimate_stays_usable(make_window, qtbot, monkeypatch):
     import app.worker
     import core
