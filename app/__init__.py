@@ -10,7 +10,8 @@ Layout (one responsibility per module):
 - :mod:`app.estimator` GUI-thread controller: generations, stale results dropped, cancel
 - :mod:`app.loader`   reading files / generating shapes on a job thread
 - :mod:`app.jobs`     daemon job threads (never block the exit, never abort it)
-- :mod:`app.launch`   the ``darboux`` command: Ctrl-C quiet from the first instant, then the viewer
+- :mod:`app.launch`   the ``darboux`` command: Ctrl-C quiet from the first instant, then the viewer;
+  :mod:`app.hard_exit` the process ended at once (Ctrl-C before the loop, a job left at exit)
 - :mod:`app.preview`  the fast first picture: k = 15 on a subsample, spread to every point
 - :mod:`app.scene`    every pyvista/VTK call (GUI thread only); :mod:`app.lod` level of detail
 - :mod:`app.errors`   the one notifier that errors reach the user through

@@ -22,7 +22,7 @@ from core.tuning import AUTO_PASSES
 from . import DEFAULT_CLOUD
 from .fields import resolve_field
 from .jobs import live_job_threads
-from .launch import end_now, exit_at_once
+from .hard_exit import end_now, exit_at_once
 from .persist import restore_layout, restore_state
 from .state import ORIENTATIONS, ViewerState
 

@@ -11,25 +11,9 @@ first (Python runs ``app/__main__.py`` whole).
 
 from __future__ import annotations
 
-import os
 import signal
-import sys
 
-
-def end_now(code: int) -> None:
-    """End the process with ``code`` without finalising the interpreter (what was printed
-    is flushed first)."""
-    sys.stdout.flush()
-    sys.stderr.flush()
-    os._exit(code)
-
-
-def exit_at_once(*_args) -> None:
-    """Ctrl-C before the viewer's event loop runs (its modules loading, the window being
-    built): nothing to save yet, end with status 130. A KeyboardInterrupt raised inside
-    VTK's imports or a Qt call printed a traceback, or was swallowed by Qt and the viewer
-    went on."""
-    end_now(130)
+from .hard_exit import exit_at_once
 
 
 def quiet_ctrl_c() -> None:
