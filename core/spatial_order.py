@@ -13,10 +13,11 @@ strong edges in :mod:`core.orientation`) follows the caller's index,
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial import cKDTree
 
+from .kernels.kd_order import kd_order
 from .kernels.permute import move_rows, relabel_rows
 from .neighbours import Neighbours
+from .tuning import ORDER_LEAF
 from .wide_neighbours import LazyNeighbours
 
 #: neighbour arrays up to this size are reordered into new arrays (on all cores); larger
@@ -91,8 +92,8 @@ def given_in_spatial_order(pts: np.ndarray, nb: Neighbours) -> tuple[Neighbours,
     """A caller's graph ``nb`` on ``pts`` (checked) as the stages read it best: on the points
     in spatial order, as :func:`core.estimate` searches its own. A result's graph still
     held in that order (:class:`core.wide_neighbours.LazyNeighbours`) is used as it is; a
-    plain graph up to :data:`COPY_BYTES` is copied into the kd-tree's leaf order (a tree
-    build, 30 ms at 100k points: on shuffled points the stages after it ran 1.5-2x slower
+    plain graph up to :data:`COPY_BYTES` is copied into the kd-tree's leaf order
+    (:func:`core.kernels.kd_order.kd_order`, 20 ms at 100k points: on shuffled points the stages after it ran 1.5-2x slower
     in the caller's order, the re-decided signs 7x). Larger or other graphs stay in the
     caller's order. The answer is the same either way (see the module's docstring)."""
     held = nb.spatial() if isinstance(nb, LazyNeighbours) else None
@@ -100,9 +101,10 @@ def given_in_spatial_order(pts: np.ndarray, nb: Neighbours) -> tuple[Neighbours,
         return held[0], SpatialOrder(held[1])
     if type(nb) is not Neighbours or nb.indices.nbytes + nb.distances.nbytes > COPY_BYTES:
         return nb, SpatialOrder(None)
-    order = SpatialOrder(np.asarray(cKDTree(pts).indices, dtype=nb.indices.dtype))
+    sorted_order, sorted_pts = kd_order(np.ascontiguousarray(pts, dtype=np.float64), ORDER_LEAF)
+    order = SpatialOrder(sorted_order.astype(nb.indices.dtype))
     idx, dist = np.empty_like(nb.indices), np.empty_like(nb.distances)  # its inverse serves the results too
     relabel_rows(np.ascontiguousarray(nb.indices), np.ascontiguousarray(nb.distances), order.inverse, idx, dist)
     idx.setflags(write=False)
     dist.setflags(write=False)
-    return Neighbours(points=pts[order.order], indices=idx, distances=dist), order
+    return Neighbours(points=sorted_pts, indices=idx, distances=dist), order

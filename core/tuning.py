@@ -27,18 +27,15 @@ RCOND = 1e-10
 #: cubic jets on 40 neighbours passed 1e-6 with |H| errors of 8 and 13 (normals right); at 1e-5 the turned cloud's
 #: errors equal the unturned one's (mean 5.3e-4, largest 0.03). Both races unchanged.
 JET_RCOND = 1e-5
-#: the smallest Cholesky pivot (equilibrated normal matrix) of a normal fit of degree 2 or
-#: 3 (k="auto"'s cubic normal field, or options={"degree": ...}); below it the point's fit
-#: falls a degree (core.kernels.lstsq.solve_determined; for the initial 2-jet normal see
-#: INITIAL_JET_PIVOT): its coefficients' variance grows
-#: as 1 / pivot, and where the neighbours lie on two to four scan lines the cubic's terms
-#: across the lines are fitted to the lines' own bend. Measured (uniform weights, 200 centres
-#: each): uniform random torus, sphere, chirp, saddle: pivots >= 1.9e-2 at 28+ neighbours,
-#: 1st percentile 1.6e-3-1.5e-2 at 15-20; a sphere scanned along parallels 6-16 spacings
-#: apart: median 7e-6-1.4e-3 at 28-113. On those parallels (noise-free, k="auto") the mean
-#: H error fell 0.754 -> 0.040 (lines 10 apart) and 26 -> 0.35 (16 apart); the hold-out race's
-#: geometric mean 0.456x -> 0.447x, tuning race 0/72 lost either way. 3e-3: parallels 0.092
-#: and 0.69, races unchanged; 3e-2: 2 tuning cells lost (1.04x).
+#: the smallest Cholesky pivot (equilibrated normal matrix) of a normal fit of degree 2 or 3 (k="auto"'s cubic normal
+#: field, or options={"degree": ...}); below it the point's fit falls a degree (core.kernels.lstsq.solve_determined; for
+#: the initial 2-jet normal see INITIAL_JET_PIVOT): its coefficients' variance grows as 1 / pivot, and where the
+#: neighbours lie on two to four scan lines the cubic's terms across the lines are fitted to the lines' own bend.
+#: Measured (uniform weights, 200 centres each): uniform random torus, sphere, chirp, saddle: pivots >= 1.9e-2 at 28+
+#: neighbours, 1st percentile 1.6e-3-1.5e-2 at 15-20; a sphere scanned along parallels 6-16 spacings apart: median
+#: 7e-6-1.4e-3 at 28-113. On those parallels (noise-free, k="auto") the mean H error fell 0.754 -> 0.040 (lines 10
+#: apart) and 26 -> 0.35 (16 apart); the hold-out race's geometric mean 0.456x -> 0.447x, tuning race 0/72 lost either
+#: way. 3e-3: parallels 0.092 and 0.69, races unchanged; 3e-2: 2 tuning cells lost (1.04x).
 DEGREE_PIVOT = 1e-2
 #: the same for the initial 2-jet normal of k="auto" (core.normals.jet_normals): below it the
 #: quadratic is not determined and the point keeps its PCA normal. Lower than DEGREE_PIVOT: on
@@ -70,6 +67,9 @@ JET_THIN_TILT = 1.0
 #: 8 / 16 / 32: k = 16 0.25 / 0.23 / 0.23, k = 56 0.50 / 0.40 / 0.37, k = 226 1.05 / 0.96 / 0.85
 #: (cKDTree's query alone: 0.39, 0.85, 4.0).
 SEARCH_LEAF = 32
+#: points per range of the spatial order (core.kernels.kd_order; speed only: finer ranges put a point by its nearest);
+#: order + tree + k = 16 query, torus 100k / 1M (s): 32: 0.123 / 1.36, 2: 0.108 / 1.04, cKDTree's order: 0.131 / 1.52.
+ORDER_LEAF = 2
 #: a query whose previous point gives no radius (the first of a block, or a jump across
 #: a gap) takes the k-th distance among the points of the smallest tree node of at least
 #: this many points (or k) holding it; speed only. A larger node gives a tighter radius

@@ -8,7 +8,8 @@ per algorithm.
 - :mod:`.sign_evidence` the signed chord evidence and Kruskal signs of :mod:`core.orientation`;
   :mod:`.border` the angular-gap border test; :mod:`.outliers` scores; :mod:`.anisotropy` the
   sampling anisotropy of :mod:`core.anisotropy`;
-- :mod:`.kdtree` the k nearest neighbours of points in spatial order; :mod:`.frame` the
+- :mod:`.kd_order` the spatial order itself, :mod:`.kdtree` the k nearest neighbours of points
+  in that order; :mod:`.frame` the
   augmented Darboux frame every fit ends in (:func:`core.frame.darboux_frame`);
 - :mod:`.algebra` small dense linear algebra shared by them.
 

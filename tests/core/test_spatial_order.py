@@ -192,3 +192,28 @@ def test_orientation_edges_are_taken_in_the_caller_order():
     np.testing.assert_array_equal(perm[ei_s], ei)
     np.testing.assert_array_equal(perm[ej_s], ej)
     np.testing.assert_array_equal(ew_s, ew)
+
+
+@pytest.mark.parametrize("leaf", [1, 2, 32])
+def test_kd_order_splits_every_range_at_its_middle_by_a_median(leaf):
+    """core.kernels.kd_order: a permutation, the points moved with it, and every range the
+    search tree halves (core.kernels.kdtree.build_tree) split by a plane along one axis:
+    no point of the lower half beyond the upper half's lowest along that axis. Ties of
+    equal coordinates (a rounded grid) included; the same order on one thread."""
+    from core.kernels.kd_order import kd_order
+    from core.kernels.kdtree import build_tree
+
+    pts = np.round(shapes.torus(5000, seed=4).points * 8) / 8
+    order, q = kd_order(pts, leaf)
+    assert np.array_equal(np.sort(order), np.arange(len(pts))) and np.array_equal(q, pts[order])
+    lo, hi, child, _ = build_tree(q, leaf)
+    for node in np.flatnonzero(child >= 0):
+        a, m, b = lo[node], hi[child[node]], hi[node]
+        assert any(q[a:m, d].max() <= q[m:b, d].min() for d in range(3)), node
+    assert (hi - lo)[child < 0].max() <= leaf
+    before = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        assert np.array_equal(kd_order(pts, leaf)[0], order)
+    finally:
+        numba.set_num_threads(before)
