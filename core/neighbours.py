@@ -151,9 +151,10 @@ def search_neighbours(pts: np.ndarray, k_max: int, *, progress=None) -> Neighbou
 
 
 def search_in_spatial_order(pts: np.ndarray, k_max: int, *, progress=None) -> tuple[Neighbours, np.ndarray | None]:
-    """:func:`search_neighbours` on the points put in a kd-tree's leaf order (:mod:`core.kernels.kd_order`; neighbours
-    in space are neighbours in memory: every later loop over the neighbours reads cache
-    lines already loaded, 2-3x faster at 1M points, and the search itself too).
+    """:func:`search_neighbours` on the points put in a kd-tree's leaf order
+    (:mod:`core.kernels.kd_order`; neighbours in space are neighbours in memory: every later
+    loop over the neighbours reads cache lines already loaded, 2-3x faster at 1M points, and
+    the search itself too).
 
     Returns ``(nb, order)``: ``nb`` holds the points ``pts[order]`` and their neighbours
     as indices into that array; each row holds the same neighbours in the same order as

@@ -93,9 +93,10 @@ def given_in_spatial_order(pts: np.ndarray, nb: Neighbours) -> tuple[Neighbours,
     in spatial order, as :func:`core.estimate` searches its own. A result's graph still
     held in that order (:class:`core.wide_neighbours.LazyNeighbours`) is used as it is; a
     plain graph up to :data:`COPY_BYTES` is copied into the kd-tree's leaf order
-    (:func:`core.kernels.kd_order.kd_order`, 20 ms at 100k points: on shuffled points the stages after it ran 1.5-2x slower
-    in the caller's order, the re-decided signs 7x). Larger or other graphs stay in the
-    caller's order. The answer is the same either way (see the module's docstring)."""
+    (:func:`core.kernels.kd_order.kd_order`, 20 ms at 100k points: on shuffled points the
+    stages after it ran 1.5-2x slower in the caller's order, the re-decided signs 7x).
+    Larger or other graphs stay in the caller's order. The answer is the same either way
+    (see the module's docstring)."""
     held = nb.spatial() if isinstance(nb, LazyNeighbours) else None
     if held is not None:
         return held[0], SpatialOrder(held[1])
