@@ -21,8 +21,8 @@ from core.tuning import AUTO_PASSES
 
 from . import DEFAULT_CLOUD
 from .fields import resolve_field
-from .jobs import live_job_threads
 from .hard_exit import end_now, exit_at_once
+from .jobs import live_job_threads
 from .persist import restore_layout, restore_state
 from .state import ORIENTATIONS, ViewerState
 

@@ -162,7 +162,6 @@ class EstimateWorker(QObject):
         res = core.estimate(pts, normals, k=max(k, 3), method=req.method, passes=passes, orientation=req.orientation,
                             progress=_sub(callback, 0.0, 0.05, "preview"), cache=self._sub_cache)
         fields = spread(_fields_of(res, req.source, sub.index), sub)
-        _flags_drawn(res)
         return EstimateOutput(gen=req.gen, request=req, points=points, result=res, fields=fields,
                               spacing=_spacing(res), elapsed=time.perf_counter() - t0, preview=len(pts))
 
@@ -209,7 +208,8 @@ class EstimateWorker(QObject):
 def _flags_drawn(result) -> None:
     """Compute here, on the job thread, the flags the view draws that core computes on first
     use: the border points (grey; an integer k's result searches its own neighbours for
-    them, 0.26 s per 100k points, which the GUI thread paid when it coloured the result)."""
+    them, 0.26 s per 100k points, which the GUI thread paid when it coloured the result).
+    A preview's are never drawn (:meth:`app.presenter.Presenter._colour_preview`)."""
     result.border  # noqa: B018 - the property computes and keeps them
 
 

@@ -185,8 +185,7 @@ def _search(pts, k_max, progress, *, spatial, width=None):
         spatial = False
     else:
         if spatial:
-            order, pts = kd_order(np.ascontiguousarray(pts, dtype=np.float64), ORDER_LEAF)
-            order = order.astype(idx.dtype)
+            order, pts = leaf_order(pts, idx.dtype)
             sorted_tree = build_tree(pts, SEARCH_LEAF)
             _query_tree(pts, sorted_tree, order, idx, dist, report)
         else:
@@ -195,6 +194,13 @@ def _search(pts, k_max, progress, *, spatial, width=None):
     dist.setflags(write=False)
     nb = Neighbours(points=pts, indices=idx, distances=dist)
     return nb, (order if spatial else None), (sorted_tree if narrow else None)
+
+
+def leaf_order(pts, dtype) -> tuple[np.ndarray, np.ndarray]:
+    """``(order, pts[order])``: the points' spatial order (:func:`core.kernels.kd_order.kd_order`,
+    ranges of :data:`~core.tuning.ORDER_LEAF`), as ``dtype`` indices, and the points in it."""
+    order, in_order = kd_order(np.ascontiguousarray(pts, dtype=np.float64), ORDER_LEAF)
+    return order.astype(dtype), in_order
 
 
 def _largest_group_bound(pts) -> int:

@@ -14,10 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .kernels.kd_order import kd_order
 from .kernels.permute import move_rows, relabel_rows
-from .neighbours import Neighbours
-from .tuning import ORDER_LEAF
+from .neighbours import Neighbours, leaf_order
 from .wide_neighbours import LazyNeighbours
 
 #: neighbour arrays up to this size are reordered into new arrays (on all cores); larger
@@ -102,8 +100,8 @@ def given_in_spatial_order(pts: np.ndarray, nb: Neighbours) -> tuple[Neighbours,
         return held[0], SpatialOrder(held[1])
     if type(nb) is not Neighbours or nb.indices.nbytes + nb.distances.nbytes > COPY_BYTES:
         return nb, SpatialOrder(None)
-    sorted_order, sorted_pts = kd_order(np.ascontiguousarray(pts, dtype=np.float64), ORDER_LEAF)
-    order = SpatialOrder(sorted_order.astype(nb.indices.dtype))
+    sorted_order, sorted_pts = leaf_order(pts, nb.indices.dtype)
+    order = SpatialOrder(sorted_order)
     idx, dist = np.empty_like(nb.indices), np.empty_like(nb.distances)  # its inverse serves the results too
     relabel_rows(np.ascontiguousarray(nb.indices), np.ascontiguousarray(nb.distances), order.inverse, idx, dist)
     idx.setflags(write=False)

@@ -88,6 +88,14 @@ def _select(q, perm, lo, hi, kth, axis):
 
 
 @njit(**OPTS)
+def _halve(q, perm, lo, hi):
+    """Split q[lo:hi] at its middle index by the median of its widest coordinate; returns the middle."""
+    mid = (lo + hi) // 2
+    _select(q, perm, lo, hi, mid, _widest(q, lo, hi))
+    return mid
+
+
+@njit(**OPTS)
 def _split_all(q, perm, lo, hi, leaf, stack):
     """Split q[lo:hi] down to ranges of at most ``leaf`` points, one after another."""
     stack[0], stack[1] = lo, hi
@@ -97,8 +105,7 @@ def _split_all(q, perm, lo, hi, leaf, stack):
         a, b = stack[2 * top], stack[2 * top + 1]
         if b - a <= leaf:
             continue
-        mid = (a + b) // 2
-        _select(q, perm, a, b, mid, _widest(q, a, b))
+        mid = _halve(q, perm, a, b)
         stack[2 * top], stack[2 * top + 1] = a, mid
         stack[2 * top + 2], stack[2 * top + 3] = mid, b
         top += 2
@@ -120,11 +127,7 @@ def kd_order(p, leaf):
     while count < _TOP:  # breadth first: range i splits into 2i and 2i + 1 (the higher first)
         for i in range(count - 1, -1, -1):
             a, b = los[i], his[i]
-            mid = (a + b) // 2
-            if b - a > leaf:
-                _select(q, perm, a, b, mid, _widest(q, a, b))
-            else:
-                mid = b
+            mid = _halve(q, perm, a, b) if b - a > leaf else b
             los[2 * i], his[2 * i], los[2 * i + 1], his[2 * i + 1] = a, mid, mid, b
         count *= 2
     depth = 2 * int(np.log2(max(n, 2))) + 8
