@@ -9,13 +9,13 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import drift, passes
+from . import anchors, drift, passes
 from .frame import turned_over
 from .orientation import resettle
 from .passes import PassRule, few_fits
 from .initial_normals import Initial
 from .stages import Fit, Scale, _empty_fit, _Fitter
-from .tuning import DRIFT_POOL, HOLD_TURN, IRLS_LATER, PASS_DECAY, RESETTLE_K, ROWS_LATER
+from .tuning import ANCHOR_REACH, DRIFT_POOL, HOLD_TURN, IRLS_LATER, PASS_DECAY, RESETTLE_K, ROWS_LATER
 from .wide_neighbours import rows_at_least
 
 
@@ -72,15 +72,16 @@ def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n
     nrm, has_normal = initial.normals, initial.has_normal
     if sc.on_jet.any():  # the jets' normals are the neighbours' input where the jet is kept
         nrm = np.where(sc.on_jet[:, None], sc.jets[0], nrm)
-    fitter = _Fitter(pts, idx, kc, h, plan.method, dict(plan.options))
+    fitter = _Fitter(pts, idx, kc, h, plan.method, dict(plan.options), _anchors(pts, nb, kc, h, sc, outlier, plan))
     share = 1.0 if first is None else float(first.mean())
     held = _Held(len(pts)) if plan.adaptive else None
     for p in range(n_fits):
         sub = report.sub(p / n_fits, (p + 1) / n_fits)
         fit = _empty_fit(len(pts))
         centres = has_normal & ~sc.on_jet & sc.spans if fitted is None else has_normal & ~sc.on_jet & sc.spans & fitted[p]
-        fitter.into(fit, nrm, centres if first is None else centres & first, sub.sub(0.0, share))
-        complete = _Rest(fitter, fit, nrm, None if first is None else centres & ~first, sub.sub(share, 1.0), held)
+        kept = fitter.into(fit, nrm, centres if first is None else centres & first, sub.sub(0.0, share))
+        complete = _Rest(fitter, (fit, nrm, None if first is None else centres & ~first, sub.sub(share, 1.0), kept),
+                         held)
         yield p, fit, nrm, complete
         complete()
         if p == 0:
@@ -90,6 +91,15 @@ def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n
             has_normal = has_normal & ~outlier
             new[outlier] = np.nan
         nrm = new
+
+
+def _anchors(pts, nb, kc, h, sc: Scale, outlier, plan):
+    """The anchors whose fits each point reads (:func:`core.anchors.assign`) with k="auto",
+    else None; anchors and followers are points fitted in every pass (outliers fit their own)."""
+    if not anchors.in_use(plan):
+        return None
+    eligible = ~sc.on_jet & sc.spans & (h > 0) & ~outlier
+    return anchors.assign(pts, nb.take_indices(min(ANCHOR_REACH + 1, plan.k_search)), kc, eligible)
 
 
 def _refining(fitter: _Fitter, plan) -> _Fitter:
@@ -165,8 +175,9 @@ class _Rest:
     """A pass's fit at the points outside the rule's sample, run once (:func:`fit_passes`);
     returns the fit to report (:class:`_Held`)."""
 
-    def __init__(self, fitter, fit, nrm, mask, report, held=None):
-        self.fitter, self.args = fitter, None if mask is None or not mask.any() else (fit, nrm, mask, report)
+    def __init__(self, fitter, args, held=None):
+        fit, nrm, mask, _, _ = args  # (fit, input normals, the points left, report, the anchors' fits kept)
+        self.fitter, self.args = fitter, None if mask is None or not mask.any() else args
         self.fit, self.nrm, self.held, self.reported = fit, nrm, held, None
 
     def __call__(self) -> Fit:

@@ -9,7 +9,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import kernels, plane_spread, scale
+from . import anchors, kernels, plane_spread, scale
+from .anchor_blend import blended
 from .frame import darboux_frame
 from .kernels.permute import put_rows
 from .border import border_of_valid, served_by
@@ -217,7 +218,8 @@ def _empty_fit(n) -> Fit:
 
 class _Fitter(NamedTuple):
     """What every fit of a refinement shares: the points, their neighbours ``idx``, the
-    sizes ``kc``, the length units ``h``, the method and its options (see :func:`fit_all`)."""
+    sizes ``kc``, the length units ``h``, the method and its options (see :func:`fit_all`),
+    and with k="auto" the anchors whose fits each point reads (``anchor``, :mod:`core.anchors`)."""
 
     pts: np.ndarray
     idx: np.ndarray
@@ -225,18 +227,33 @@ class _Fitter(NamedTuple):
     h: np.ndarray
     method: object
     options: dict
+    anchor: np.ndarray | None = None
 
-    def into(self, out: Fit, nrm, has_normal, report) -> None:
-        """Fit the points with ``has_normal`` (and h > 0) to the normals ``nrm``, into ``out``."""
-        n = len(self.pts)
+    def into(self, out: Fit, nrm, has_normal, report, kept=None):
+        """Fit the points with ``has_normal`` (and h > 0) to the normals ``nrm``, into ``out``;
+        with anchors, the followers among them read their anchors' fits (fitted here too
+        unless ``kept``, what an earlier call of the same pass returned, holds them).
+        Returns the anchors' fits (:class:`core.anchors.Kept`), or None without anchors."""
         usable = has_normal & (self.h > 0)
+        if self.anchor is None:
+            return self._fit(out, nrm, usable, report)
+        kept = anchors.Kept(self.anchor) if kept is None else kept
+        fit_at, follow = anchors.split(self.anchor, usable, kept)
+        self._fit(out, nrm, fit_at, report.sub(0.0, 0.95), kept)
+        alone = self._follow(out, kept, nrm, np.flatnonzero(follow))
+        if alone.any():  # their anchor's fit failed: their own
+            self._fit(out, nrm, alone, report.sub(0.95, 1.0))
+        return kept
+
+    def _fit(self, out, nrm, usable, report, kept=None) -> None:
+        n = len(self.pts)
         whole = isinstance(self.idx, np.ndarray) and self.idx.flags.c_contiguous
         step = max(_CHUNK, _CHUNK_ENTRIES // max(int(self.kc.max()), 1)) if n else _CHUNK
         for start in range(0, n, step):
             stop = min(n, start + step)
             c = start + np.flatnonzero(usable[start:stop])
             if len(c):
-                _fit_chunk(self._chunk(nrm, c, whole), self.method, self.options, out)
+                _fit_chunk(self._chunk(nrm, c, whole), self.method, self.options, out, kept)
             report(stop / n, self.method.name)
 
     def _chunk(self, nrm, c, whole):
@@ -246,17 +263,35 @@ class _Fitter(NamedTuple):
             return Chunk.build(self.pts, nrm, self.idx, self.h[c], c, self.kc[c], rows=c)
         return Chunk.build(self.pts, nrm, self.idx[c], self.h[c], c, self.kc[c])
 
+    def _follow(self, out: Fit, kept, nrm, points) -> np.ndarray:
+        """Store at the followers ``points`` their anchors' fits read at their offsets and
+        averaged (:mod:`core.anchor_blend`); returns the (N,) mask of those where an anchor's
+        fit failed."""
+        alone = np.zeros(len(self.pts), dtype=bool)
+        if not len(points):
+            return alone
+        frame, good, r = blended(kept, self.pts, nrm, points, self.anchor[points], self.options.get("constraint", "project"))
+        alone[points[~good]] = True
+        _store(out, points, frame, {"rms": kept.rms[r], "spread": kept.spread[r], "degree": kept.degree[r]}, good)
+        return alone
 
-def _fit_chunk(chunk, method, opts, out: Fit) -> None:
+
+def _fit_chunk(chunk, method, opts, out: Fit, kept=None) -> None:
     mu, W, ok, diag = method.fit(chunk, **opts)
     frame = darboux_frame(chunk.t1, chunk.t2, chunk.z, mu, W / chunk.h[:, None, None])
-    good = ok & frame.ok
+    if kept is not None:
+        kept.take(chunk, diag, ok & frame.ok)
+    _store(out, chunk.centres, frame, diag, ok & frame.ok)
+
+
+def _store(out: Fit, centres, frame, diag, good) -> None:
+    """``out``'s rows ``centres[good]`` = the frame's and the fit's diagnostics' (valid last: True where good)."""
     stored = [(frame.normal, out.normals), (frame.e1, out.e1), (frame.e2, out.e2), (frame.k1, out.k1), (frame.k2, out.k2)]
     if diag is not None and "rms" in diag:
         stored += [(diag["rms"], out.rms), (diag["spread"], out.spread), (diag["degree"], out.degree)]
-    stored.append((good, out.valid))  # valid last: True where good
+    stored.append((good, out.valid))
     for src, dst in stored:  # dst[centres[good]] = src[good], one compiled loop per array
-        put_rows(good, chunk.centres, _columns(src, dst.dtype), dst.reshape(len(dst), -1))
+        put_rows(good, centres, _columns(src, dst.dtype), dst.reshape(len(dst), -1))
 
 
 def _columns(a, dtype):

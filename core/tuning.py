@@ -148,64 +148,65 @@ FOLD_FLAT = 0.45
 
 # ----------------------------------------------------------------------------- automatic k (core.scale)
 
-#: candidate neighbourhood sizes (about x1.4 apart). 320 on top of 226 (where the budget
-#: allows: up to 200k points): with noise NR fits the largest candidate at most points of a
-#: smooth graph, and the direction e1 kept improving past 226. Decided on the tuning and the
-#: private set (python -m core bench holdout --set tuning / private: geometric mean of the
-#: error ratios 0.494 -> 0.478 and 0.470 -> 0.430, cells lost 1 -> 2 of 72 (worst 1.07x ->
-#: 1.01x) and 2 -> 1 of 48), then checked on the hold-out: 11 -> 6 of 84 lost, worst 1.46x ->
-#: 1.37x, 0.500 -> 0.460. It costs H and K up to ~10 % on the fast-curving chirp and saddle,
-#: and a noisy 100k cloud ~1.3x the CPU time.
+#: candidate neighbourhood sizes (about x1.4 apart). 320 on top of 226 (where the budget allows: up to 200k points):
+#: with noise NR fits the largest candidate at most points of a smooth graph, and the direction e1 kept improving past
+#: 226. Decided on the tuning and the private set (python -m core bench holdout --set tuning / private: geometric mean
+#: of the error ratios 0.494 -> 0.478 and 0.470 -> 0.430, cells lost 1 -> 2 of 72 (worst 1.07x -> 1.01x) and 2 -> 1 of
+#: 48), then checked on the hold-out: 11 -> 6 of 84 lost, worst 1.46x -> 1.37x, 0.500 -> 0.460. It costs H and K up to
+#: ~10 % on the fast-curving chirp and saddle, and a noisy 100k cloud ~1.3x the CPU time.
 AUTO_KS = (20, 28, 40, 56, 80, 113, 160, 226, 320)
 #: the candidates stop where N x k would exceed this many cached neighbours (~0.8 GB)
 NEIGHBOUR_BUDGET = 64_000_000
 #: degree of the normal fit used by k="auto" (a cubic normal field: bias O(h^3))
 AUTO_DEGREE = 3
-#: width of the confidence intervals in standard deviations. The least-squares variance
-#: treats the neighbours' normals as independent, but neighbouring estimated normals
-#: share most of their own neighbours, so their errors are correlated and the variance
-#: is underestimated; 4 (not the textbook 2) compensates. Measured on the torus, saddle,
+#: width of the confidence intervals in standard deviations. The least-squares variance treats the neighbours' normals
+#: as independent, but neighbouring estimated normals share most of their own neighbours, so their errors are
+#: correlated and the variance is underestimated; 4 (not the textbook 2) compensates. Measured on the torus, saddle,
 #: ellipsoid and a thin torus (r = 0.3) at noise 0-0.2 of the spacing.
 GAMMA = 4.0
-#: fold test (k stops growing where a ring of neighbours leaves the graph of a function
-#: over the local plane; see core.kernels.scale). Share of a ring that may lie off the
-#: graph before k stops growing
+#: fold test (k stops growing where a ring of neighbours leaves the graph of a function over the local plane; see
+#: core.kernels.scale). Share of a ring that may lie off the graph before k stops growing
 FOLD_FRACTION = 0.2
 #: a neighbour whose normal turns more than 70 degrees from the local mean normal is off the graph
 FOLD_COS = 0.34
-#: heights within this many RMS heights of the smallest neighbourhood are noise, not a
-#: fold. With noise of a whole spacing, a test on the centre's own noisy normal (no
-#: margin) stopped a quarter of the points at k = 20.
+#: heights within this many RMS heights of the smallest neighbourhood are noise, not a fold. With noise of a whole
+#: spacing, a test on the centre's own noisy normal (no margin) stopped a quarter of the points at k = 20.
 FOLD_NOISE = 3.0
 #: fewest off-graph neighbours that make a fold (a few turned normals in a small ring are noise)
 FOLD_MIN_BAD = 3
 
 # ----------------------------------------------------------------------------- the fit and its passes
 
-#: a point whose fitted neighbours spread less than this across their main direction in the
-#: tangent plane (sqrt(lambda_min / lambda_max) of their offsets, core.plane_spread) is not
-#: fitted: its neighbours lie along one line, so its curvature across that line is noise over
-#: their tiny lever arms. Measured (tests/core/test_plane_spread.py has the classes): k = 15
-#: on random samplings of a torus: >= 0.31 (0.21 at k = 10, 0.10 at k = 8); scan lines up to 6x wider
-#: apart than the along-line spacing: >= 0.5; 7x: 8 % of points 0.005-0.05 (H error 8-9 against
-#: 0.02); 8x and 12x: median 0.013 (H error 54-77 against |H| 0.18, every point valid);
-#: a circle with 1e-6 jitter: 0.006
+#: a point whose fitted neighbours spread less than this across their main direction in the tangent plane
+#: (sqrt(lambda_min / lambda_max) of their offsets, core.plane_spread) is not fitted: its neighbours lie along one
+#: line, so its curvature across that line is noise over their tiny lever arms. Measured
+#: (tests/core/test_plane_spread.py has the classes): k = 15 on random samplings of a torus: >= 0.31 (0.21 at k = 10,
+#: 0.10 at k = 8); scan lines up to 6x wider apart than the along-line spacing: >= 0.5; 7x: 8 % of points 0.005-0.05 (H
+#: error 8-9 against 0.02); 8x and 12x: median 0.013 (H error 54-77 against |H| 0.18, every point valid); a circle with
+#: 1e-6 jitter: 0.006
 THIN_SPREAD = 0.1
 
 #: reweighting iterations of the robust fits (each one re-solves the least squares)
 IRLS_ITERATIONS = 2
 #: ... of the refinement passes after the first fit. Their input normals are the previous fit's, smooth, with the
-#: outliers flagged and (robust mode) left out, so one reweighting finds the same weights. 2026-12-04, k="auto", 6000
-#: points of torus, ellipsoid, saddle, chirp, sphere, cylinder, graded, range scan at noise 0.1/0.2/0.5 spacing and 0.2
-#: with 3 % outliers (32 cells): H, K, e1 errors 0.83-1.03x those with 2 (the gains at 0.5 spacing and with outliers);
-#: hold-out race unchanged (3/84 cells lost, geometric mean 0.456x), tuning race 0/72; noisy 100k torus (0.2 spacing)
-#: 13 % less wall time. Zero reweightings: 30 % less time but 1.2-2.2x the errors with outliers.
+#: outliers flagged and (robust mode) left out, so one reweighting finds the same weights. 2026-12-04, k="auto",
+#: 6000 points of torus, ellipsoid, saddle, chirp, sphere, cylinder, graded, range scan at noise 0.1/0.2/0.5
+#: spacing and 0.2 with 3 % outliers (32 cells): H, K, e1 errors 0.83-1.03x those with 2 (the gains at 0.5 spacing
+#: and with outliers); hold-out race unchanged (3/84 cells lost, geometric mean 0.456x), tuning race 0/72; noisy
+#: 100k torus (0.2 spacing) 13 % less wall time. Zero reweightings: 30 % less time but 1.2-2.2x the errors with
+#: outliers.
 IRLS_LATER = 1
 #: ... and the fewest rows they fit on (k="auto"): of k >= 2 x ROWS_LATER neighbours, every (k // ROWS_LATER)-th by
 #: distance (the same disc); a pass fits the previous fit's normals, each already a wide average, so half of them
-#: determine the cubic as well. 2026-12-05: hold-out 0.445x -> 0.444x (3/84 lost; e1 1-3 % worse on 9 cells), tuning
-#: 0.470x -> 0.471x, NF on a noisy 100k torus 6.5 -> 3.9 s; 80 rows: hold-out 5/84, tuning 0.481x; first fit too 0.478x
+#: determine the cubic as well. 2026-12-05: hold-out 0.445x -> 0.444x (3/84 lost; e1 1-3 % worse on 9 cells),
+#: tuning 0.470x -> 0.471x, NF on a noisy 100k torus 6.5 -> 3.9 s; 80 rows: hold-out 5/84, tuning 0.481x; first fit
+#: too 0.478x
 ROWS_LATER = 160
+#: k="auto"'s sparse centres (core.anchors): about ANCHOR_ROWS / k of the points with k > ANCHOR_ROWS are fitted, the
+#: others read the fits of the ANCHOR_BLEND nearest such anchors among their ANCHOR_REACH nearest (same k)
+ANCHOR_ROWS = 80
+ANCHOR_REACH = 24
+ANCHOR_BLEND = 4
 #: most NR refinement passes a user may ask for
 MAX_PASSES = 20
 # ----------------------------------------------------------------------------- the jet rule (issue 15, core.scale)
@@ -381,20 +382,18 @@ PATCH_TRUST = 0.6
 
 # ----------------------------------------------------------------------------- threads
 
-#: OpenMP's wait policy for numba's worker threads when the environment sets none
-#: (core._threads; numba's threading layer is libgomp here). libgomp's default lets an idle
-#: worker spin ~300k times after every parallel loop before it sleeps, so each serial stretch
-#: between two loops (numpy, the spanning forest, cKDTree's build) also burnt the other core.
-#: One NR k = 15 estimate of a 100k torus, CPU s with 2 threads: 0.96 spinning, 0.71 passive
-#: (1 thread: 0.65). Against the bare kNN search, same process, median of 8 interleaved pairs,
-#: load 10 on 2 cores: wall 2.05 / 2.47 -> 1.51 / 1.90, CPU 1.89 / 2.20 -> 1.40 / 1.65 (two
-#: processes each). The results are the same bits (the policy only decides how threads wait).
+#: OpenMP's wait policy for numba's worker threads when the environment sets none (core._threads; numba's threading
+#: layer is libgomp here). libgomp's default lets an idle worker spin ~300k times after every parallel loop before it
+#: sleeps, so each serial stretch between two loops (numpy, the spanning forest, cKDTree's build) also burnt the other
+#: core. One NR k = 15 estimate of a 100k torus, CPU s with 2 threads: 0.96 spinning, 0.71 passive (1 thread: 0.65).
+#: Against the bare kNN search, same process, median of 8 interleaved pairs, load 10 on 2 cores: wall 2.05 / 2.47 ->
+#: 1.51 / 1.90, CPU 1.89 / 2.20 -> 1.40 / 1.65 (two processes each). The results are the same bits (the policy only
+#: decides how threads wait).
 OMP_WAIT_POLICY = "PASSIVE"
-#: numpy's large arrays on 4 KiB pages, not transparent huge pages (core._pages, set at
-#: ``import core`` unless NUMPY_MADVISE_HUGEPAGE is in the environment). On this 2-core KVM
-#: guest with free page reporting a fresh huge page cost 2-4 ms (host faults); NR k = 15 on
-#: the bench's 1M torus, processes alternating with NUMPY_MADVISE_HUGEPAGE=0 (load ~7):
-#: estimate 9.6-10.3 -> 6.4-7.1 CPU s, the bare kNN search in the same processes 7.3-7.5 ->
-#: 6.6-6.8, NR / kNN CPU 1.16-1.22 -> 1.00. On bare metal huge pages are cheap to fault and
-#: 4 KiB pages cost more faults: not measured there. Same bits either way.
+#: numpy's large arrays on 4 KiB pages, not transparent huge pages (core._pages, set at ``import core`` unless
+#: NUMPY_MADVISE_HUGEPAGE is in the environment). On this 2-core KVM guest with free page reporting a fresh huge page
+#: cost 2-4 ms (host faults); NR k = 15 on the bench's 1M torus, processes alternating with NUMPY_MADVISE_HUGEPAGE=0
+#: (load ~7): estimate 9.6-10.3 -> 6.4-7.1 CPU s, the bare kNN search in the same processes 7.3-7.5 -> 6.6-6.8, NR /
+#: kNN CPU 1.16-1.22 -> 1.00. On bare metal huge pages are cheap to fault and 4 KiB pages cost more faults: not
+#: measured there. Same bits either way.
 NUMPY_HUGEPAGES = False

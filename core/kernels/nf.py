@@ -26,6 +26,7 @@ import numpy as np
 from numba import njit, prange
 
 from ._base import BLOCK, OPTS, theta
+from .algebra import n_terms
 from .lstsq import (BX, BY, C1, C2, CX, CY, accumulate, fit_scratch, monomials, reset, slope_variances, solve,
                     solve_coefficients, solve_determined)
 from .robust import robust_weights
@@ -83,7 +84,9 @@ class Fits(NamedTuple):
     the least-squares variances of W11, (W12 + W21)/2, W22, rms (M,) the weighted RMS
     residual of the normal components, spread (M,) their weighted RMS deviation from
     their mean (how much the normals turn), degree (M,) the degree fitted
-    (:func:`solve_determined`; 0 where no fit)."""
+    (:func:`solve_determined`; 0 where no fit) and coef (M, 2, MAX_TERMS) the polynomials of
+    X and Y in (u, v) by :func:`poly_row`'s monomials (zero past the degree fitted; without
+    the constraint), which :mod:`core.anchors` evaluates at the points around the centre."""
 
     mu: np.ndarray
     W: np.ndarray
@@ -91,6 +94,7 @@ class Fits(NamedTuple):
     rms: np.ndarray
     spread: np.ndarray
     degree: np.ndarray
+    coef: np.ndarray
 
 
 @njit(**OPTS, inline="always")
@@ -266,6 +270,10 @@ def _store(opt, degree, r, n, s, out):
         w12 -= t * g2
         w21 -= t * g3
         w22 -= t * g4
+    p = n_terms(degree)
+    for a in range(out.coef.shape[2]):
+        out.coef[r, 0, a] = vec[CX, a] if a < p else 0.0
+        out.coef[r, 1, a] = vec[CY, a] if a < p else 0.0
     out.mu[r, 0] = cx0
     out.mu[r, 1] = cy0
     out.W[r, 0, 0] = w11

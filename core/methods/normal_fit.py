@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import kernels
+from ..kernels.algebra import MAX_TERMS
 from ..tuning import DEGREE_PIVOT, IRLS_ITERATIONS, RCOND, THETA_REACH, THIN_SPREAD
 from ._options import choose
 from ._result import MethodFit
@@ -71,7 +72,9 @@ def fit(chunk, *, weights="uniform", constraint="project", robust=None, degree=1
     rms = np.full(m, np.nan)
     spread = np.full(m, np.nan)
     fitted = np.zeros(m, dtype=np.int8)
+    coef = np.zeros((m, 2, MAX_TERMS))
     settings = kernels.Settings(THETA_REACH, _WEIGHTS.index(weights), _CONSTRAINTS.index(constraint),
                                 _ROBUST.index(robust), reweightings, degree, RCOND, DEGREE_PIVOT, THIN_SPREAD, rows)
-    kernels.normal_fit(chunk.frames(), settings, kernels.Fits(mu, W, var, rms, spread, fitted), chunk.kernel_rows())
-    return MethodFit(mu, W, fitted > 0, {"var": var, "rms": rms, "spread": spread, "degree": fitted})
+    kernels.normal_fit(chunk.frames(), settings, kernels.Fits(mu, W, var, rms, spread, fitted, coef), chunk.kernel_rows())
+    return MethodFit(mu, W, fitted > 0, {"var": var, "rms": rms, "spread": spread, "degree": fitted,
+                                              "coef": coef})

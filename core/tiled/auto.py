@@ -20,7 +20,7 @@ import numpy as np
 from ..estimate import _reported, _result as result_of, prepare  # the in-memory result's fields and flags
 from ..planning import EstimatePlan
 from ..passes import PassRule, few_fits, rule_sample, turn_angles
-from .. import drift
+from .. import anchors, drift
 from ..refinement import Refined, finish, fit_passes, settle_signs
 from ..stages import flags
 from .._progress import Progress
@@ -42,7 +42,8 @@ def run_auto_tile(root, tile: int, spec) -> dict:
     if len(store.read_bin(tile)) == 0:
         _save(store, tile, [_empty()] * (whole.passes + 1), np.zeros((whole.passes + 2, 2)), {})
         return {"tile": tile, "skipped": False, "points": 0, "loaded": 0}
-    chain = auto_chain(whole.passes, whole.k_search, whole.k_initial)
+    anchored = anchors.in_use(whole)  # a fit read at a follower: one ring more per pass (core.tiled.halo.auto_chain)
+    chain = auto_chain(whole.passes, whole.k_search, whole.k_initial, anchored)
     rec, owner, nb, exact = load_with_halo(store, plan, tile, whole.k_search, chain)
     pts = np.ascontiguousarray(rec["xyz"])
     normals = np.ascontiguousarray(rec["n"]) if spec.normals_given else None
@@ -52,7 +53,7 @@ def run_auto_tile(root, tile: int, spec) -> dict:
     judged = own & rule_sample(pts, whole.n_points) if whole.adaptive else own  # as in memory (core.passes)
     outputs, stats = [], np.zeros((tplan.passes + 2, 2))  # per pass: sum of turns, count; then the noisy points
     # fit p where later fits use it, and one ring more: an own point's border flag counts its valid neighbours
-    reach = [rings_from(own, nb.indices, tplan.passes - p + 1) for p in range(tplan.passes + 1)]
+    reach = [rings_from(own, nb.indices, (2 if anchored else 1) * (tplan.passes - p) + 1) for p in range(tplan.passes + 1)]
     fits, back = [], []  # the last three passes' fits; pass 1 stepped back where pass 2 drifts (core.drift)
     pool = front.fit_nb.take(min(DRIFT_POOL, tplan.k_search))[0]
 

@@ -34,7 +34,7 @@ def chain_rings(passes: int) -> int:
     return passes + 1
 
 
-def auto_chain(passes: int, k_search: int, k_initial: int) -> tuple:
+def auto_chain(passes: int, k_search: int, k_initial: int, anchored: bool = False) -> tuple:
     """The dependency chain of k="auto" as ``((rings, k), ...)``: points within ``rings``
     kNN hops of the tile (over the ``k_search`` lists) need their ``k`` nearest exact.
 
@@ -50,9 +50,12 @@ def auto_chain(passes: int, k_search: int, k_initial: int) -> tuple:
     ring ``passes + 2``, need only their ``k_initial`` nearest (the outlier scores). Each
     point's own-sheet order (:mod:`core.one_sheet`) reads its neighbours' normals, from their
     own-sheet rows in turn: the first :func:`core.one_sheet.sheet_width` one ring further,
-    and the ``k_initial`` nearest two.
+    and the ``k_initial`` nearest two. With ``anchored`` fits (:mod:`core.anchors`) a point's
+    fit is that of an anchor among its nearest, whose neighbours are a ring further: fit 0
+    is needed ``2 passes + 1`` rings out, and at the anchors of that ring.
     """
-    return ((passes + 1, k_search), (passes + 2, sheet_width(k_search)), (passes + 3, k_initial))
+    hops = 2 * passes + 1 if anchored else passes
+    return ((hops + 1, k_search), (hops + 2, sheet_width(k_search)), (hops + 3, k_initial))
 
 
 def shortfall(nb, own, chain, lo, hi) -> tuple[float, np.ndarray]:

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import core
-from core import noise, passes, scale, shapes, shapes_thin
+from core import anchors, noise, passes, scale, shapes, shapes_thin
 from core.io import read_cloud
 from core.tiled import auto, estimate_tiled, halo, task, wholecloud
 
@@ -69,6 +69,21 @@ def test_auto_in_16_tiles_is_the_in_memory_estimate(tmp_path, small_candidates, 
     assert (tmp_path / "out.ply").read_bytes() == ref
     for name in ("noise", "crease_typical", "passes_run"):  # the whole cloud's, exactly
         assert run.params[name] == mem.params[name]
+
+
+def test_anchored_fits_in_tiles_are_the_in_memory_estimate(tmp_path, small_candidates, monkeypatch):
+    """Where a point reads its fit from anchors among its nearest (core.anchors; here from
+    k > 8, so that the small candidates use them) each pass depends on one ring more, which
+    the halo's chain and each pass's reach hold (core.tiled.halo.auto_chain)."""
+    monkeypatch.setattr(anchors, "ANCHOR_ROWS", 8)
+    drawn, assign = [], anchors.assign
+    monkeypatch.setattr(anchors, "assign", lambda *args: drawn.append(assign(*args)) or drawn[-1])
+    pts = _noisy_torus(4000)
+    mem = core.estimate(pts, passes=2)
+    assert mem.params["passes_run"] >= 1 and anchors.followers(drawn[-1]).mean() > 0.3
+    run = estimate_tiled(pts, tmp_path / "out.ply", tile_points=375, workers=0, passes=2)
+    assert run.n_tiles >= 8
+    _same(tmp_path / "out.ply", mem)
 
 
 def test_a_thin_rims_fold_test_is_the_whole_clouds(tmp_path, small_candidates):
@@ -133,6 +148,7 @@ def test_the_derived_auto_chain_is_enough(tmp_path, monkeypatch, small_candidate
 def test_the_auto_chain_covers_every_pass():
     assert halo.auto_chain(4, 226, 15) == ((5, 226), (6, 40), (7, 15))  # own-sheet rows: two rings more (core.one_sheet)
     assert halo.auto_chain(0, 20, 15) == ((1, 20), (2, 20), (3, 15))
+    assert halo.auto_chain(2, 226, 15, anchored=True) == ((6, 226), (7, 40), (8, 15))  # a ring more per pass
 
 
 @pytest.mark.parametrize("sizes", [[0], [1], [5, 0, 3], [4, 4], [3000, 1, 2500, 0, 7], [1_200_000, 900_001]])

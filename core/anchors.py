@@ -1,0 +1,127 @@
+"""Sparse centres of k="auto"'s wide fits: fit at some points, evaluate the fit at those around.
+
+Where noise makes k="auto" choose a wide neighbourhood (k = 320 on a noisy torus), the
+fits of neighbouring points are fits of nearly the same neighbours: two points a spacing
+apart share ~95 % of 320 neighbours, and their fitted polynomials describe one normal
+field. A cubic fit at a centre a describes the normal field over its whole disc, so the
+normal and its derivatives at a point p a spacing or two away are the fitted polynomial's
+value and slopes at p's offset (u, v) (eqs. 23-24 read at (u, v) instead of (0, 0)):
+
+    X(u, v), Y(u, v)                                   the normal at p, in a's frame
+    W = [[dX/du, dX/dv], [dY/du, dY/dv]]               dn at p in the basis (r_u, r_v)
+
+(the graph parametrisation of :func:`core.frame.darboux_frame` holds at every (u, v),
+not only at the centre), with the symmetry constraint of eq. 22 projected at p. So
+about ``ANCHOR_ROWS / k`` of the points with such a k are *anchors* whose fits are
+computed, and each other point *follows* the ``ANCHOR_BLEND`` nearest anchors among its
+``ANCHOR_REACH`` nearest that chose the same k, their fits read at its offset and
+averaged (:mod:`core.anchor_blend`): the fits cost what fits of ``ANCHOR_ROWS``
+neighbours at every point would, over the same wide disc. Measured on the hold-out race
+(2026-12-05): ANCHOR_ROWS = 40 (1 in 8 fitted at k = 320) and the nearest anchor alone:
+8/84 cells lost, 3 over 1.10x, geometric mean 0.444x -> 0.457x; averaging 4 anchors:
+6/84, 3 over; ANCHOR_ROWS = 80: 5/84, 2 over (worst 1.38x -> 1.32x), 0.451x, tuning race
+0/72, 0.471x -> 0.474x. A noisy 100k torus: k="auto" 12.9 -> 6.2 s (NR k = 15: 0.56 s).
+
+Which points are anchors is drawn by a hash of their coordinates
+(:func:`core.passes.coordinate_hash`), so it does not depend on the order of the points,
+the thread count or the tile that holds them; a point with no anchor near, or whose
+anchor's fit fails, fits itself. An integer k never uses anchors.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .kernels.algebra import MAX_TERMS
+from .kernels.anchors import read_at
+from .passes import coordinate_hash
+from .tuning import ANCHOR_BLEND, ANCHOR_REACH, ANCHOR_ROWS
+
+#: the hash's salt: anchors are drawn independently of the pass rule's sample
+_SALT = 0x5A17C0DE
+
+
+def in_use(plan) -> bool:
+    """Whether the fits of ``plan`` may read anchors: k="auto" with candidates wider than
+    ANCHOR_ROWS, and eq. 22 projected (a follower's W is projected; "exact" solves at a centre)."""
+    return plan.auto and plan.k_search > ANCHOR_ROWS and plan.options.get("constraint") != "exact"
+
+
+def assign(pts, near, kc, eligible) -> np.ndarray | None:
+    """(N, ANCHOR_BLEND) int64: the anchors whose fits each point reads, nearest first and
+    -1 past the last (column 0 is the point itself where it fits its own), or None when
+    every point fits its own. ``near`` (N, >= ANCHOR_REACH + 1): each point's nearest
+    (itself first) in the order its fit reads them; ``kc`` (N,) the k each point fits on;
+    ``eligible`` (N,) bool: the points that may be anchors or follow them (fitted in every
+    pass: not an outlier, a normal, a neighbourhood that spans)."""
+    kc = np.asarray(kc)
+    drawn = coordinate_hash(pts, salt=_SALT) / 2.0**64 < ANCHOR_ROWS / np.maximum(kc, 1)  # always at k <= ANCHOR_ROWS
+    anchors = eligible & drawn
+    rows = np.flatnonzero(eligible & ~anchors)
+    if not len(rows):
+        return None
+    cand = np.asarray(near[rows, 1:ANCHOR_REACH + 1])
+    ok = anchors[cand] & (kc[cand] == kc[rows, None])
+    first = np.argsort(~ok, axis=1, kind="stable")[:, :ANCHOR_BLEND]  # the first anchors of each row, in order
+    picked = np.where(np.take_along_axis(ok, first, 1), np.take_along_axis(cand, first, 1), -1)
+    found = picked[:, 0] >= 0
+    anchor = np.full((len(kc), ANCHOR_BLEND), -1, dtype=np.int64)
+    anchor[:, 0] = np.arange(len(kc))
+    anchor[rows[found]] = picked[found]
+    return anchor
+
+
+def followers(anchor) -> np.ndarray:
+    """(N,) bool: the points that read anchors' fits."""
+    return anchor[:, 0] != np.arange(len(anchor))
+
+
+def split(anchor, usable, kept: "Kept"):
+    """``(fit_at, follow)`` (N,) bool: the points to fit (the usable ones that fit their
+    own, and the anchors of the usable ones that follow them), less those ``kept`` has
+    fitted in this pass already, and the usable followers."""
+    follow = usable & followers(anchor)
+    fit_at = usable & ~follow
+    read = anchor[follow]
+    fit_at[read[read >= 0]] = True
+    fit_at[kept.points[kept.fitted]] = False
+    return fit_at, follow
+
+
+class Kept:
+    """One pass's fits at the anchors (their polynomials, frames, length units and
+    diagnostics), filled chunk by chunk as they are fitted (:meth:`take`): the rule's
+    sample and the rest of a pass (:func:`core.refinement.fit_passes`) share them."""
+
+    def __init__(self, anchor):
+        n = len(anchor)
+        read = anchor[followers(anchor)]
+        self.points = np.unique(read[read >= 0])  # the anchors some point follows
+        m = len(self.points)
+        self.row = np.full(n, -1, dtype=np.int64)
+        self.row[self.points] = np.arange(m)
+        self.coef, self.frame = np.zeros((m, 2, MAX_TERMS)), np.zeros((m, 3, 3))
+        self.h, self.ok, self.fitted = np.ones(m), np.zeros(m, dtype=bool), np.zeros(m, dtype=bool)
+        self.rms, self.spread, self.degree = np.full(m, np.nan), np.full(m, np.nan), np.zeros(m, dtype=np.int8)
+
+    def take(self, chunk, diag, good) -> None:
+        """Keep the chunk's fits at the anchors it holds (``good``: fit and frame usable)."""
+        rows = self.row[chunk.centres]
+        at = np.flatnonzero(rows >= 0)
+        r = rows[at]
+        self.coef[r] = diag["coef"][at]
+        self.frame[r, 0], self.frame[r, 1], self.frame[r, 2] = chunk.t1[at], chunk.t2[at], chunk.z[at]
+        self.h[r], self.ok[r], self.fitted[r] = chunk.h[at], good[at], True
+        self.rms[r], self.spread[r], self.degree[r] = diag["rms"][at], diag["spread"][at], diag["degree"][at]
+
+    def at(self, pts, points, anchors, constraint):
+        """``(t1, t2, z, mu, W, r)`` of ``points`` read off the fits of ``anchors`` (one
+        each): the anchors' frames, the normal (mu) and its derivatives W (in units of 1/h,
+        eq. 22's constraint projected when ``constraint`` is "project") at each point's
+        offset, and the rows ``r`` of the anchors in this record (:attr:`ok`, diagnostics)."""
+        r = self.row[anchors]
+        mu, W = np.empty((len(points), 2)), np.empty((len(points), 2, 2))
+        read_at(np.ascontiguousarray(pts, dtype=np.float64), points, anchors, r, self.coef, self.frame, self.h,
+                constraint == "project", mu, W)
+        f = self.frame[r]
+        return f[:, 0], f[:, 1], f[:, 2], mu, W, r

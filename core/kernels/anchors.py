@@ -1,0 +1,209 @@
+"""The fits of :mod:`core.anchors` read at the points that follow anchors and averaged, in
+compiled loops (numpy references: :func:`core.anchor_blend.read_at_reference` and
+:func:`core.anchor_blend.blended_reference`)."""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit, prange
+
+from ._base import OPTS
+from .frame import _shape_operator
+
+
+@njit(**OPTS, inline="always")
+def _read(pts, p, a, q, coef, frame, h, project, out):
+    """out[0:2] = mu, out[2:6] = W (row-major, units of 1/h): the cubic polynomials of anchor
+    row q (point a) read at point p's offset in its frame, W projected onto eq. 22's plane
+    when ``project``."""
+    hq = h[q]
+    d0, d1, d2 = (pts[p, 0] - pts[a, 0]) / hq, (pts[p, 1] - pts[a, 1]) / hq, (pts[p, 2] - pts[a, 2]) / hq
+    u = d0 * frame[q, 0, 0] + d1 * frame[q, 0, 1] + d2 * frame[q, 0, 2]
+    v = d0 * frame[q, 1, 0] + d1 * frame[q, 1, 1] + d2 * frame[q, 1, 2]
+    uu, uv, vv = u * u, u * v, v * v
+    for c in range(2):
+        k = coef[q, c]
+        out[c] = k[0] + k[1] * u + k[2] * v + k[3] * uu + k[4] * uv + k[5] * vv + k[6] * uu * u + k[7] * uu * v \
+            + k[8] * u * vv + k[9] * vv * v
+        out[2 + 2 * c] = (k[1] + 2.0 * k[3] * u + k[4] * v + 3.0 * k[6] * uu + 2.0 * k[7] * uv + k[8] * vv) / hq
+        out[3 + 2 * c] = (k[2] + k[4] * u + 2.0 * k[5] * v + k[7] * uu + 2.0 * k[8] * uv + 3.0 * k[9] * vv) / hq
+    if project:  # §4.4: the Euclidean projection onto g . w = 0, as the NF kernel does at a centre
+        X, Y = out[0], out[1]
+        g1, g2, g3, g4 = X * Y, -(1.0 - Y * Y), 1.0 - X * X, -X * Y
+        t = (g1 * out[2] + g2 * out[3] + g3 * out[4] + g4 * out[5]) / (g1 * g1 + g2 * g2 + g3 * g3 + g4 * g4)
+        out[2] -= t * g1
+        out[3] -= t * g2
+        out[4] -= t * g3
+        out[5] -= t * g4
+
+
+@njit(**OPTS, parallel=True)
+def read_at(pts, points, anchors, r, coef, frame, h, project, mu, W):
+    """For follower m (point ``points[m]``, anchor ``anchors[m]``, the anchor's row ``r[m]``
+    of ``coef`` (., 2, 10), ``frame`` (., 3, 3) = (t1, t2, z) and ``h``): the cubic
+    polynomials X, Y of the anchor's fit at the follower's offset (u, v) in the anchor's
+    frame, in units of h (``mu[m]``), and their slopes ``W[m]`` = [[X_u, X_v], [Y_u, Y_v]]
+    in units of 1/h, projected onto eq. 22's plane when ``project``."""
+    for m in prange(len(points)):
+        out = np.empty(6)
+        _read(pts, points[m], anchors[m], r[m], coef, frame, h, project, out)
+        mu[m, 0], mu[m, 1] = out[0], out[1]
+        W[m, 0, 0], W[m, 0, 1], W[m, 1, 0], W[m, 1, 1] = out[2], out[3], out[4], out[5]
+
+
+@njit(**OPTS)
+def _basis(n0, n1, n2):
+    """(t1, t2) of :func:`core.linalg.tangent_basis` for the unit normal (n0, n1, n2)."""
+    sign = 1.0 if n2 >= 0.0 else -1.0
+    a = -1.0 / (sign + n2)
+    b = n0 * n1 * a
+    return (1.0 + sign * n0 * n0 * a, sign * b, -sign * n0), (b, sign + n1 * n1 * a, -n1)
+
+
+class AnchorFits(NamedTuple):
+    """The anchors' fits (:class:`core.anchors.Kept`): ``row`` (N,) each point's row (-1: not
+    an anchor), per row ``coef`` (., 2, 10), ``frame`` (., 3, 3) = (t1, t2, z), ``h``, ``ok``."""
+
+    row: np.ndarray
+    coef: np.ndarray
+    frame: np.ndarray
+    h: np.ndarray
+    ok: np.ndarray
+
+
+class Blended(NamedTuple):
+    """What :func:`blend` writes per follower: ``normal``, ``k1`` >= ``k2``, ``e1``, ``e2``."""
+
+    normal: np.ndarray
+    k1: np.ndarray
+    k2: np.ndarray
+    e1: np.ndarray
+    e2: np.ndarray
+
+
+@njit(**OPTS)
+def _offsets(pts, p, nrm, picked, x, y, d2):
+    """The anchors' offsets from point p in its tangent plane (x, y) and squared distances
+    d2; returns the number of anchors and the largest distance (1 without anchors)."""
+    t1, t2 = _basis(nrm[p, 0], nrm[p, 1], nrm[p, 2])
+    count, far = 0, 0.0
+    for b in range(len(picked)):
+        a = picked[b]
+        if a < 0:
+            continue
+        count += 1
+        e0, e1, e2 = pts[a, 0] - pts[p, 0], pts[a, 1] - pts[p, 1], pts[a, 2] - pts[p, 2]
+        x[b] = e0 * t1[0] + e1 * t1[1] + e2 * t1[2]
+        y[b] = e0 * t2[0] + e1 * t2[1] + e2 * t2[2]
+        d2[b] = e0 * e0 + e1 * e1 + e2 * e2
+        far = max(far, d2[b])
+    return count, math.sqrt(far) if far > 0.0 else 1.0
+
+
+@njit(**OPTS)
+def _weights(pts, p, nrm, picked, w, floor):
+    """w[0:B] = the affine weights of :func:`core.anchor_blend.affine_weights` for point p
+    (none below ``-floor``, else inverse squared distances)."""
+    B = len(picked)
+    x, y, d2 = np.zeros(B), np.zeros(B), np.zeros(B)
+    count, s = _offsets(pts, p, nrm, picked, x, y, d2)
+    m00 = m01 = m02 = m11 = m12 = m22 = 0.0
+    for b in range(B):
+        xb, yb, on = x[b] / s, y[b] / s, 1.0 if picked[b] >= 0 else 0.0
+        m00 += on
+        m01 += xb
+        m02 += yb
+        m11 += xb * xb
+        m12 += xb * yb
+        m22 += yb * yb
+    c00, c01, c02 = m11 * m22 - m12 * m12, m02 * m12 - m01 * m22, m01 * m12 - m02 * m11  # first column of adj(M)
+    det = m00 * c00 + m01 * c01 + m02 * c02
+    affine = count >= 3 and abs(det) > 1e-6
+    for b in range(B):
+        w[b] = (c00 + c01 * x[b] / s + c02 * y[b] / s) / det if affine and picked[b] >= 0 else 0.0
+        affine = affine and w[b] >= -floor
+    if not affine:  # inverse squared distances
+        for b in range(B):
+            w[b] = (1.0 / d2[b] if d2[b] > 0.0 else 1.0) if picked[b] >= 0 else 0.0
+        w /= w.sum()
+
+
+@njit(**OPTS)
+def _accumulate(pts, p, picked, w, fits, project, max_tilt2, N, S):
+    """N += w_b n_b, S += w_b (the shape operator in world coordinates) over the anchors
+    ``picked`` of point p, each turned to the first one's side; False if a fit read is not
+    usable there."""
+    val, n, u1, u2, first = np.empty(6), np.empty(3), np.empty(3), np.empty(3), np.zeros(3)
+    for b in range(len(picked)):
+        a = picked[b]
+        if a < 0:
+            continue
+        q = fits.row[a]
+        _read(pts, p, a, q, fits.coef, fits.frame, fits.h, project, val)
+        X, Y = val[0], val[1]
+        tilt2 = X * X + Y * Y
+        if not (fits.ok[q] and np.isfinite(val).all() and tilt2 < max_tilt2):
+            return False
+        Z0 = math.sqrt(1.0 - tilt2)
+        s11, s12, s22, b1, b2 = _shape_operator(X, Y, Z0, val[2], val[3], val[4], val[5])
+        f = fits.frame[q]
+        for i in range(3):
+            n[i] = X * f[0, i] + Y * f[1, i] + Z0 * f[2, i]
+            u1[i] = b1[0] * f[0, i] + b1[1] * f[1, i] + b1[2] * f[2, i]
+            u2[i] = b2[0] * f[0, i] + b2[1] * f[1, i] + b2[2] * f[2, i]
+        if b == 0:
+            first[:] = n
+        wb = w[b] if n[0] * first[0] + n[1] * first[1] + n[2] * first[2] >= 0.0 else -w[b]
+        for i in range(3):
+            N[i] += wb * n[i]
+            for j in range(3):
+                S[i, j] += wb * (s11 * u1[i] * u1[j] + s12 * (u1[i] * u2[j] + u2[i] * u1[j]) + s22 * u2[i] * u2[j])
+    return True
+
+
+@njit(**OPTS)
+def _principal(N, S, out, m):
+    """out's row m: the unit normal along N and the principal curvatures and directions of
+    S in its tangent plane (e1 x e2 = normal); False where N vanishes."""
+    length = math.sqrt(N[0] * N[0] + N[1] * N[1] + N[2] * N[2])
+    if not length > 0.0:
+        return False
+    n0, n1, n2 = N[0] / length, N[1] / length, N[2] / length
+    t1, t2 = _basis(n0, n1, n2)
+    a11 = a12 = a22 = 0.0
+    for i in range(3):
+        for j in range(3):
+            a11 += t1[i] * S[i, j] * t1[j]
+            a12 += t1[i] * S[i, j] * t2[j]
+            a22 += t2[i] * S[i, j] * t2[j]
+    mean, half = 0.5 * (a11 + a22), 0.5 * (a11 - a22)
+    rad = math.hypot(half, a12)
+    phi = 0.5 * math.atan2(a12, half)
+    c, s = math.cos(phi), math.sin(phi)
+    out.k1[m], out.k2[m] = mean + rad, mean - rad
+    out.normal[m, 0], out.normal[m, 1], out.normal[m, 2] = n0, n1, n2
+    for i in range(3):
+        out.e1[m, i] = c * t1[i] + s * t2[i]
+        out.e2[m, i] = -s * t1[i] + c * t2[i]
+    return True
+
+
+@njit(**OPTS, parallel=True)
+def blend(pts, nrm, points, picked, fits, project, max_tilt2, floor, out, good):
+    """Follower m (point ``points[m]``) from the :class:`AnchorFits` ``fits`` of its anchors
+    ``picked[m]``: each read at its offset (:func:`_read`), turned into a normal and a shape
+    operator in world coordinates (the augmented Darboux frame of :mod:`core.kernels.frame`),
+    averaged with the affine weights (:func:`_weights`) and diagonalised in the averaged
+    normal's tangent plane, into the :class:`Blended` ``out``; ``good[m]``: every anchor read
+    usable (written here: numba drops a parallel loop's own writes to a record's arrays)."""
+    for m in prange(len(points)):
+        p = points[m]
+        w, N, S = np.empty(picked.shape[1]), np.zeros(3), np.zeros((3, 3))
+        _weights(pts, p, nrm, picked[m], w, floor)
+        fine = _accumulate(pts, p, picked[m], w, fits, project, max_tilt2, N, S)
+        if fine:
+            fine = _principal(N, S, out, m)
+        good[m] = fine
