@@ -16,16 +16,17 @@ about ``ANCHOR_ROWS / k`` of the points with such a k are *anchors* whose fits a
 computed, and each other point *follows* the ``ANCHOR_BLEND`` nearest anchors among its
 ``ANCHOR_REACH`` nearest that chose the same k, their fits read at its offset and
 averaged (:mod:`core.anchor_blend`): the fits cost what fits of ``ANCHOR_ROWS``
-neighbours at every point would, over the same wide disc. Measured on the hold-out race
-(2026-12-05): ANCHOR_ROWS = 40 (1 in 8 fitted at k = 320) and the nearest anchor alone:
-8/84 cells lost, 3 over 1.10x, geometric mean 0.444x -> 0.457x; averaging 4 anchors:
-6/84, 3 over; ANCHOR_ROWS = 80: 5/84, 2 over (worst 1.38x -> 1.32x), 0.451x, tuning race
-0/72, 0.471x -> 0.474x. A noisy 100k torus: k="auto" 12.9 -> 6.2 s (NR k = 15: 0.56 s).
+neighbours at every point would, over the same wide disc. The pass rule judges the
+anchors' own fits (:func:`core.refinement.fit_passes`). Measured (2026-12-05, README
+"Wide fits at sparse anchors"): the nearest anchor alone, 1 in 8 fitted (ANCHOR_ROWS 40):
+hold-out race 8/84 cells lost, 3 over 1.10x; 4 anchors averaged: 6/84; ANCHOR_ROWS 80:
+5/84; noisy 100k clouds: mean |H| error -11 to +4.5 % against a fit at every point, the
+default 10.8 -> ~6 s on a torus.
 
-Which points are anchors is drawn by a hash of their coordinates
-(:func:`core.passes.coordinate_hash`), so it does not depend on the order of the points,
-the thread count or the tile that holds them; a point with no anchor near, or whose
-anchor's fit fails, fits itself. An integer k never uses anchors.
+Which points are anchors is drawn by a hash of their distances to their nearest
+(:func:`priority`), so it depends neither on the order of the points, the thread count
+or the tile that holds them nor on the cloud's pose or scale; a point with no anchor near,
+or where an anchor's fit fails, fits itself. An integer k never uses anchors.
 """
 
 from __future__ import annotations
@@ -34,17 +35,19 @@ import numpy as np
 
 from .kernels.algebra import MAX_TERMS
 from .kernels.anchors import read_at
-from .passes import coordinate_hash
+from .passes import mix64
 from .tuning import ANCHOR_BLEND, ANCHOR_REACH, ANCHOR_ROWS
 
-#: the hash's salt: anchors are drawn independently of the pass rule's sample
-_SALT = 0x5A17C0DE
+#: the hash's seed, and how many nearest distances it reads (:func:`priority`)
+_SALT, _RATIOS = 0x5A17C0DE, 8
 
 
 def in_use(plan) -> bool:
-    """Whether the fits of ``plan`` may read anchors: k="auto" with candidates wider than
-    ANCHOR_ROWS, and eq. 22 projected (a follower's W is projected; "exact" solves at a centre)."""
-    return plan.auto and plan.k_search > ANCHOR_ROWS and plan.options.get("constraint") != "exact"
+    """Whether the fits of ``plan`` may read anchors: k="auto" with candidates of at least
+    1.5 x ANCHOR_ROWS (:func:`assign`), and eq. 22 projected (a follower's W is projected;
+    "exact" solves at a centre)."""
+    wide = np.rint(plan.k_search / ANCHOR_ROWS) >= 2
+    return bool(plan.auto and wide and plan.options.get("constraint") != "exact")
 
 
 def assign(pts, near, kc, eligible) -> np.ndarray | None:
@@ -53,10 +56,14 @@ def assign(pts, near, kc, eligible) -> np.ndarray | None:
     every point fits its own. ``near`` (N, >= ANCHOR_REACH + 1): each point's nearest
     (itself first) in the order its fit reads them; ``kc`` (N,) the k each point fits on;
     ``eligible`` (N,) bool: the points that may be anchors or follow them (fitted in every
-    pass: not an outlier, a normal, a neighbourhood that spans)."""
+    pass: not an outlier, a normal, a neighbourhood that spans). A point is an anchor when
+    its :func:`priority` is above those of its m = round(k / ANCHOR_ROWS) - 1 nearest
+    (about 1 in m + 1 points)."""
     kc = np.asarray(kc)
-    drawn = coordinate_hash(pts, salt=_SALT) / 2.0**64 < ANCHOR_ROWS / np.maximum(kc, 1)  # always at k <= ANCHOR_ROWS
-    anchors = eligible & drawn
+    m = np.clip(np.rint(kc / ANCHOR_ROWS).astype(np.int64) - 1, 0, ANCHOR_REACH)
+    prio = priority(pts, near)
+    rival = np.where(np.arange(1, m.max() + 1) <= m[:, None], prio[np.asarray(near[:, 1:m.max() + 1])], 0)
+    anchors = eligible & (prio > rival.max(axis=1, initial=0))
     rows = np.flatnonzero(eligible & ~anchors)
     if not len(rows):
         return None
@@ -69,6 +76,26 @@ def assign(pts, near, kc, eligible) -> np.ndarray | None:
     anchor[:, 0] = np.arange(len(kc))
     anchor[rows[found]] = picked[found]
     return anchor
+
+
+def priority(pts, near, chunk=65_536) -> np.ndarray:
+    """(N,) uint64 > 0: a hash of each point's distances to its ``_RATIOS`` nearest, sorted
+    and divided by the largest, rounded to 2^-20: a draw that depends on neither the order
+    of the points, the thread count or the tile that holds them, nor the pose or scale of
+    the cloud (a rotation moves the ratios by ~1e-16, far from the rounding's half-steps),
+    so a turned cloud reads the same anchors. Points with equal ratios (an exact grid's)
+    tie, and a tie is no anchor: such points fit their own."""
+    prio = np.empty(len(pts), dtype=np.uint64)
+    for start in range(0, len(pts), chunk):
+        rows = slice(start, start + chunk)
+        d = np.linalg.norm(pts[np.asarray(near[rows, 1:_RATIOS + 1])] - pts[rows, None], axis=2)
+        d.sort(axis=1)
+        q = np.rint(d[:, :-1] / np.where(d[:, -1:] > 0.0, d[:, -1:], 1.0) * 2.0**20).astype(np.uint64)
+        h = np.full(len(q), _SALT, dtype=np.uint64)
+        for j in range(q.shape[1]):
+            h = mix64(h ^ q[:, j])
+        prio[rows] = h | np.uint64(1)
+    return prio
 
 
 def followers(anchor) -> np.ndarray:

@@ -28,19 +28,12 @@ def rule_sample(points, n_total=None, size=RULE_SAMPLE) -> np.ndarray:
     n_total = len(points) if n_total is None else int(n_total)
     if n_total <= size:
         return np.ones(len(points), dtype=bool)
-    return coordinate_hash(points) < np.uint64(int(size / n_total * 2.0**64))
-
-
-def coordinate_hash(points, salt=0) -> np.ndarray:
-    """(N,) uint64, a hash of each point's coordinates' bits (and ``salt``, for a draw
-    independent of another's): the same for a point whatever the order of the points, the
-    machine, the thread count or the tile that holds it."""
-    points = np.ascontiguousarray(points, dtype=np.float64)
     bits = (points + 0.0).view(np.uint64).reshape(len(points), 3)  # + 0.0: -0.0 hashes as 0.0
-    return _mix(bits[:, 0] ^ _mix(bits[:, 1] ^ _mix(bits[:, 2] ^ np.uint64(salt))))
+    h = mix64(bits[:, 0] ^ mix64(bits[:, 1] ^ mix64(bits[:, 2])))
+    return h < np.uint64(int(size / n_total * 2.0**64))
 
 
-def _mix(x: np.ndarray) -> np.ndarray:
+def mix64(x: np.ndarray) -> np.ndarray:
     """splitmix64's finaliser: every input bit moves every output bit (wrapping uint64)."""
     x = (x ^ (x >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
     x = (x ^ (x >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)

@@ -202,8 +202,8 @@ IRLS_LATER = 1
 #: tuning 0.470x -> 0.471x, NF on a noisy 100k torus 6.5 -> 3.9 s; 80 rows: hold-out 5/84, tuning 0.481x; first fit
 #: too 0.478x
 ROWS_LATER = 160
-#: k="auto"'s sparse centres (core.anchors): about ANCHOR_ROWS / k of the points with k > ANCHOR_ROWS are fitted, the
-#: others read the fits of the ANCHOR_BLEND nearest such anchors among their ANCHOR_REACH nearest (same k)
+#: k="auto"'s sparse centres (core.anchors): about ANCHOR_ROWS / k of the points with k >= 1.5 x ANCHOR_ROWS are fitted,
+#: the others read the fits of the ANCHOR_BLEND nearest such anchors among their ANCHOR_REACH nearest (same k)
 ANCHOR_ROWS = 80
 ANCHOR_REACH = 24
 ANCHOR_BLEND = 4

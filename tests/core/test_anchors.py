@@ -73,13 +73,13 @@ def test_the_compiled_blend_is_the_numpy_reference(monkeypatch):
         assert dot.min() > 1 - 1e-9, name
 
 
-def test_anchors_are_drawn_by_position_whatever_the_order(monkeypatch):
+def test_anchors_are_the_same_whatever_the_order_pose_or_scale(monkeypatch, helpers):
     pts = noise.add_noise(shapes.torus(6000, seed=2).points, 0.2, seed=3)
-    anchor = _anchor(pts, 160, 40, monkeypatch)
+    anchor = _anchor(pts, 160, 40, monkeypatch)  # m = 3: an anchor's priority beats its 3 nearest
     n = len(pts)
     follows = anchors.followers(anchor)
     own = np.unique(anchor[follows][anchor[follows] >= 0])
-    assert 0.2 < len(own) / n < 0.3 and follows.mean() > 0.7  # ~40 / 160 of the points fitted
+    assert 0.2 < len(own) / n < 0.3 and follows.mean() > 0.7  # ~1 in 4 fitted
     assert not follows[own].any()  # an anchor fits its own
     idx, _ = _graph(pts, 25)
     read = anchor[follows]
@@ -88,7 +88,9 @@ def test_anchors_are_drawn_by_position_whatever_the_order(monkeypatch):
     perm = np.random.default_rng(1).permutation(n)
     moved = _anchor(pts[perm], 160, 40, monkeypatch)
     np.testing.assert_array_equal(np.where(moved >= 0, perm[moved], -1), anchor[perm])  # the same anchors
-    assert _anchor(pts, 40, 40, monkeypatch) is None  # k <= ANCHOR_ROWS: every point fits its own
+    turned = (pts @ helpers.random_orthogonal(3, proper=False).T) * 7.3 + [1e3, -2.0, 5.0]
+    np.testing.assert_array_equal(_anchor(turned, 160, 40, monkeypatch), anchor)
+    assert _anchor(pts, 40, 40, monkeypatch) is None  # k < 1.5 x ANCHOR_ROWS: every point fits its own
 
 
 def test_a_follower_reads_a_spheres_curvature_exactly(monkeypatch):

@@ -33,9 +33,9 @@ def test_judging_on_a_sample_keeps_the_passes_and_the_numbers(noisy, monkeypatch
     seen = []
     real_into = stages._Fitter.into
 
-    def into(self, out, nrm, has_normal, report):
+    def into(self, out, nrm, has_normal, report, *kept):
         seen.append(int(has_normal.sum()))
-        return real_into(self, out, nrm, has_normal, report)
+        return real_into(self, out, nrm, has_normal, report, *kept)
 
     whole_cloud_rule = passes.rule_sample
     monkeypatch.setattr(passes, "rule_sample", lambda pts, n=None: whole_cloud_rule(pts, n, size=1000))
