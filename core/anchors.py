@@ -16,12 +16,12 @@ about ``ANCHOR_ROWS / k`` of the points with such a k are *anchors* whose fits a
 computed, and each other point *follows* the ``ANCHOR_BLEND`` nearest anchors among its
 ``ANCHOR_REACH`` nearest that chose the same k, their fits read at its offset and
 averaged (:mod:`core.anchor_blend`): the fits cost what fits of ``ANCHOR_ROWS``
-neighbours at every point would, over the same wide disc. The pass rule judges the
-anchors' own fits (:func:`core.refinement.fit_passes`). Measured (2026-12-05, README
+neighbours at every point would, over the same wide disc. Measured (2026-12-05, README
 "Wide fits at sparse anchors"): the nearest anchor alone, 1 in 8 fitted (ANCHOR_ROWS 40):
 hold-out race 8/84 cells lost, 3 over 1.10x; 4 anchors averaged: 6/84; ANCHOR_ROWS 80:
-5/84; noisy 100k clouds: mean |H| error -11 to +4.5 % against a fit at every point, the
-default 10.8 -> ~6 s on a torus.
+4/84, 2 over (fitting every point: 3/84, 2 over); noisy clouds' mean |H| error +3 to +5 % against a
+fit at every point where the pass rule decides alike (+22 % where it undoes one pass more),
+the default 10.8 -> ~6 s on a noisy 100k torus.
 
 Which points are anchors is drawn by a hash of their distances to their nearest
 (:func:`priority`), so it depends neither on the order of the points, the thread count

@@ -65,17 +65,15 @@ def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n
     with k="auto" a copy where :class:`_Held` keeps earlier passes' fits (the next pass
     and the pass rule see ``fit``). ``fitted[p]`` (N,) bool, optional: fit only those points in fit p (a tile
     fits each pass only as far out as later passes use it; the others keep their input
-    normals). With a mask ``first`` a pass is fitted there only (less the points that read
-    anchors' fits, :mod:`core.anchors`: the pass rule judges fits), and ``complete()`` fits
-    its other points (done before the next pass if the caller did not)."""
+    normals). With a mask ``first`` a pass is fitted there only (and at the anchors its
+    points read, :mod:`core.anchors`), and ``complete()`` fits its other points (done
+    before the next pass if the caller did not)."""
     kc = sc.k
     idx, h = rows_at_least(nb, kc)
     nrm, has_normal = initial.normals, initial.has_normal
     if sc.on_jet.any():  # the jets' normals are the neighbours' input where the jet is kept
         nrm = np.where(sc.on_jet[:, None], sc.jets[0], nrm)
     fitter = _Fitter(pts, idx, kc, h, plan.method, dict(plan.options), _anchors(pts, nb, kc, h, sc, outlier, plan))
-    if first is not None and fitter.anchor is not None:  # the rule judges fits, not their reading (core.anchors)
-        first = first & ~anchors.followers(fitter.anchor)
     share = 1.0 if first is None else float(first.mean())
     held = _Held(len(pts)) if plan.adaptive else None
     for p in range(n_fits):

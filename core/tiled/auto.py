@@ -66,7 +66,7 @@ def run_auto_tile(root, tile: int, spec) -> dict:
         return _outputs(rec, res, nb, own, owner, exact, spec, front.init.normals)
 
     for p, fit, nrm, complete in fit_passes(pts, front.init, front.outlier, front.fit_nb, front.scale, tplan, Progress(None),
-                                         n_fits=tplan.passes + 1, fitted=reach, first=judged):
+                                         n_fits=tplan.passes + 1, fitted=reach):
         seen = fit.valid & judged
         stats[p] = math.fsum(turn_angles(fit.normals, nrm, seen)), int(seen.sum())
         fits = (fits + [(complete(), nrm)])[-3:]
