@@ -79,8 +79,10 @@ def blended_reference(kept, pts, nrm, points, picked, constraint):
     normal, S, good, r0 = np.zeros((f, 3)), np.zeros((f, 3, 3)), np.ones(f, dtype=bool), None
     for j in range(picked.shape[1]):
         rows = np.flatnonzero(picked[:, j] >= 0)
-        t1, t2, z, mu, W, r = kept.at(pts, points[rows], picked[rows, j], constraint)
-        frame = darboux_frame(t1, t2, z, mu, W)
+        r = kept.row[picked[rows, j]]
+        f = kept.frame[r]
+        mu, W = read_at_reference(pts, points[rows], picked[rows, j], kept.coef[r], f, kept.h[r], constraint == "project")
+        frame = darboux_frame(f[:, 0], f[:, 1], f[:, 2], mu, W)
         ok = kept.ok[r] & frame.ok
         good[rows] &= ok
         if j == 0:
@@ -117,8 +119,10 @@ def _principal(normal, S, good):
 
 
 def read_at_reference(pts, points, anchors, coef, frame, h, project):
-    """Numpy reference of :func:`core.kernels.anchors.read_at` (rows of ``coef``, ``frame``
-    and ``h`` per follower): ``(mu, W)``."""
+    """``(mu, W)``: the polynomials ``coef`` of the anchors' fits (rows of ``coef``, ``frame``
+    and ``h`` per follower) read at the followers' offsets, W in units of 1/h and projected
+    onto eq. 22's plane when ``project`` (numpy reference of the reading inside
+    :func:`core.kernels.anchors.blend`)."""
     d = (pts[points] - pts[anchors]) / h[:, None]
     u, v = np.einsum("ij,ij->i", d, frame[:, 0]), np.einsum("ij,ij->i", d, frame[:, 1])
     i, j = _POWERS[:, 0], _POWERS[:, 1]

@@ -34,7 +34,6 @@ from __future__ import annotations
 import numpy as np
 
 from .kernels.algebra import MAX_TERMS
-from .kernels.anchors import read_at
 from .passes import mix64
 from .tuning import ANCHOR_BLEND, ANCHOR_REACH, ANCHOR_ROWS
 
@@ -140,15 +139,3 @@ class Kept:
         self.frame[r, 0], self.frame[r, 1], self.frame[r, 2] = chunk.t1[at], chunk.t2[at], chunk.z[at]
         self.h[r], self.ok[r], self.fitted[r] = chunk.h[at], good[at], True
         self.rms[r], self.spread[r], self.degree[r] = diag["rms"][at], diag["spread"][at], diag["degree"][at]
-
-    def at(self, pts, points, anchors, constraint):
-        """``(t1, t2, z, mu, W, r)`` of ``points`` read off the fits of ``anchors`` (one
-        each): the anchors' frames, the normal (mu) and its derivatives W (in units of 1/h,
-        eq. 22's constraint projected when ``constraint`` is "project") at each point's
-        offset, and the rows ``r`` of the anchors in this record (:attr:`ok`, diagnostics)."""
-        r = self.row[anchors]
-        mu, W = np.empty((len(points), 2)), np.empty((len(points), 2, 2))
-        read_at(np.ascontiguousarray(pts, dtype=np.float64), points, anchors, r, self.coef, self.frame, self.h,
-                constraint == "project", mu, W)
-        f = self.frame[r]
-        return f[:, 0], f[:, 1], f[:, 2], mu, W, r

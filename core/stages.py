@@ -279,9 +279,10 @@ class _Fitter(NamedTuple):
 def _fit_chunk(chunk, method, opts, out: Fit, kept=None) -> None:
     mu, W, ok, diag = method.fit(chunk, **opts)
     frame = darboux_frame(chunk.t1, chunk.t2, chunk.z, mu, W / chunk.h[:, None, None])
+    good = ok & frame.ok
     if kept is not None:
-        kept.take(chunk, diag, ok & frame.ok)
-    _store(out, chunk.centres, frame, diag, ok & frame.ok)
+        kept.take(chunk, diag, good)
+    _store(out, chunk.centres, frame, diag, good)
 
 
 def _store(out: Fit, centres, frame, diag, good) -> None:

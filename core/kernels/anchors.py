@@ -1,6 +1,5 @@
 """The fits of :mod:`core.anchors` read at the points that follow anchors and averaged, in
-compiled loops (numpy references: :func:`core.anchor_blend.read_at_reference` and
-:func:`core.anchor_blend.blended_reference`)."""
+one compiled loop (numpy reference: :func:`core.anchor_blend.blended_reference`)."""
 
 from __future__ import annotations
 
@@ -11,7 +10,7 @@ import numpy as np
 from numba import njit, prange
 
 from ._base import OPTS
-from .frame import _shape_operator
+from .frame import _shape_operator, tangent_basis_of
 
 
 @njit(**OPTS, inline="always")
@@ -40,29 +39,6 @@ def _read(pts, p, a, q, coef, frame, h, project, out):
         out[5] -= t * g4
 
 
-@njit(**OPTS, parallel=True)
-def read_at(pts, points, anchors, r, coef, frame, h, project, mu, W):
-    """For follower m (point ``points[m]``, anchor ``anchors[m]``, the anchor's row ``r[m]``
-    of ``coef`` (., 2, 10), ``frame`` (., 3, 3) = (t1, t2, z) and ``h``): the cubic
-    polynomials X, Y of the anchor's fit at the follower's offset (u, v) in the anchor's
-    frame, in units of h (``mu[m]``), and their slopes ``W[m]`` = [[X_u, X_v], [Y_u, Y_v]]
-    in units of 1/h, projected onto eq. 22's plane when ``project``."""
-    for m in prange(len(points)):
-        out = np.empty(6)
-        _read(pts, points[m], anchors[m], r[m], coef, frame, h, project, out)
-        mu[m, 0], mu[m, 1] = out[0], out[1]
-        W[m, 0, 0], W[m, 0, 1], W[m, 1, 0], W[m, 1, 1] = out[2], out[3], out[4], out[5]
-
-
-@njit(**OPTS)
-def _basis(n0, n1, n2):
-    """(t1, t2) of :func:`core.linalg.tangent_basis` for the unit normal (n0, n1, n2)."""
-    sign = 1.0 if n2 >= 0.0 else -1.0
-    a = -1.0 / (sign + n2)
-    b = n0 * n1 * a
-    return (1.0 + sign * n0 * n0 * a, sign * b, -sign * n0), (b, sign + n1 * n1 * a, -n1)
-
-
 class AnchorFits(NamedTuple):
     """The anchors' fits (:class:`core.anchors.Kept`): ``row`` (N,) each point's row (-1: not
     an anchor), per row ``coef`` (., 2, 10), ``frame`` (., 3, 3) = (t1, t2, z), ``h``, ``ok``."""
@@ -88,7 +64,7 @@ class Blended(NamedTuple):
 def _offsets(pts, p, nrm, picked, x, y, d2):
     """The anchors' offsets from point p in its tangent plane (x, y) and squared distances
     d2; returns the number of anchors and the largest distance (1 without anchors)."""
-    t1, t2 = _basis(nrm[p, 0], nrm[p, 1], nrm[p, 2])
+    t1, t2 = tangent_basis_of(nrm[p, 0], nrm[p, 1], nrm[p, 2])
     count, far = 0, 0.0
     for b in range(len(picked)):
         a = picked[b]
@@ -172,7 +148,7 @@ def _principal(N, S, out, m):
     if not length > 0.0:
         return False
     n0, n1, n2 = N[0] / length, N[1] / length, N[2] / length
-    t1, t2 = _basis(n0, n1, n2)
+    t1, t2 = tangent_basis_of(n0, n1, n2)
     a11 = a12 = a22 = 0.0
     for i in range(3):
         for j in range(3):

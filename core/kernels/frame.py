@@ -90,6 +90,16 @@ def frame_directions(t1, t2, z, mu, good, c, s, e1, e2):
 
 
 @njit(**OPTS)
+def tangent_basis_of(n0, n1, n2):
+    """(t1, t2) of :func:`core.linalg.tangent_basis` (Duff et al. 2017) for the unit normal
+    (n0, n1, n2), the same operations in the same order."""
+    sign = 1.0 if n2 >= 0.0 else -1.0
+    a = -1.0 / (sign + n2)
+    b = n0 * n1 * a
+    return (1.0 + sign * (n0 * n0) * a, sign * b, -sign * n0), (b, sign + (n1 * n1) * a, -n1)
+
+
+@njit(**OPTS)
 def local_frames(normals, centres, z, t1, t2):
     """z = normals[centres] and the orthonormal (t1, t2) of :func:`core.linalg.tangent_basis`
     (Duff et al. 2017) in one loop, the same operations in the same order (numpy reference:
@@ -98,15 +108,7 @@ def local_frames(normals, centres, z, t1, t2):
         i = centres[m]
         n0, n1, n2 = normals[i, 0], normals[i, 1], normals[i, 2]
         z[m, 0], z[m, 1], z[m, 2] = n0, n1, n2
-        sign = 1.0 if n2 >= 0.0 else -1.0
-        a = -1.0 / (sign + n2)
-        b = n0 * n1 * a
-        t1[m, 0] = 1.0 + sign * (n0 * n0) * a
-        t1[m, 1] = sign * b
-        t1[m, 2] = -sign * n0
-        t2[m, 0] = b
-        t2[m, 1] = sign + (n1 * n1) * a
-        t2[m, 2] = -n1
+        (t1[m, 0], t1[m, 1], t1[m, 2]), (t2[m, 0], t2[m, 1], t2[m, 2]) = tangent_basis_of(n0, n1, n2)
 
 
 @njit(**OPTS, parallel=True)

@@ -9,7 +9,6 @@ from scipy.spatial import cKDTree
 import core
 from core import anchor_blend, anchors, noise, shapes
 from core._progress import Progress
-from core.kernels.anchors import read_at
 from core.methods import METHODS
 from core.stages import _empty_fit, _Fitter
 
@@ -35,21 +34,8 @@ def _anchor(pts, k, rows, monkeypatch):
     return anchors.assign(pts, idx, np.full(len(pts), k), np.ones(len(pts), dtype=bool))
 
 
-@pytest.mark.parametrize("project", [False, True])
-def test_the_compiled_reading_is_the_numpy_reference(project):
-    rng = np.random.default_rng(0)
-    pts = rng.normal(size=(50, 3))
-    points, anchor = np.arange(10, 50), rng.integers(0, 10, 40)
-    coef, h = rng.normal(scale=0.3, size=(10, 2, 10)), rng.uniform(0.5, 2.0, 10)
-    frame = np.linalg.qr(rng.normal(size=(10, 3, 3)))[0]
-    mu, W = np.empty((40, 2)), np.empty((40, 2, 2))
-    read_at(pts, points, anchor, anchor, coef, frame, h, project, mu, W)
-    ref_mu, ref_W = anchor_blend.read_at_reference(pts, points, anchor, coef[anchor], frame[anchor], h[anchor], project)
-    np.testing.assert_allclose(mu, ref_mu, rtol=1e-12, atol=1e-12)
-    np.testing.assert_allclose(W, ref_W, rtol=1e-10, atol=1e-12)
-
-
-def test_the_compiled_blend_is_the_numpy_reference(monkeypatch):
+@pytest.mark.parametrize("constraint", ["project", "none"])
+def test_the_compiled_blend_is_the_numpy_reference(constraint, monkeypatch):
     """Followers of a noisy torus read from up to 4 anchors each (some from 1-2: the
     inverse-distance weights): the compiled average equals numpy's."""
     pts = noise.add_noise(shapes.torus(4000, seed=7).points, 0.1, seed=8)
@@ -58,12 +44,12 @@ def test_the_compiled_blend_is_the_numpy_reference(monkeypatch):
     idx, h = _graph(pts, 80)
     nrm = core.estimate(pts, k=15).normals
     kept = anchors.Kept(anchor)
-    fitter = _Fitter(pts, idx, np.full(len(pts), 80), h, METHODS["nr"], dict(CUBIC), anchor)
+    fitter = _Fitter(pts, idx, np.full(len(pts), 80), h, METHODS["nr"], dict(CUBIC, constraint=constraint), anchor)
     fitter._fit(_empty_fit(len(pts)), nrm, np.isin(np.arange(len(pts)), kept.points), Progress(None), kept)
     points = np.flatnonzero(anchors.followers(anchor))
     picked = anchor[points]
-    got, good, r = anchor_blend.blended(kept, pts, nrm, points, picked, "project")
-    ref = anchor_blend.blended_reference(kept, pts, nrm, points, picked, "project")
+    got, good, r = anchor_blend.blended(kept, pts, nrm, points, picked, constraint)
+    ref = anchor_blend.blended_reference(kept, pts, nrm, points, picked, constraint)
     np.testing.assert_array_equal(good, ref[1])
     assert good.mean() > 0.99 and (picked[:, 1:] < 0).sum() > 100
     for name in ("normal", "k1", "k2"):
