@@ -77,6 +77,19 @@ def assign(pts, near, kc, eligible) -> np.ndarray | None:
     return anchor
 
 
+def shared_scale(pts, near, growing, k_top):
+    """``(follow, lead)`` (F,) int64: the ``growing`` points (N,) bool that take the scale
+    chosen at an anchor, and that anchor (the nearest among their ``ANCHOR_REACH``
+    nearest); anchors drawn as for fits of ``k_top`` neighbours (:func:`assign`). Where
+    the jets of the scale rule grow past the columns held, the rule walks on to ``k_top``
+    at the anchors alone: a follower would fit on nearly the same wide disc."""
+    anchor = assign(pts, near, np.full(len(pts), k_top, dtype=np.int64), growing)
+    if anchor is None:
+        return np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64)
+    follow = np.flatnonzero(followers(anchor))
+    return follow, anchor[follow, 0]
+
+
 def priority(pts, near, chunk=65_536) -> np.ndarray:
     """(N,) uint64 > 0: a hash of each point's distances to its ``_RATIOS`` nearest, sorted
     and divided by the largest, rounded to 2^-20: a draw that depends on neither the order

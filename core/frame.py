@@ -100,3 +100,19 @@ def quadratic_form(a, b, c):
     """(mu, W) for a fit whose frame z is the normal and whose Hessian is [[a, b], [b, c]]."""
     zero = np.zeros_like(a)
     return height_field_derivatives(zero, zero, a, b, c)
+
+
+def jet_frames(coef, t1, t2, z, s, rows=131_072):
+    """The Darboux frames ``(normal, k1, k2, e1, e2, ok)`` of the cubic height jets ``coef`` (N, 10) in
+    (t1, t2, z), lengths in units of ``s``, by ``rows`` rows: the same numbers without N-long temporaries
+    (~250 MiB at 1M points; 32k rows: 0.25 CPU s more)."""
+    n = len(coef)
+    out = (np.empty((n, 3)), np.empty(n), np.empty(n), np.empty((n, 3)), np.empty((n, 3)), np.empty(n, dtype=bool))
+    for start in range(0, n, rows):
+        r, c = slice(start, start + rows), coef[start:start + rows]
+        mu, W = height_field_derivatives(c[:, 1], c[:, 2], 2 * c[:, 3], c[:, 4], 2 * c[:, 5])
+        with np.errstate(invalid="ignore", divide="ignore"):
+            frame = darboux_frame(t1[r], t2[r], z[r], np.nan_to_num(mu), np.nan_to_num(W) / s[r, None, None])
+        for dst, src in zip(out, frame):
+            dst[r] = src
+    return out

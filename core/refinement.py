@@ -16,7 +16,7 @@ from .passes import PassRule, few_fits
 from .initial_normals import Initial
 from .stages import Fit, Scale, _empty_fit, _Fitter
 from .tuning import ANCHOR_REACH, DRIFT_POOL, HOLD_TURN, IRLS_LATER, PASS_DECAY, RESETTLE_K, ROWS_LATER
-from .wide_neighbours import rows_at_least
+from .wide_neighbours import held_h, rows_at_least
 
 
 class Refined(NamedTuple):
@@ -69,11 +69,12 @@ def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n
     points read, :mod:`core.anchors`), and ``complete()`` fits its other points (done
     before the next pass if the caller did not)."""
     kc = sc.k
-    idx, h = rows_at_least(nb, kc)
+    anchor = _anchors(pts, nb, kc, held_h(nb, kc), sc, outlier, plan)
+    idx, h = rows_at_least(nb, kc, None if anchor is None else ~anchors.followers(anchor))  # followers' on demand
     nrm, has_normal = initial.normals, initial.has_normal
     if sc.on_jet.any():  # the jets' normals are the neighbours' input where the jet is kept
         nrm = np.where(sc.on_jet[:, None], sc.jets[0], nrm)
-    fitter = _Fitter(pts, idx, kc, h, plan.method, dict(plan.options), _anchors(pts, nb, kc, h, sc, outlier, plan))
+    fitter = _Fitter(pts, idx, kc, h, plan.method, dict(plan.options), anchor)
     share = 1.0 if first is None else float(first.mean())
     held = _Held(len(pts)) if plan.adaptive else None
     for p in range(n_fits):
@@ -96,7 +97,8 @@ def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n
 
 def _anchors(pts, nb, kc, h, sc: Scale, outlier, plan):
     """The anchors whose fits each point reads (:func:`core.anchors.assign`) with k="auto",
-    else None; anchors and followers are points fitted in every pass (outliers fit their own)."""
+    else None; anchors and followers are points fitted in every pass (outliers fit their own),
+    ``h`` > 0 (:func:`core.wide_neighbours.held_h`: the rows of followers are not searched)."""
     if not anchors.in_use(plan):
         return None
     eligible = ~sc.on_jet & sc.spans & (h > 0) & ~outlier

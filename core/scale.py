@@ -30,6 +30,12 @@ residual variance per degree of freedom exceeds the cubic's on 15 is skipped: it
 neighbourhood holds something no polynomial describes (an edge, a fold). (:mod:`core.kernels.jet_degree`,
 run inside the cubic's intervals on the same sums; ``res.degree_point`` holds the degree.)
 
+**Shared at wide scales.** With noise most jets grow to the largest size. Where k="auto"'s
+wide fits are shared (:mod:`core.anchors`), only the anchors drawn for fits of that size
+walk on past :data:`JET_SHARED_FROM`; a point still growing there takes its nearest
+anchor's size (its fit reads the anchors' wide discs anyway): 1.4-1.9 s less of a noisy
+100k torus or ellipsoid, mean |H| error within 0.2 %.
+
 **The model.** Where the measured noise is below :data:`JET_QUIET` (nearly noise-free) the
 jet itself is the result: it inherits no error of estimated normals (on 7 stand-in
 surfaces 2-30x better than NR at the same k). Elsewhere NR fits a cubic normal field on the
@@ -40,26 +46,11 @@ better than the jet (1.2-1.8x). Quiet but sparse points, whose 15 neighbours rea
 neighbours are a strip of one scan line), use NR with the NF rule below. ``res.k_point`` and
 ``res.degree_point`` hold the choice. (Values and reasons of the constants: :mod:`core.tuning`.)
 
-**The principal direction with noise (measured; not solved).** With noise of 0.1-0.2 mean spacing,
-e1 is the quantity the default still loses (to a cubic jet on 240 neighbours on some hold-out
-surfaces). Four explanations were tested on the tuning surfaces and a private set (``python -m core
-bench holdout --probe``), then on the hold-out, and none holds across surfaces: (1) *k too small*:
-not at 226 alone, NR fits the largest candidate (226) at 76-100 % of the points of every noisy
-graph, and forcing 226 everywhere moves e1 by <= 2 % there (but one candidate more, 320, gains 10-30
-% on e1 on smooth noisy graphs: :data:`core.tuning.AUTO_KS`); (2) *the refinement passes bias the
-direction*: no, they are what makes it good (the first fit alone: 1.0-3.0x worse), and more passes
-help e1 on some surfaces only, while smoothing the curvatures; (3) *e1 from the position jet's
-Hessian*: at the jet rule's own k its e1 is 0.6-1.0x NR's on most hold-out and private graphs at
-0.05 spacing, but 1.2-1.9x on the torus, ellipsoid and chirp and worse nearly everywhere at 0.2;
-averaging the two traceless shape operators (fixed weights, gated by their agreement, or weighted by
-each field's roughness) gains up to 25 % on the hold-out at 0.05-0.1 but loses 20-40 % on the
-ellipsoid and chirp and 14-42 % at 0.5: a net loss on the tuning set, so adopting it would be
-fitting the hold-out; the jet's relative error does not fall with its reach h|k| either, so no
-per-point choice follows; (4) *a wider scale for the direction alone* (NR's shape operator averaged
-over nearby points): worse, 1.6x on the torus with 8 points, because the lines of curvature turn by
-about 2 degrees between nearest neighbours there, more than the 0.4 degree error being averaged.
-What remains is a model difference that depends on the surface; choosing between the two models per point
-would need NR's own variance, which its least squares underestimates (estimated normals share neighbours).
+**The principal direction with noise (measured; not solved).** With noise of 0.1-0.2 mean
+spacing e1 is the quantity the default still loses (to a cubic jet on 240 neighbours on some
+hold-out surfaces); four explanations were tested (k too small, the passes, e1 from the position
+jet, a wider scale for the direction) and none holds across surfaces: README, "Why e1 still loses
+with noise" (``python -m core bench holdout --probe``).
 
 **The NF rule** (:func:`choose_k`, issue 4; now only for those sparse points): small
 neighbourhoods give unbiased but noisy normal derivatives; large ones average the
@@ -82,14 +73,14 @@ import warnings
 
 import numpy as np
 
-from . import kernels, plane_spread
-from .frame import darboux_frame, height_field_derivatives, turned_over
+from . import anchors, kernels, plane_spread
+from .frame import jet_frames, turned_over
 from .kernels import jets as jet_kernels, pool as pool_kernels
 from .kernels.frame import intrinsic_frames
 from .linalg import tangent_basis
 from .patch import Chunk
 from .tuning import (AUTO_DEGREE, AUTO_KS, DEGREE_PIVOT, FOLD_COS, FOLD_FRACTION, FOLD_MIN_BAD, FOLD_NOISE, GAMMA,
-                     INITIAL_K0, INITIAL_SHARE, JET_DEGREE, JET_GAMMA, JET_DEGREES, JET_KS, JET_QUIET, JET_REACH, JET_SCORE,
+                     ANCHOR_REACH, INITIAL_K0, INITIAL_SHARE, JET_SHARED_FROM, JET_DEGREE, JET_GAMMA, JET_DEGREES, JET_KS, JET_QUIET, JET_REACH, JET_SCORE,
                      NEIGHBOUR_BUDGET, NOISE_KS, NOISE_POOL, RCOND, JET_RCOND, JET_THIN_TILT, JET_TILT, ROUNDING_NOISE, WIDEN_SHARE)
 
 __all__ = ["AUTO_DEGREE", "AUTO_KS", "GAMMA", "INITIAL_K0", "NEIGHBOUR_BUDGET", "JET_KS", "JET_DEGREE", "JET_SCORE",
@@ -238,8 +229,10 @@ def _jet_rule():
     return kernels.ScaleRule(JET_DEGREE, JET_GAMMA, JET_RCOND, FOLD_FRACTION, FOLD_COS, FOLD_NOISE, FOLD_MIN_BAD, JET_RCOND)
 
 
-def choose_jets(points, normals, nb, has_normal, ks, report):
-    """Per point: the size of a cubic jet by ICI with an outside noise level (see module).
+def choose_jets(points, normals, nb, has_normal, ks, report, *, shared=False):
+    """Per point: the size of a cubic jet by ICI with an outside noise level (see module);
+    ``shared``: where noisy jets grow past the columns held, only anchors walk on
+    (:func:`core.anchors.shared_scale`, the anchors of k="auto"'s wide fits).
 
     Returns ``(k, jet, noise, degree)``: k (N,) int (0 where no fit), the chosen jets'
     frames ``(normal, k1, k2, e1, e2, ok)`` as :func:`core.frame.darboux_frame` gives them,
@@ -260,7 +253,7 @@ def choose_jets(points, normals, nb, has_normal, ks, report):
     sigma2, plain = _measured_noise(points, normals, idx_all, usable, s, t1, t2)
     with np.errstate(invalid="ignore", divide="ignore"):
         noise = np.where(s > 0, np.maximum(np.sqrt(sigma2), 0.5 * np.sqrt(plain)) / s, np.inf)
-    if nb.width < ks[-1] and np.count_nonzero(noise[usable] > JET_QUIET) > WIDEN_SHARE * len(usable):
+    if not shared and nb.width < ks[-1] and np.count_nonzero(noise[usable] > JET_QUIET) > WIDEN_SHARE * len(usable):
         idx_all, dist_all = nb.take(ks[-1])  # noisy: most jets grow past the columns held, search all at once
     report(0.2, "choosing k")
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -270,14 +263,17 @@ def choose_jets(points, normals, nb, has_normal, ks, report):
         return _jet_frames(points, normals, rows, c, s, t1, t2)
 
     deg = _degree_rule(ks, noise <= JET_QUIET)
-    chosen, coef, walked = _jet_ici(nb, idx_all, usable, ks, frames, sigma2_h, deg, report)
+    lead = None
+    if shared and idx_all.shape[1] > ANCHOR_REACH:  # its nearest, to find their anchors among
+        lead = lambda growing: anchors.shared_scale(points, idx_all, growing, ks[-1])  # noqa: E731
+    chosen, coef, walked = _jet_ici(nb, idx_all, usable, ks, frames, sigma2_h, deg, report, lead=lead)
     ks_arr = np.asarray(ks, dtype=np.int64)
     fitted = chosen >= 0
     k = np.where(fitted, ks_arr[np.maximum(chosen, 0)], 0)
     degree = np.where(fitted, JET_DEGREE, -1)
     higher = np.flatnonzero((walked >= 0) & (walked < len(deg.kd)))  # a richer model than the cubic
     k[higher], degree[higher] = deg.kd[walked[higher]], deg.degrees[walked[higher]]
-    frame = _jet_frames_of(coef, t1, t2, np.where(has_normal[:, None], normals, [0.0, 0.0, 1.0]), s)
+    frame = jet_frames(coef, t1, t2, np.where(has_normal[:, None], normals, [0.0, 0.0, 1.0]), s)
     return k, (*frame[:-1], frame[-1] & fitted), noise, degree
 
 
@@ -292,22 +288,7 @@ def _measured_noise(points, normals, idx, usable, s, t1, t2):
     return noise_variance(rss[:, 0], rss[:, 1], s, idx)
 
 
-def _jet_frames_of(coef, t1, t2, z, s):
-    """The Darboux frames of the jets ``coef`` (N, 10) in (t1, t2, z), lengths in units of ``s``, by 128k rows:
-    the same numbers without N-long temporaries (~250 MiB at 1M points; 32k rows: 0.25 CPU s more)."""
-    n, rows = len(coef), 4 * _CHUNK
-    out = (np.empty((n, 3)), np.empty(n), np.empty(n), np.empty((n, 3)), np.empty((n, 3)), np.empty(n, dtype=bool))
-    for start in range(0, n, rows):
-        r, c = slice(start, start + rows), coef[start:start + rows]
-        mu, W = height_field_derivatives(c[:, 1], c[:, 2], 2 * c[:, 3], c[:, 4], 2 * c[:, 5])
-        with np.errstate(invalid="ignore", divide="ignore"):
-            frame = darboux_frame(t1[r], t2[r], z[r], np.nan_to_num(mu), np.nan_to_num(W) / s[r, None, None])
-        for dst, src in zip(out, frame):
-            dst[r] = src
-    return out
-
-
-def _jet_ici(nb, idx, usable, ks, frames, sigma2_h, deg, report):
+def _jet_ici(nb, idx, usable, ks, frames, sigma2_h, deg, report, *, lead=None):
     """(chosen index into ``ks`` (N,), -1 where no fit; coefficients (N, 10); the degree
     rule's answer (N,)) of :func:`core.kernels.jets.jet_ici` at the ``usable`` centres, on
     their neighbours ``idx`` (N, w) (the columns ``nb`` holds); ``frames(rows, centres)``
@@ -319,34 +300,51 @@ def _jet_ici(nb, idx, usable, ks, frames, sigma2_h, deg, report):
     so it takes the same steps as on all sizes up to the next-to-last size held: a centre
     that stopped before (chosen <= m - 3 of m sizes) has the full rule's answer, the others
     (and those without a fit) are run again on their ``ks[-1]`` neighbours (``nb.rows``).
+    With ``lead`` (growing (N,) bool -> (followers, their anchors), :func:`core.anchors.shared_scale`)
+    the first run ends at :data:`JET_SHARED_FROM`, whatever w, and the noisy centres still
+    growing there take their anchor's answer (those whose anchor's fails, their own).
     """
     n = len(idx)
-    chosen, walked = np.full(n, -1, dtype=np.int64), np.full(n, -1, dtype=np.int64)
-    coef = np.full((n, jet_kernels.P3), np.nan)
+    out = (np.full(n, -1, dtype=np.int64), np.full((n, jet_kernels.P3), np.nan), np.full(n, -1, dtype=np.int64))
     rule = _jet_rule()
     m = int(np.searchsorted(ks, idx.shape[1], side="right"))  # sizes held
+    if lead is not None:
+        m = min(m, int(np.searchsorted(ks, JET_SHARED_FROM, side="right")))
     if m < 3 < len(ks):  # too few to tell anything: all of them
         idx, m = nb.take(ks[-1])[0], len(ks)
-    held = ks[:m]
-    ks_held = np.asarray(held, dtype=np.int64)
 
     def run(c, rows, sizes):  # rows >= ks[2] = 28 wide: the richer models' (20) included
-        out_k, out_c, out_w = np.empty(len(c), dtype=np.int64), np.empty((len(c), jet_kernels.P3)), np.empty_like(c)
-        jet_kernels.jet_ici(frames(rows, c), sizes, sigma2_h[c], rule, deg._replace(quiet=deg.quiet[c]), out_k, out_c,
-                            out_w)
-        chosen[c], coef[c], walked[c] = out_k, out_c, out_w
+        got = np.empty(len(c), dtype=np.int64), np.empty((len(c), jet_kernels.P3)), np.empty_like(c)
+        jet_kernels.jet_ici(frames(rows, c), np.asarray(sizes, dtype=np.int64), sigma2_h[c], rule,
+                            deg._replace(quiet=deg.quiet[c]), *got)
+        for dst, src in zip(out, got):
+            dst[c] = src
 
     for start in range(0, len(usable), _CHUNK):
         c = usable[start:start + _CHUNK]
-        run(c, _rows(idx, c, held[-1]), ks_held)
+        run(c, _rows(idx, c, ks[m - 1]), ks[:m])
         report(0.2 + 0.8 * min(len(usable), start + _CHUNK) / max(len(usable), 1), "choosing k")
-    if len(held) < len(ks):
-        ks_arr = np.asarray(ks, dtype=np.int64)
-        again = usable[(chosen[usable] < 0) | (chosen[usable] >= len(held) - 2)]
-        for start in range(0, len(again), _CHUNK):
-            c = again[start:start + _CHUNK]
-            run(c, nb.rows(c, ks[-1])[0], ks_arr)
-    return chosen, coef, walked
+    if m < len(ks):
+        _walk_on(nb, usable, ks, m, out[0], deg.quiet, run, lead)
+    return out
+
+
+def _walk_on(nb, usable, ks, m, chosen, quiet, run, lead):
+    """The rule on all ``ks`` where the first ``m`` did not decide (:func:`_jet_ici`)."""
+    again = usable[(chosen[usable] < 0) | (chosen[usable] >= m - 2)]
+    follow = anchor = again[:0]
+    if lead is not None:
+        growing = np.zeros(len(chosen), dtype=bool)
+        growing[again[(chosen[again] == m - 1) & ~quiet[again]]] = True
+        follow, anchor = lead(growing)
+        again = np.setdiff1d(again, follow, assume_unique=True)
+    for start in range(0, len(again), _CHUNK):
+        c = again[start:start + _CHUNK]
+        run(c, nb.rows(c, ks[-1])[0], ks)
+    chosen[follow] = chosen[anchor]
+    alone = follow[chosen[follow] < 0]  # their anchor's rule failed: their own
+    if len(alone):
+        run(alone, nb.rows(alone, ks[-1])[0], ks)
 
 
 def _degree_rule(ks, quiet):
@@ -371,7 +369,7 @@ def aligned_jets(jets, normals):
     return (*turned_over(nrm, k1, k2, e1, e2, flip), ok)
 
 
-def choose_model(points, normals, nb, has_normal, ks, report):
+def choose_model(points, normals, nb, has_normal, ks, report, *, shared=False):
     """k per point by :func:`choose_jets`, and where the cubic jet itself is the result.
 
     Returns ``(k, on_jet, quiet, jets, degree)``: jets (aligned with ``normals``, of ``degree`` per point, see
@@ -385,7 +383,7 @@ def choose_model(points, normals, nb, has_normal, ks, report):
     if not jks or ks[-1] < NOISE_KS[-1]:
         none = np.zeros(n, dtype=bool)
         return np.full(n, ks[0], dtype=np.int64), none, none, None, np.full(n, -1)
-    k, jets, noise, degree = choose_jets(points, normals, nb, has_normal, jks, report)
+    k, jets, noise, degree = choose_jets(points, normals, nb, has_normal, jks, report, shared=shared)
     quiet = jets[-1] & (noise <= JET_QUIET)
     reach = nb.take(jks[0])[1][:, -1] * np.maximum(np.abs(jets[1]), np.abs(jets[2]))
     tilt = np.abs(np.einsum("ij,ij->i", jets[0], np.nan_to_num(normals)))  # cos to the initial normal (NaN: no jet)

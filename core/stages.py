@@ -184,7 +184,7 @@ def choose_scale(pts, nrm, nb, inliers, plan, report, *, scores=None, k_initial=
     suspect = scores > JET_SCORE if plan.robust and scores is not None else np.zeros(n, dtype=bool)
     steady = inliers & ~suspect  # the jets are least squares: suspects sit out the choice of k
     masked = np.where(steady[:, None], nrm, np.nan)
-    kc, on_jet, quiet, jets, degree = scale.choose_model(pts, masked, nb, steady, ks, report)
+    kc, on_jet, quiet, jets, degree = scale.choose_model(pts, masked, nb, steady, ks, report, shared=anchors.in_use(plan))
     floor = np.full(n, ks[min(int(np.searchsorted(ks, k_initial or 0)), len(ks) - 1)])  # a candidate >= k_initial
     lifted = np.flatnonzero(steady & ~quiet & (kc < floor))
     if len(lifted):  # but not across a fold (the far side of a thin part)
@@ -241,7 +241,9 @@ class _Fitter(NamedTuple):
         fit_at, follow = anchors.split(self.anchor, usable, kept)
         self._fit(out, nrm, fit_at, report.sub(0.0, 0.95), kept)
         alone = self._follow(out, kept, nrm, np.flatnonzero(follow))
-        if alone.any():  # their anchor's fit failed: their own
+        if alone.any():  # their anchor's fit failed: their own, on rows searched now
+            if hasattr(self.idx, "ensure"):
+                self.idx.ensure(np.flatnonzero(alone), self.h)
             self._fit(out, nrm, alone, report.sub(0.95, 1.0))
         return kept
 

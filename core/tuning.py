@@ -189,12 +189,11 @@ THIN_SPREAD = 0.1
 #: reweighting iterations of the robust fits (each one re-solves the least squares)
 IRLS_ITERATIONS = 2
 #: ... of the refinement passes after the first fit. Their input normals are the previous fit's, smooth, with the
-#: outliers flagged and (robust mode) left out, so one reweighting finds the same weights. 2026-12-04, k="auto",
-#: 6000 points of torus, ellipsoid, saddle, chirp, sphere, cylinder, graded, range scan at noise 0.1/0.2/0.5
-#: spacing and 0.2 with 3 % outliers (32 cells): H, K, e1 errors 0.83-1.03x those with 2 (the gains at 0.5 spacing
-#: and with outliers); hold-out race unchanged (3/84 cells lost, geometric mean 0.456x), tuning race 0/72; noisy
-#: 100k torus (0.2 spacing) 13 % less wall time. Zero reweightings: 30 % less time but 1.2-2.2x the errors with
-#: outliers.
+#: outliers flagged and (robust mode) left out, so one reweighting finds the same weights. 2026-12-04, k="auto", 6000
+#: points of torus, ellipsoid, saddle, chirp, sphere, cylinder, graded, range scan at noise 0.1/0.2/0.5 spacing and 0.2
+#: with 3 % outliers (32 cells): H, K, e1 errors 0.83-1.03x those with 2 (the gains at 0.5 spacing and with outliers);
+#: hold-out race unchanged (3/84 cells lost, geometric mean 0.456x), tuning race 0/72; noisy 100k torus (0.2 spacing) 13
+#: % less wall time. Zero reweightings: 30 % less time but 1.2-2.2x the errors with outliers.
 IRLS_LATER = 1
 #: ... and the fewest rows they fit on (k="auto"): of k >= 2 x ROWS_LATER neighbours, every (k // ROWS_LATER)-th by
 #: distance (the same disc); a pass fits the previous fit's normals, each already a wide average, so half of them
@@ -237,19 +236,21 @@ JET_GAMMA = 5.0
 #: margin over noise-free data. An outlier that raises a point's neighbours' residuals
 #: keeps them off the jet (the jet is not robust).
 JET_QUIET = 0.001
-#: the least noise (over s) the jet rule's intervals assume: float64 coordinates are rounded
-#: to ~1e-16 of their size, so no measured noise below this is real. A cube whose faces lie on
-#: the axes is exactly planar and measured 0, the same cube turned by 1e-12 rad 3e-16: the
-#: intervals of zero width took other sizes there (median k 56 against 40; normals up to 8
-#: degrees apart, |k| up to 0.83). Both races unchanged. Cost: both now take the axis-aligned
-#: path, the worse one on tilted noise-free flat shapes (normal error +0.01-0.03 degrees, H +3-17 %);
-#: a floor of 1e-14 or 1e-16 left the two apart.
+#: the least noise (over s) the jet rule's intervals assume: float64 coordinates are rounded to ~1e-16 of their size, so
+#: no measured noise below this is real. A cube whose faces lie on the axes is exactly planar and measured 0, the same
+#: cube turned by 1e-12 rad 3e-16: the intervals of zero width took other sizes there (median k 56 against 40; normals
+#: up to 8 degrees apart, |k| up to 0.83). Both races unchanged. Cost: both now take the axis-aligned path, the worse
+#: one on tilted noise-free flat shapes (normal error +0.01-0.03 degrees, H +3-17 %); a floor of 1e-14 or 1e-16 left the
+#: two apart.
 ROUNDING_NOISE = 1e-12
 #: when more than this share of the points measures noise above JET_QUIET, the jet rule
 #: searches every point's whole list at once instead of the rows that grow past the
 #: columns held (core.tuning.SEARCH_WIDTH): with noise most jets grow to the largest size
 #: (noise 0.2 spacing on a torus: 96 % at 226), noise-free nearly none do. Speed only.
 WIDEN_SHARE = 0.5
+#: a jet still growing at this size takes its anchor's where wide fits are shared (core.anchors.shared_scale;
+#: = SEARCH_WIDTH). Noisy 100k torus and ellipsoid: 1.4-1.9 s less, mean |H| error within 0.2 %.
+JET_SHARED_FROM = 40
 #: ... but only where the 15 neighbours reach less than this fraction of a radius of
 #: curvature (s |k|max): on 1000 points of a torus (15 neighbours span 0.65 of the tube's
 #: radius) NR's cubic normal field at the NF rule's k has a quarter of the jet's H error,

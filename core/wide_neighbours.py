@@ -24,7 +24,7 @@ from .kernels.kdtree import query_rows
 from .neighbours import _CHUNK, Neighbours, _query_tree, _search, _self_first
 from .tuning import SEARCH_RADIUS_NODE, SEARCH_REACH
 
-__all__ = ["WidenableNeighbours", "LazyNeighbours", "rows_at_least", "search_in_spatial_order"]
+__all__ = ["WidenableNeighbours", "LazyNeighbours", "rows_at_least", "held_h", "search_in_spatial_order"]
 
 
 def search_in_spatial_order(pts: np.ndarray, k_max: int, *, progress=None, width: int | None = None):
@@ -249,38 +249,58 @@ class LazyNeighbours(Neighbours):
         return graph.indices, graph.distances
 
 
-def rows_at_least(nb, kc):
+def rows_at_least(nb, kc, fits=None):
     """``(rows, h)``: the neighbours of every point, at least ``kc[i]`` for point i, as an
     (N, kc.max()) array or, when ``nb`` holds fewer columns and only a minority of the
     points needs more, a :class:`_Rows` that adds them per chunk; ``h[i]`` the distance
-    to point i's ``kc[i]``-th neighbour."""
+    to point i's ``kc[i]``-th neighbour. ``fits`` (N,) bool, optional: the points expected
+    to fit (k="auto"'s anchors, :mod:`core.anchors`); the others' wider rows are searched
+    when they do (:meth:`_Rows.ensure`), and until then ``h`` is :func:`held_h`'s."""
     n, k = len(kc), int(kc.max())
     wide = np.flatnonzero(kc > nb.width) if k > nb.width else np.empty(0, dtype=np.int64)
+    if fits is not None:
+        wide = wide[fits[wide]]
     if 2 * len(wide) > n:
         nb.widen(k)
         wide = wide[:0]
-    if not len(wide):
+    if k <= nb.width:
         idx, dist = nb.take(k)
         return idx, dist[np.arange(n), kc - 1]
-    idx, dist = nb.take(nb.width)
-    h = np.empty(n)
-    narrow = np.flatnonzero(kc <= nb.width)
-    h[narrow] = dist[narrow, kc[narrow] - 1]
+    idx = nb.take(nb.width)[0]
+    h = held_h(nb, kc)
     w_idx, w_dist = nb.rows(wide, k)
     h[wide] = w_dist[np.arange(len(wide)), kc[wide] - 1]
-    return _Rows(idx, wide, w_idx, kc), h
+    return _Rows(idx, wide, w_idx, kc, nb), h
+
+
+def held_h(nb, kc):
+    """(N,): the distance to each point's ``kc``-th neighbour where ``nb`` holds it, else to
+    the last neighbour held (a lower bound: > 0 wherever the exact one is, duplicates merged)."""
+    dist = nb.take(min(nb.width, int(kc.max())))[1]
+    return dist[np.arange(len(kc)), np.minimum(kc, dist.shape[1]) - 1].copy()
 
 
 class _Rows:
     """The neighbours of a chunk of centres ``c`` (``self[c]``), as wide as the most any of
     them uses (``kc``): the ``held`` columns, and for the centres in ``wide`` (sorted) their
-    rows ``w_idx`` searched wider. Columns a centre does not use hold the centre itself
-    (the fits read a centre's first kc only)."""
+    rows ``w_idx`` searched wider (by ``nb``, :meth:`ensure`). Columns a centre does not use
+    hold the centre itself (the fits read a centre's first kc only)."""
 
-    __slots__ = ("held", "wide", "w_idx", "kc")
+    __slots__ = ("held", "wide", "w_idx", "kc", "nb")
 
-    def __init__(self, held, wide, w_idx, kc):
-        self.held, self.wide, self.w_idx, self.kc = held, wide, w_idx, kc
+    def __init__(self, held, wide, w_idx, kc, nb):
+        self.held, self.wide, self.w_idx, self.kc, self.nb = held, wide, w_idx, kc, nb
+
+    def ensure(self, c, h) -> None:
+        """Search the wider rows of centres ``c`` not held yet, and write their ``h``."""
+        c = c[(self.kc[c] > self.held.shape[1]) & ~np.isin(c, self.wide)]
+        if not len(c):
+            return
+        w_idx, w_dist = self.nb.rows(c, self.w_idx.shape[1])
+        h[c] = w_dist[np.arange(len(c)), self.kc[c] - 1]
+        wide = np.concatenate([self.wide, c])
+        order = np.argsort(wide, kind="stable")
+        self.wide, self.w_idx = wide[order], np.concatenate([self.w_idx, w_idx])[order]
 
     def __getitem__(self, c):
         k = int(self.kc[c].max()) if len(c) else 1
@@ -291,6 +311,6 @@ class _Rows:
         idx[:, :width] = self.held[c]
         idx[:, width:] = c[:, None]
         pos = np.minimum(np.searchsorted(self.wide, c), len(self.wide) - 1)
-        mine = np.flatnonzero(self.wide[pos] == c)
+        mine = np.flatnonzero(self.wide[pos] == c) if len(self.wide) else pos[:0]
         idx[mine] = self.w_idx[pos[mine], :k]
         return idx

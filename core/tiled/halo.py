@@ -52,9 +52,10 @@ def auto_chain(passes: int, k_search: int, k_initial: int, anchored: bool = Fals
     own-sheet rows in turn: the first :func:`core.one_sheet.sheet_width` one ring further,
     and the ``k_initial`` nearest two. With ``anchored`` fits (:mod:`core.anchors`) a point's
     fit is that of an anchor among its nearest, whose neighbours are a ring further: fit 0
-    is needed ``2 passes + 1`` rings out, and at the anchors of that ring.
+    is needed ``2 passes + 1`` rings out, and at the anchors of that ring, whose scale may
+    be that of an anchor of the scale rule a ring further (:func:`core.anchors.shared_scale`).
     """
-    hops = 2 * passes + 1 if anchored else passes
+    hops = 2 * passes + 2 if anchored else passes
     return ((hops + 1, k_search), (hops + 2, sheet_width(k_search)), (hops + 3, k_initial))
 
 

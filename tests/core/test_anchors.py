@@ -7,7 +7,7 @@ import pytest
 from scipy.spatial import cKDTree
 
 import core
-from core import anchor_blend, anchors, noise, shapes
+from core import anchor_blend, anchors, noise, scale, shapes
 from core._progress import Progress
 from core.methods import METHODS
 from core.stages import _empty_fit, _Fitter
@@ -119,5 +119,27 @@ def test_the_default_with_anchors_is_as_accurate_as_without(monkeypatch):
     assert with_anchors.params["passes_run"] == without.params["passes_run"]
     for name, truth in (("mean", 0.5 * (s.k1 + s.k2)), ("gaussian", s.k1 * s.k2)):
         a, b = (np.nanmean(np.abs(getattr(r, name) - truth)) for r in (with_anchors, without))
-        print(name, a, b)
         assert a < 1.1 * b, (name, a, b)
+
+
+def test_a_growing_point_takes_the_scale_of_an_anchor_among_its_nearest(monkeypatch):
+    """With noise the jet rule grows past JET_SHARED_FROM at most points; only anchors (as
+    for fits of the largest size) walk on, the others take their nearest anchor's size
+    (core.anchors.shared_scale), at nearly no cost in accuracy against walking on everywhere."""
+    s = shapes.torus(6000, seed=5)
+    pts = noise.add_noise(s.points, 0.2, seed=6)
+    seen, shared, choose = [], anchors.shared_scale, scale.choose_jets
+    monkeypatch.setattr(anchors, "shared_scale", lambda *a: seen.append((a, shared(*a))) or seen[-1][1])
+    monkeypatch.setattr(scale, "choose_jets", lambda *a, **kw: seen.append(choose(*a, **kw)) or seen[-1])
+    res = core.estimate(pts)
+    ((sorted_pts, near, growing, k_top), (follow, lead)), (k, *_) = seen
+    assert k_top == 320 and growing.mean() > 0.8 and 0.6 < len(follow) / growing.sum() < 0.8
+    assert growing[lead].all() and not np.isin(lead, follow).any()  # anchors walk on themselves
+    assert (near[follow, 1:anchors.ANCHOR_REACH + 1] == lead[:, None]).any(axis=1).all()
+    np.testing.assert_array_equal(k[follow], k[lead])
+    monkeypatch.setattr(anchors, "shared_scale", lambda *a: (np.empty(0, dtype=np.int64),) * 2)
+    own = core.estimate(pts)
+    assert (own.k_point != res.k_point).any()
+    for name, truth in (("mean", 0.5 * (s.k1 + s.k2)), ("gaussian", s.k1 * s.k2)):
+        a, b = (np.nanmean(np.abs(getattr(r, name) - truth)) for r in (res, own))
+        assert a < 1.05 * b, (name, a, b)

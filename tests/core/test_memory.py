@@ -9,9 +9,9 @@ import tracemalloc
 import numpy as np
 
 import core
-from core import initial_normals, noise, orientation, scale, shapes, stages
+from core import initial_normals, noise, orientation, shapes, stages
 from core._progress import Progress
-from core.frame import darboux_frame, height_field_derivatives
+from core.frame import darboux_frame, height_field_derivatives, jet_frames
 from core.linalg import tangent_basis
 from core.tuning import RESETTLE_K, SEARCH_WIDTH
 
@@ -42,7 +42,7 @@ def test_resettle_reads_the_graph_in_place():
     np.testing.assert_array_equal(conf, wide[1])
 
 
-def test_jet_frames_by_chunks_are_the_frames_at_once(monkeypatch):
+def test_jet_frames_by_chunks_are_the_frames_at_once():
     """Row by row the same numbers as darboux_frame over all rows at once, NaN rows included."""
     rng = np.random.default_rng(3)
     n = 1000
@@ -55,8 +55,7 @@ def test_jet_frames_by_chunks_are_the_frames_at_once(monkeypatch):
     mu, W = height_field_derivatives(coef[:, 1], coef[:, 2], 2 * coef[:, 3], coef[:, 4], 2 * coef[:, 5])
     with np.errstate(invalid="ignore", divide="ignore"):
         whole = darboux_frame(t1, t2, z, np.nan_to_num(mu), np.nan_to_num(W) / s[:, None, None])
-    monkeypatch.setattr(scale, "_CHUNK", 24)  # chunks of 96 rows: 11, the last one short
-    for a, b in zip(scale._jet_frames_of(coef, t1, t2, z, s), whole):
+    for a, b in zip(jet_frames(coef, t1, t2, z, s, rows=96), whole):  # chunks of 96 rows: 11, the last one short
         np.testing.assert_array_equal(a, b)
 
 

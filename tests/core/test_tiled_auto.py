@@ -148,7 +148,7 @@ def test_the_derived_auto_chain_is_enough(tmp_path, monkeypatch, small_candidate
 def test_the_auto_chain_covers_every_pass():
     assert halo.auto_chain(4, 226, 15) == ((5, 226), (6, 40), (7, 15))  # own-sheet rows: two rings more (core.one_sheet)
     assert halo.auto_chain(0, 20, 15) == ((1, 20), (2, 20), (3, 15))
-    assert halo.auto_chain(2, 226, 15, anchored=True) == ((6, 226), (7, 40), (8, 15))  # a ring more per pass
+    assert halo.auto_chain(2, 226, 15, anchored=True) == ((7, 226), (8, 40), (9, 15))  # a ring more per pass, one for the scale
 
 
 @pytest.mark.parametrize("sizes", [[0], [1], [5, 0, 3], [4, 4], [3000, 1, 2500, 0, 7], [1_200_000, 900_001]])

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from core import build_neighbours, estimate, noise, plan, scale, shapes, stages
-from core.wide_neighbours import LazyNeighbours, WidenableNeighbours, search_in_spatial_order
+from core.wide_neighbours import LazyNeighbours, WidenableNeighbours, rows_at_least, search_in_spatial_order
 from core.stage_cache import StageCache
 
 FIELDS = ("normals", "k1", "k2", "e1", "e2", "valid", "k_point", "degree_point", "outlier_score", "crease",
@@ -243,3 +243,28 @@ def test_a_widened_graph_frees_the_narrow_one(noise_level, share, monkeypatch):
     monkeypatch.setattr(scale, "WIDEN_SHARE", share)
     estimate(noise.add_noise(shapes.torus(6000, seed=3).points, noise_level, seed=4))
     assert narrow  # the graph was widened
+
+
+def test_rows_of_points_that_may_not_fit_are_searched_when_they_do(quantised):
+    """k="auto"'s followers (core.anchors) read their anchors' fits: their wide rows are
+    searched only if they fit after all (_Rows.ensure), the same rows and h as a full search."""
+    narrow, _ = search_in_spatial_order(quantised, 120, width=24)
+    full, _ = search_in_spatial_order(quantised, 120)
+    n = len(quantised)
+    kc = np.where(np.arange(n) % 3 == 0, 100, 20)
+    fits = np.arange(n) % 4 != 1
+    rows, h = rows_at_least(narrow, kc, fits)
+    assert narrow.width == 24 and not isinstance(rows, np.ndarray)
+    exact = fits | (kc <= 24)
+    np.testing.assert_array_equal(h[exact], full.distances[exact, kc[exact] - 1])
+    assert (h <= full.distances[np.arange(n), kc - 1]).all()  # the others: a lower bound until searched
+    later = np.flatnonzero(~exact)
+    rows.ensure(later[::2], h)
+    now = exact.copy()
+    now[later[::2]] = True
+    np.testing.assert_array_equal(h[now], full.distances[now, kc[now] - 1])
+    c = np.flatnonzero(now)
+    got = rows[c]
+    for i, row in zip(c, got):
+        np.testing.assert_array_equal(row[:kc[i]], full.indices[i, :kc[i]])
+    assert (rows[later[1::2]][:, 24:] == later[1::2, None]).all()  # not searched: the centre itself
