@@ -38,18 +38,23 @@ from .passes import mix64
 from .tuning import ANCHOR_BLEND, ANCHOR_REACH, ANCHOR_ROWS
 
 #: the hash's seed, and how many nearest distances it reads (:func:`priority`)
-_SALT, _RATIOS = 0x5A17C0DE, 8
+_SALT, RATIOS = 0x5A17C0DE, 8
+
+
+def shares_scale(plan) -> bool:
+    """Whether the scale rule of ``plan`` may walk on at anchors only (:func:`shared_scale`):
+    k="auto" with candidates of at least 1.5 x ANCHOR_ROWS (:func:`assign`). Independent of
+    the fit's options, so a cached choice of scale holds for any of them."""
+    return bool(plan.auto and np.rint(plan.k_search / ANCHOR_ROWS) >= 2)
 
 
 def in_use(plan) -> bool:
-    """Whether the fits of ``plan`` may read anchors: k="auto" with candidates of at least
-    1.5 x ANCHOR_ROWS (:func:`assign`), and eq. 22 projected (a follower's W is projected;
-    "exact" solves at a centre)."""
-    wide = np.rint(plan.k_search / ANCHOR_ROWS) >= 2
-    return bool(plan.auto and wide and plan.options.get("constraint") != "exact")
+    """Whether the fits of ``plan`` may read anchors: :func:`shares_scale`, and eq. 22
+    projected (a follower's W is projected; "exact" solves at a centre)."""
+    return shares_scale(plan) and plan.options.get("constraint") != "exact"
 
 
-def assign(pts, near, kc, eligible) -> np.ndarray | None:
+def assign(pts, near, kc, eligible, prio=None) -> np.ndarray | None:
     """(N, ANCHOR_BLEND) int64: the anchors whose fits each point reads, nearest first and
     -1 past the last (column 0 is the point itself where it fits its own), or None when
     every point fits its own. ``near`` (N, >= ANCHOR_REACH + 1): each point's nearest
@@ -57,10 +62,10 @@ def assign(pts, near, kc, eligible) -> np.ndarray | None:
     ``eligible`` (N,) bool: the points that may be anchors or follow them (fitted in every
     pass: not an outlier, a normal, a neighbourhood that spans). A point is an anchor when
     its :func:`priority` is above those of its m = round(k / ANCHOR_ROWS) - 1 nearest
-    (about 1 in m + 1 points)."""
+    (about 1 in m + 1 points); ``prio``: :func:`priority`'s answer, if computed already."""
     kc = np.asarray(kc)
     m = np.clip(np.rint(kc / ANCHOR_ROWS).astype(np.int64) - 1, 0, ANCHOR_REACH)
-    prio = priority(pts, near)
+    prio = priority(pts, near) if prio is None else prio
     rival = np.where(np.arange(1, m.max() + 1) <= m[:, None], prio[np.asarray(near[:, 1:m.max() + 1])], 0)
     anchors = eligible & (prio > rival.max(axis=1, initial=0))
     rows = np.flatnonzero(eligible & ~anchors)
@@ -77,13 +82,14 @@ def assign(pts, near, kc, eligible) -> np.ndarray | None:
     return anchor
 
 
-def shared_scale(pts, near, growing, k_top):
+def shared_scale(pts, near, growing, k_top, prio=None):
     """``(follow, lead)`` (F,) int64: the ``growing`` points (N,) bool that take the scale
     chosen at an anchor, and that anchor (the nearest among their ``ANCHOR_REACH``
     nearest); anchors drawn as for fits of ``k_top`` neighbours (:func:`assign`). Where
     the jets of the scale rule grow past the columns held, the rule walks on to ``k_top``
-    at the anchors alone: a follower would fit on nearly the same wide disc."""
-    anchor = assign(pts, near, np.full(len(pts), k_top, dtype=np.int64), growing)
+    at the anchors alone: a follower would fit on nearly the same wide disc. ``prio``: as
+    :func:`assign`'s."""
+    anchor = assign(pts, near, np.full(len(pts), k_top, dtype=np.int64), growing, prio)
     if anchor is None:
         return np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64)
     follow = np.flatnonzero(followers(anchor))
@@ -91,7 +97,7 @@ def shared_scale(pts, near, growing, k_top):
 
 
 def priority(pts, near, chunk=65_536) -> np.ndarray:
-    """(N,) uint64 > 0: a hash of each point's distances to its ``_RATIOS`` nearest, sorted
+    """(N,) uint64 > 0: a hash of each point's distances to its ``RATIOS`` nearest, sorted
     and divided by the largest, rounded to 2^-20: a draw that depends on neither the order
     of the points, the thread count or the tile that holds them, nor the pose or scale of
     the cloud (a rotation moves the ratios by ~1e-16, far from the rounding's half-steps),
@@ -100,7 +106,7 @@ def priority(pts, near, chunk=65_536) -> np.ndarray:
     prio = np.empty(len(pts), dtype=np.uint64)
     for start in range(0, len(pts), chunk):
         rows = slice(start, start + chunk)
-        d = np.linalg.norm(pts[np.asarray(near[rows, 1:_RATIOS + 1])] - pts[rows, None], axis=2)
+        d = np.linalg.norm(pts[np.asarray(near[rows, 1:RATIOS + 1])] - pts[rows, None], axis=2)
         d.sort(axis=1)
         q = np.rint(d[:, :-1] / np.where(d[:, -1:] > 0.0, d[:, -1:], 1.0) * 2.0**20).astype(np.uint64)
         h = np.full(len(q), _SALT, dtype=np.uint64)

@@ -102,7 +102,7 @@ def _anchors(pts, nb, kc, h, sc: Scale, outlier, plan):
     if not anchors.in_use(plan):
         return None
     eligible = ~sc.on_jet & sc.spans & (h > 0) & ~outlier
-    return anchors.assign(pts, nb.take_indices(min(ANCHOR_REACH + 1, plan.k_search)), kc, eligible)
+    return anchors.assign(pts, nb.take_indices(min(ANCHOR_REACH + 1, plan.k_search)), kc, eligible, sc.priority)
 
 
 def _refining(fitter: _Fitter, plan) -> _Fitter:

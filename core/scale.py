@@ -229,10 +229,10 @@ def _jet_rule():
     return kernels.ScaleRule(JET_DEGREE, JET_GAMMA, JET_RCOND, FOLD_FRACTION, FOLD_COS, FOLD_NOISE, FOLD_MIN_BAD, JET_RCOND)
 
 
-def choose_jets(points, normals, nb, has_normal, ks, report, *, shared=False):
+def choose_jets(points, normals, nb, has_normal, ks, report, *, shared=None):
     """Per point: the size of a cubic jet by ICI with an outside noise level (see module);
-    ``shared``: where noisy jets grow past the columns held, only anchors walk on
-    (:func:`core.anchors.shared_scale`, the anchors of k="auto"'s wide fits).
+    ``shared`` (N,), optional: the anchors' priorities (:func:`core.anchors.priority`) where
+    k="auto"'s wide fits are shared; only anchors walk on past :data:`JET_SHARED_FROM`.
 
     Returns ``(k, jet, noise, degree)``: k (N,) int (0 where no fit), the chosen jets'
     frames ``(normal, k1, k2, e1, e2, ok)`` as :func:`core.frame.darboux_frame` gives them,
@@ -253,7 +253,7 @@ def choose_jets(points, normals, nb, has_normal, ks, report, *, shared=False):
     sigma2, plain = _measured_noise(points, normals, idx_all, usable, s, t1, t2)
     with np.errstate(invalid="ignore", divide="ignore"):
         noise = np.where(s > 0, np.maximum(np.sqrt(sigma2), 0.5 * np.sqrt(plain)) / s, np.inf)
-    if not shared and nb.width < ks[-1] and np.count_nonzero(noise[usable] > JET_QUIET) > WIDEN_SHARE * len(usable):
+    if shared is None and nb.width < ks[-1] and np.count_nonzero(noise[usable] > JET_QUIET) > WIDEN_SHARE * len(usable):
         idx_all, dist_all = nb.take(ks[-1])  # noisy: most jets grow past the columns held, search all at once
     report(0.2, "choosing k")
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -264,8 +264,8 @@ def choose_jets(points, normals, nb, has_normal, ks, report, *, shared=False):
 
     deg = _degree_rule(ks, noise <= JET_QUIET)
     lead = None
-    if shared and idx_all.shape[1] > ANCHOR_REACH:  # its nearest, to find their anchors among
-        lead = lambda growing: anchors.shared_scale(points, idx_all, growing, ks[-1])  # noqa: E731
+    if shared is not None and idx_all.shape[1] > ANCHOR_REACH:  # its nearest, to find their anchors among
+        lead = lambda growing: anchors.shared_scale(points, idx_all, growing, ks[-1], shared)  # noqa: E731
     chosen, coef, walked = _jet_ici(nb, idx_all, usable, ks, frames, sigma2_h, deg, report, lead=lead)
     ks_arr = np.asarray(ks, dtype=np.int64)
     fitted = chosen >= 0
@@ -369,7 +369,7 @@ def aligned_jets(jets, normals):
     return (*turned_over(nrm, k1, k2, e1, e2, flip), ok)
 
 
-def choose_model(points, normals, nb, has_normal, ks, report, *, shared=False):
+def choose_model(points, normals, nb, has_normal, ks, report, *, shared=None):
     """k per point by :func:`choose_jets`, and where the cubic jet itself is the result.
 
     Returns ``(k, on_jet, quiet, jets, degree)``: jets (aligned with ``normals``, of ``degree`` per point, see

@@ -154,7 +154,8 @@ class Scale(NamedTuple):
     nil (NF rule or jet), ``jets`` the jets' frames (None without k="auto") and
     ``jet_degree`` (N,) their polynomial degree where kept (-1 elsewhere); ``spans`` (N,)
     False where NR's neighbours do not span the tangent plane (:mod:`core.plane_spread`:
-    not fitted, invalid)."""
+    not fitted, invalid); ``priority`` (N,) the anchors' draw where wide fits are shared
+    (:func:`core.anchors.priority`, else None)."""
 
     k: np.ndarray
     k_point: np.ndarray
@@ -163,6 +164,7 @@ class Scale(NamedTuple):
     jets: tuple | None = None
     jet_degree: np.ndarray | None = None
     spans: np.ndarray | None = None
+    priority: np.ndarray | None = None
 
 
 def choose_scale(pts, nrm, nb, inliers, plan, report, *, scores=None, k_initial=None) -> Scale:
@@ -184,7 +186,8 @@ def choose_scale(pts, nrm, nb, inliers, plan, report, *, scores=None, k_initial=
     suspect = scores > JET_SCORE if plan.robust and scores is not None else np.zeros(n, dtype=bool)
     steady = inliers & ~suspect  # the jets are least squares: suspects sit out the choice of k
     masked = np.where(steady[:, None], nrm, np.nan)
-    kc, on_jet, quiet, jets, degree = scale.choose_model(pts, masked, nb, steady, ks, report, shared=anchors.in_use(plan))
+    prio = anchors.priority(pts, nb.take_indices(anchors.RATIOS + 1)) if anchors.shares_scale(plan) else None
+    kc, on_jet, quiet, jets, degree = scale.choose_model(pts, masked, nb, steady, ks, report, shared=prio)
     floor = np.full(n, ks[min(int(np.searchsorted(ks, k_initial or 0)), len(ks) - 1)])  # a candidate >= k_initial
     lifted = np.flatnonzero(steady & ~quiet & (kc < floor))
     if len(lifted):  # but not across a fold (the far side of a thin part)
@@ -193,7 +196,7 @@ def choose_scale(pts, nrm, nb, inliers, plan, report, *, scores=None, k_initial=
     wide = plane_spread.widened(pts, nrm, nb, fit_k, ks)
     fit_k = np.where(wide > 0, wide, fit_k)
     return Scale(fit_k, np.where(on_jet, kc, fit_k), on_jet, quiet, jets, np.where(on_jet, degree, -1),
-                 spans=on_jet | (wide > 0))
+                 spans=on_jet | (wide > 0), priority=prio)
 
 
 def fit_all(pts, nrm, idx, kc, h, has_normal, *, method, options, report) -> Fit:

@@ -42,7 +42,7 @@ def run_auto_tile(root, tile: int, spec) -> dict:
     if len(store.read_bin(tile)) == 0:
         _save(store, tile, [_empty()] * (whole.passes + 1), np.zeros((whole.passes + 2, 2)), {})
         return {"tile": tile, "skipped": False, "points": 0, "loaded": 0}
-    anchored = anchors.in_use(whole)  # a fit read at a follower: one ring more per pass (core.tiled.halo.auto_chain)
+    anchored = anchors.shares_scale(whole)  # a fit or scale read at a follower: rings more (core.tiled.halo.auto_chain)
     chain = auto_chain(whole.passes, whole.k_search, whole.k_initial, anchored)
     rec, owner, nb, exact = load_with_halo(store, plan, tile, whole.k_search, chain)
     pts = np.ascontiguousarray(rec["xyz"])

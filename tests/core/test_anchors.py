@@ -132,7 +132,7 @@ def test_a_growing_point_takes_the_scale_of_an_anchor_among_its_nearest(monkeypa
     monkeypatch.setattr(anchors, "shared_scale", lambda *a: seen.append((a, shared(*a))) or seen[-1][1])
     monkeypatch.setattr(scale, "choose_jets", lambda *a, **kw: seen.append(choose(*a, **kw)) or seen[-1])
     res = core.estimate(pts)
-    ((sorted_pts, near, growing, k_top), (follow, lead)), (k, *_) = seen
+    ((_, near, growing, k_top, _), (follow, lead)), (k, *_) = seen
     assert k_top == 320 and growing.mean() > 0.8 and 0.6 < len(follow) / growing.sum() < 0.8
     assert growing[lead].all() and not np.isin(lead, follow).any()  # anchors walk on themselves
     assert (near[follow, 1:anchors.ANCHOR_REACH + 1] == lead[:, None]).any(axis=1).all()

@@ -122,3 +122,14 @@ def test_auto_k_beyond_the_head_room_and_keep_two_methods(torus):
     for kw in (dict(k="auto", passes=2), dict(k=15, method="ct"), dict(k="auto", passes=2)):
         estimate(torus, cache=one, **kw)
     assert one.reused["scale"] == 0
+
+
+def test_a_cached_scale_holds_for_any_constraint():
+    """k="auto" shares its wide scale at anchors whatever eq. 22's constraint (core.anchors.shares_scale),
+    so the cached choice of a projected fit is the one an "exact" fit makes afresh, and back."""
+    s = shapes.torus(6000, seed=5)
+    pts = s.points + np.random.default_rng(1).normal(scale=0.02, size=s.points.shape)  # noisy: k = 320 at anchors
+    cache = StageCache()
+    for constraint in ("project", "exact", "project"):
+        _same(estimate(pts, options={"constraint": constraint}, cache=cache), estimate(pts, options={"constraint": constraint}))
+    assert cache.computed["scale"] == 1 and cache.reused["scale"] == 2
