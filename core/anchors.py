@@ -82,14 +82,14 @@ def assign(pts, near, kc, eligible, prio=None) -> np.ndarray | None:
     return anchor
 
 
-def shared_scale(pts, near, growing, k_top, prio=None):
-    """``(follow, lead)`` (F,) int64: the ``growing`` points (N,) bool that take the scale
+def shared_scale(pts, near, noisy, k_top, prio=None):
+    """``(follow, lead)`` (F,) int64: the ``noisy`` points (N,) bool that take the scale
     chosen at an anchor, and that anchor (the nearest among their ``ANCHOR_REACH``
-    nearest); anchors drawn as for fits of ``k_top`` neighbours (:func:`assign`). Where
-    the jets of the scale rule grow past the columns held, the rule walks on to ``k_top``
+    nearest); anchors drawn as for fits of ``k_top`` neighbours (:func:`assign`). With
+    noise the jets of the scale rule grow to ``k_top`` nearly everywhere, and the rule runs
     at the anchors alone: a follower would fit on nearly the same wide disc. ``prio``: as
     :func:`assign`'s."""
-    anchor = assign(pts, near, np.full(len(pts), k_top, dtype=np.int64), growing, prio)
+    anchor = assign(pts, near, np.full(len(pts), k_top, dtype=np.int64), noisy, prio)
     if anchor is None:
         return np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64)
     follow = np.flatnonzero(followers(anchor))

@@ -9,7 +9,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import kernels, plane_spread, scale, tuning
+from . import anchors, kernels, plane_spread, scale, tuning
 from .normals import jet_normals, pca_normals
 
 
@@ -59,9 +59,9 @@ def _initial_normals(pts, nb, plan, outlier, report) -> tuple[Initial, np.ndarra
         noise = scale.noise_ratio(np.where(clean, ratio, np.nan) if clean.any() else ratio, 1.0)
         jet = (jet, ratio)
     k_init = scale.initial_k(noise, plan.k_initial, plan.k_search, plan.n_points)
-    if k_init > nb.width:  # noise this large grows most jets to k_search too: search them all once
-        del idx_p, dist_p  # views of the narrow graph would keep it alive beside the wide one
-        nb.widen(plan.k_search)
+    if k_init > nb.width:  # noise this large grows most jets to k_search too: search them all once, unless
+        del idx_p, dist_p  # only anchors walk on (core.anchors.shares_scale; views of the narrow graph would keep it alive)
+        nb.widen(k_init if anchors.shares_scale(plan) else plan.k_search)
         idx_p, dist_p = nb.take(plan.k_initial)
     small, height = _small_normals(pts, nrm, ok, idx_p, dist_p, jet, plan)
     if k_init == plan.k_initial and not (plan.robust and outlier.any()):

@@ -30,11 +30,11 @@ residual variance per degree of freedom exceeds the cubic's on 15 is skipped: it
 neighbourhood holds something no polynomial describes (an edge, a fold). (:mod:`core.kernels.jet_degree`,
 run inside the cubic's intervals on the same sums; ``res.degree_point`` holds the degree.)
 
-**Shared at wide scales.** With noise most jets grow to the largest size. Where k="auto"'s
-wide fits are shared (:mod:`core.anchors`), only the anchors drawn for fits of that size
-walk on past :data:`JET_SHARED_FROM`; a point still growing there takes its nearest
-anchor's size (its fit reads the anchors' wide discs anyway): 1.4-1.9 s less of a noisy
-100k torus or ellipsoid, mean |H| error within 0.2 %.
+**Shared at wide scales.** With noise nearly every jet grows to the largest size. Where
+k="auto"'s wide fits are shared (:mod:`core.anchors`), the rule runs at the anchors drawn
+for fits of that size (and at the quiet points), and every other noisy point takes its
+nearest anchor's size (its fit reads the anchors' wide discs anyway): 1.8-2.3 s less of
+a noisy 100k torus or ellipsoid, mean |H| error within 0.2 %.
 
 **The model.** Where the measured noise is below :data:`JET_QUIET` (nearly noise-free) the
 jet itself is the result: it inherits no error of estimated normals (on 7 stand-in
@@ -80,7 +80,7 @@ from .kernels.frame import intrinsic_frames
 from .linalg import tangent_basis
 from .patch import Chunk
 from .tuning import (AUTO_DEGREE, AUTO_KS, DEGREE_PIVOT, FOLD_COS, FOLD_FRACTION, FOLD_MIN_BAD, FOLD_NOISE, GAMMA,
-                     ANCHOR_REACH, INITIAL_K0, INITIAL_SHARE, JET_SHARED_FROM, JET_DEGREE, JET_GAMMA, JET_DEGREES, JET_KS, JET_QUIET, JET_REACH, JET_SCORE,
+                     ANCHOR_REACH, INITIAL_K0, INITIAL_SHARE, JET_DEGREE, JET_GAMMA, JET_DEGREES, JET_KS, JET_QUIET, JET_REACH, JET_SCORE,
                      NEIGHBOUR_BUDGET, NOISE_KS, NOISE_POOL, RCOND, JET_RCOND, JET_THIN_TILT, JET_TILT, ROUNDING_NOISE, WIDEN_SHARE)
 
 __all__ = ["AUTO_DEGREE", "AUTO_KS", "GAMMA", "INITIAL_K0", "NEIGHBOUR_BUDGET", "JET_KS", "JET_DEGREE", "JET_SCORE",
@@ -232,7 +232,8 @@ def _jet_rule():
 def choose_jets(points, normals, nb, has_normal, ks, report, *, shared=None):
     """Per point: the size of a cubic jet by ICI with an outside noise level (see module);
     ``shared`` (N,), optional: the anchors' priorities (:func:`core.anchors.priority`) where
-    k="auto"'s wide fits are shared; only anchors walk on past :data:`JET_SHARED_FROM`.
+    k="auto"'s wide fits are shared: a noisy point that follows an anchor takes its size
+    (:func:`core.anchors.shared_scale`; its jet's frame is not valid).
 
     Returns ``(k, jet, noise, degree)``: k (N,) int (0 where no fit), the chosen jets'
     frames ``(normal, k1, k2, e1, e2, ok)`` as :func:`core.frame.darboux_frame` gives them,
@@ -274,7 +275,7 @@ def choose_jets(points, normals, nb, has_normal, ks, report, *, shared=None):
     higher = np.flatnonzero((walked >= 0) & (walked < len(deg.kd)))  # a richer model than the cubic
     k[higher], degree[higher] = deg.kd[walked[higher]], deg.degrees[walked[higher]]
     frame = jet_frames(coef, t1, t2, np.where(has_normal[:, None], normals, [0.0, 0.0, 1.0]), s)
-    return k, (*frame[:-1], frame[-1] & fitted), noise, degree
+    return k, (*frame[:-1], frame[-1] & fitted & ~np.isnan(coef[:, 0])), noise, degree  # followers: no jet
 
 
 def _measured_noise(points, normals, idx, usable, s, t1, t2):
@@ -289,27 +290,24 @@ def _measured_noise(points, normals, idx, usable, s, t1, t2):
 
 
 def _jet_ici(nb, idx, usable, ks, frames, sigma2_h, deg, report, *, lead=None):
-    """(chosen index into ``ks`` (N,), -1 where no fit; coefficients (N, 10); the degree
-    rule's answer (N,)) of :func:`core.kernels.jets.jet_ici` at the ``usable`` centres, on
-    their neighbours ``idx`` (N, w) (the columns ``nb`` holds); ``frames(rows, centres)``
-    the kernels' record, ``sigma2_h`` (N,) the noise in units of h^2, ``deg`` the degree
-    rule (:func:`_degree_rule`, ``quiet`` for all N points).
+    """(chosen index into ``ks`` (N,), -1 where no fit; coefficients (N, 10), NaN where not
+    fitted; the degree rule's answer (N,)) of :func:`core.kernels.jets.jet_ici` at the
+    ``usable`` centres, on their neighbours ``idx`` (N, w) (the columns ``nb`` holds);
+    ``frames(rows, centres)`` the kernels' record, ``sigma2_h`` (N,) the noise in units of
+    h^2, ``deg`` the degree rule (:func:`_degree_rule`, ``quiet`` for all N points).
 
     With w < ks[-1] the rule runs on the sizes up to w first. It looks one ring ahead
     (at size c it tests the ring ks[c]..ks[c + 1] for a fold) and ends at the last size,
     so it takes the same steps as on all sizes up to the next-to-last size held: a centre
     that stopped before (chosen <= m - 3 of m sizes) has the full rule's answer, the others
     (and those without a fit) are run again on their ``ks[-1]`` neighbours (``nb.rows``).
-    With ``lead`` (growing (N,) bool -> (followers, their anchors), :func:`core.anchors.shared_scale`)
-    the first run ends at :data:`JET_SHARED_FROM`, whatever w, and the noisy centres still
-    growing there take their anchor's answer (those whose anchor's fails, their own).
+    With ``lead`` (noisy (N,) bool -> (followers, their anchors), :func:`core.anchors.shared_scale`)
+    the noisy centres that follow an anchor take its answer (those whose anchor's fails, their own).
     """
     n = len(idx)
     out = (np.full(n, -1, dtype=np.int64), np.full((n, jet_kernels.P3), np.nan), np.full(n, -1, dtype=np.int64))
     rule = _jet_rule()
     m = int(np.searchsorted(ks, idx.shape[1], side="right"))  # sizes held
-    if lead is not None:
-        m = min(m, int(np.searchsorted(ks, JET_SHARED_FROM, side="right")))
     if m < 3 < len(ks):  # too few to tell anything: all of them
         idx, m = nb.take(ks[-1])[0], len(ks)
 
@@ -320,31 +318,27 @@ def _jet_ici(nb, idx, usable, ks, frames, sigma2_h, deg, report, *, lead=None):
         for dst, src in zip(out, got):
             dst[c] = src
 
+    follow = lead_of = usable[:0]
+    if lead is not None:
+        noisy = np.zeros(n, dtype=bool)
+        noisy[usable[~deg.quiet[usable]]] = True
+        follow, lead_of = lead(noisy)
+        usable = np.setdiff1d(usable, follow, assume_unique=True)
     for start in range(0, len(usable), _CHUNK):
         c = usable[start:start + _CHUNK]
         run(c, _rows(idx, c, ks[m - 1]), ks[:m])
         report(0.2 + 0.8 * min(len(usable), start + _CHUNK) / max(len(usable), 1), "choosing k")
+    chosen = out[0]
     if m < len(ks):
-        _walk_on(nb, usable, ks, m, out[0], deg.quiet, run, lead)
-    return out
-
-
-def _walk_on(nb, usable, ks, m, chosen, quiet, run, lead):
-    """The rule on all ``ks`` where the first ``m`` did not decide (:func:`_jet_ici`)."""
-    again = usable[(chosen[usable] < 0) | (chosen[usable] >= m - 2)]
-    follow = anchor = again[:0]
-    if lead is not None:
-        growing = np.zeros(len(chosen), dtype=bool)
-        growing[again[(chosen[again] == m - 1) & ~quiet[again]]] = True
-        follow, anchor = lead(growing)
-        again = np.setdiff1d(again, follow, assume_unique=True)
-    for start in range(0, len(again), _CHUNK):
-        c = again[start:start + _CHUNK]
-        run(c, nb.rows(c, ks[-1])[0], ks)
-    chosen[follow] = chosen[anchor]
+        again = usable[(chosen[usable] < 0) | (chosen[usable] >= m - 2)]
+        for start in range(0, len(again), _CHUNK):
+            c = again[start:start + _CHUNK]
+            run(c, nb.rows(c, ks[-1])[0], ks)
+    chosen[follow] = chosen[lead_of]
     alone = follow[chosen[follow] < 0]  # their anchor's rule failed: their own
     if len(alone):
         run(alone, nb.rows(alone, ks[-1])[0], ks)
+    return out
 
 
 def _degree_rule(ks, quiet):

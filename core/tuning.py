@@ -248,9 +248,6 @@ ROUNDING_NOISE = 1e-12
 #: columns held (core.tuning.SEARCH_WIDTH): with noise most jets grow to the largest size
 #: (noise 0.2 spacing on a torus: 96 % at 226), noise-free nearly none do. Speed only.
 WIDEN_SHARE = 0.5
-#: a jet still growing at this size takes its anchor's where wide fits are shared (core.anchors.shared_scale;
-#: = SEARCH_WIDTH). Noisy 100k torus and ellipsoid: 1.4-1.9 s less, mean |H| error within 0.2 %.
-JET_SHARED_FROM = 40
 #: ... but only where the 15 neighbours reach less than this fraction of a radius of
 #: curvature (s |k|max): on 1000 points of a torus (15 neighbours span 0.65 of the tube's
 #: radius) NR's cubic normal field at the NF rule's k has a quarter of the jet's H error,

@@ -122,21 +122,22 @@ def test_the_default_with_anchors_is_as_accurate_as_without(monkeypatch):
         assert a < 1.1 * b, (name, a, b)
 
 
-def test_a_growing_point_takes_the_scale_of_an_anchor_among_its_nearest(monkeypatch):
-    """With noise the jet rule grows past JET_SHARED_FROM at most points; only anchors (as
-    for fits of the largest size) walk on, the others take their nearest anchor's size
-    (core.anchors.shared_scale), at nearly no cost in accuracy against walking on everywhere."""
+def test_a_noisy_point_takes_the_scale_of_an_anchor_among_its_nearest(monkeypatch):
+    """With noise the jet rule grows to the largest size nearly everywhere; only anchors (as
+    for fits of that size) run it, the other noisy points take their nearest anchor's size
+    (core.anchors.shared_scale), at nearly no cost in accuracy against running it everywhere."""
     s = shapes.torus(6000, seed=5)
     pts = noise.add_noise(s.points, 0.2, seed=6)
     seen, shared, choose = [], anchors.shared_scale, scale.choose_jets
     monkeypatch.setattr(anchors, "shared_scale", lambda *a: seen.append((a, shared(*a))) or seen[-1][1])
     monkeypatch.setattr(scale, "choose_jets", lambda *a, **kw: seen.append(choose(*a, **kw)) or seen[-1])
     res = core.estimate(pts)
-    ((_, near, growing, k_top, _), (follow, lead)), (k, *_) = seen
-    assert k_top == 320 and growing.mean() > 0.8 and 0.6 < len(follow) / growing.sum() < 0.8
-    assert growing[lead].all() and not np.isin(lead, follow).any()  # anchors walk on themselves
+    ((_, near, noisy, k_top, _), (follow, lead)), (k, jets, *_) = seen
+    assert k_top == 320 and noisy.mean() > 0.95 and 0.6 < len(follow) / noisy.sum() < 0.8
+    assert noisy[lead].all() and not np.isin(lead, follow).any()  # anchors run the rule themselves
     assert (near[follow, 1:anchors.ANCHOR_REACH + 1] == lead[:, None]).any(axis=1).all()
     np.testing.assert_array_equal(k[follow], k[lead])
+    assert not jets[-1][follow].any() and jets[-1][lead].mean() > 0.99  # no jet of the size at a follower
     monkeypatch.setattr(anchors, "shared_scale", lambda *a: (np.empty(0, dtype=np.int64),) * 2)
     own = core.estimate(pts)
     assert (own.k_point != res.k_point).any()
