@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from core import build_neighbours, estimate, noise, plan, scale, shapes, stages
+from core import anchors, build_neighbours, estimate, noise, plan, scale, shapes, stages
 from core.wide_neighbours import LazyNeighbours, WidenableNeighbours, rows_at_least, search_in_spatial_order
 from core.stage_cache import StageCache
 
@@ -75,11 +75,16 @@ def test_half_noisy_cloud_is_bit_identical_to_a_full_search(half_noisy, full_wid
 
 
 @pytest.mark.parametrize("share", [0.0, 1.0])
-def test_either_way_of_widening_gives_the_same(half_noisy, full_width, share, monkeypatch):
+def test_either_way_of_widening_gives_the_same(half_noisy, share, monkeypatch):
     """share 0: every point searched wide before the jet rule; 1: only the rows that reached
-    the last sizes held, rerun (the jet rule looks one ring ahead)."""
+    the last sizes held, rerun (the jet rule looks one ring ahead). Where the scale is not
+    shared (core.anchors.shares_scale; here forced off), every noisy point runs the rule."""
+    monkeypatch.setattr(anchors, "ANCHOR_ROWS", 10**6)
+    with monkeypatch.context() as mp:
+        mp.setattr(stages, "SEARCH_WIDTH", 10**9)
+        reference = estimate(half_noisy)
     monkeypatch.setattr(scale, "WIDEN_SHARE", share)
-    _same(estimate(half_noisy), full_width)
+    _same(estimate(half_noisy), reference)
 
 
 def test_truncated_jet_rule_reruns_the_points_at_its_last_sizes(half_noisy, full_width, monkeypatch):
