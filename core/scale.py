@@ -266,7 +266,7 @@ def choose_jets(points, normals, nb, has_normal, ks, report, *, shared=None):
     deg = _degree_rule(ks, noise <= JET_QUIET)
     lead = None
     if shared is not None and idx_all.shape[1] > ANCHOR_REACH:  # its nearest, to find their anchors among
-        lead = lambda growing: anchors.shared_scale(points, idx_all, growing, ks[-1], shared)  # noqa: E731
+        lead = lambda noisy: anchors.shared_scale(points, idx_all, noisy, ks[-1], shared)  # noqa: E731
     chosen, coef, walked = _jet_ici(nb, idx_all, usable, ks, frames, sigma2_h, deg, report, lead=lead)
     ks_arr = np.asarray(ks, dtype=np.int64)
     fitted = chosen >= 0
