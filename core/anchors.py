@@ -141,7 +141,9 @@ class Kept:
     def __init__(self, anchor):
         n = len(anchor)
         read = anchor[followers(anchor)]
-        self.points = np.unique(read[read >= 0])  # the anchors some point follows
+        some = np.zeros(n, dtype=bool)
+        some[read[read >= 0]] = True
+        self.points = np.flatnonzero(some)  # the anchors some point follows (np.unique sorted them: 0.36 s at 1M)
         m = len(self.points)
         self.row = np.full(n, -1, dtype=np.int64)
         self.row[self.points] = np.arange(m)
