@@ -275,7 +275,7 @@ def rows_at_least(nb, kc, fits=None):
 
 def held_h(nb, kc):
     """(N,): the distance to each point's ``kc``-th neighbour where ``nb`` holds it, else to
-    the last neighbour held (a lower bound: > 0 wherever the exact one is, duplicates merged)."""
+    the last neighbour held (a lower bound, > 0 as the exact one is: duplicates are merged before)."""
     dist = nb.take(min(nb.width, int(kc.max())))[1]
     return dist[np.arange(len(kc)), np.minimum(kc, dist.shape[1]) - 1].copy()
 
