@@ -54,7 +54,7 @@ def in_use(plan) -> bool:
     return shares_scale(plan) and plan.options.get("constraint") != "exact"
 
 
-def assign(pts, near, kc, eligible, prio=None) -> np.ndarray | None:
+def assign(pts, near, kc, eligible, prio=None, lead=None) -> np.ndarray | None:
     """(N, ANCHOR_BLEND) int64: the anchors whose fits each point reads, nearest first and
     -1 past the last (column 0 is the point itself where it fits its own), or None when
     every point fits its own. ``near`` (N, >= ANCHOR_REACH + 1): each point's nearest
@@ -62,12 +62,13 @@ def assign(pts, near, kc, eligible, prio=None) -> np.ndarray | None:
     ``eligible`` (N,) bool: the points that may be anchors or follow them (fitted in every
     pass: not an outlier, a normal, a neighbourhood that spans). A point is an anchor when
     its :func:`priority` is above those of its m = round(k / ANCHOR_ROWS) - 1 nearest
-    (about 1 in m + 1 points); ``prio``: :func:`priority`'s answer, if computed already."""
+    (about 1 in m + 1 points); ``prio``: :func:`priority`'s answer, if computed already;
+    ``lead`` (N,) bool, optional: the eligible points that may be anchors (the others only follow)."""
     kc = np.asarray(kc)
     m = np.clip(np.rint(kc / ANCHOR_ROWS).astype(np.int64) - 1, 0, ANCHOR_REACH)
     prio = priority(pts, near) if prio is None else prio
     rival = np.where(np.arange(1, m.max() + 1) <= m[:, None], prio[np.asarray(near[:, 1:m.max() + 1])], 0)
-    anchors = eligible & (prio > rival.max(axis=1, initial=0))
+    anchors = (eligible if lead is None else eligible & lead) & (prio > rival.max(axis=1, initial=0))
     rows = np.flatnonzero(eligible & ~anchors)
     if not len(rows):
         return None
@@ -82,14 +83,16 @@ def assign(pts, near, kc, eligible, prio=None) -> np.ndarray | None:
     return anchor
 
 
-def shared_scale(pts, near, noisy, k_top, prio=None):
+def shared_scale(pts, near, noisy, k_top, prio=None, sat_out=None):
     """``(follow, lead)`` (F,) int64: the ``noisy`` points (N,) bool that take the scale
     chosen at an anchor, and that anchor (the nearest among their ``ANCHOR_REACH``
     nearest); anchors drawn as for fits of ``k_top`` neighbours (:func:`assign`). With
     noise the jets of the scale rule grow to ``k_top`` nearly everywhere, and the rule runs
     at the anchors alone: a follower would fit on nearly the same wide disc. ``prio``: as
-    :func:`assign`'s."""
-    anchor = assign(pts, near, np.full(len(pts), k_top, dtype=np.int64), noisy, prio)
+    :func:`assign`'s; ``sat_out`` (N,) bool, optional: points that sit out the rule (robust
+    mode's suspects) and follow an anchor too, never one themselves."""
+    eligible = noisy if sat_out is None else noisy | sat_out
+    anchor = assign(pts, near, np.full(len(pts), k_top, dtype=np.int64), eligible, prio, noisy)
     if anchor is None:
         return np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64)
     follow = np.flatnonzero(followers(anchor))

@@ -229,11 +229,12 @@ def _jet_rule():
     return kernels.ScaleRule(JET_DEGREE, JET_GAMMA, JET_RCOND, FOLD_FRACTION, FOLD_COS, FOLD_NOISE, FOLD_MIN_BAD, JET_RCOND)
 
 
-def choose_jets(points, normals, nb, has_normal, ks, report, *, shared=None):
+def choose_jets(points, normals, nb, has_normal, ks, report, *, shared=None, sat_out=None):
     """Per point: the size of a cubic jet by ICI with an outside noise level (see module);
     ``shared`` (N,), optional: the anchors' priorities (:func:`core.anchors.priority`) where
     k="auto"'s wide fits are shared: a noisy point that follows an anchor takes its size
-    (:func:`core.anchors.shared_scale`; its jet's frame is not valid).
+    (:func:`core.anchors.shared_scale`; its jet's frame is not valid), and so do the
+    points ``sat_out`` (N,) bool, which run no jet of their own (robust mode's suspects).
 
     Returns ``(k, jet, noise, degree)``: k (N,) int (0 where no fit), the chosen jets'
     frames ``(normal, k1, k2, e1, e2, ok)`` as :func:`core.frame.darboux_frame` gives them,
@@ -266,7 +267,7 @@ def choose_jets(points, normals, nb, has_normal, ks, report, *, shared=None):
     deg = _degree_rule(ks, noise <= JET_QUIET)
     lead = None
     if shared is not None and idx_all.shape[1] > ANCHOR_REACH:  # its nearest, to find their anchors among
-        lead = lambda noisy: anchors.shared_scale(points, idx_all, noisy, ks[-1], shared)  # noqa: E731
+        lead = lambda noisy: anchors.shared_scale(points, idx_all, noisy, ks[-1], shared, sat_out)  # noqa: E731
     chosen, coef, walked = _jet_ici(nb, idx_all, usable, ks, frames, sigma2_h, deg, report, lead=lead)
     ks_arr = np.asarray(ks, dtype=np.int64)
     fitted = chosen >= 0
@@ -335,7 +336,7 @@ def _jet_ici(nb, idx, usable, ks, frames, sigma2_h, deg, report, *, lead=None):
             c = again[start:start + _CHUNK]
             run(c, nb.rows(c, ks[-1])[0], ks)
     chosen[follow] = chosen[lead_of]
-    alone = follow[chosen[follow] < 0]  # their anchor's rule failed: their own
+    alone = follow[(chosen[follow] < 0) & noisy[follow]] if len(follow) else follow  # their anchor's failed: their own
     if len(alone):
         run(alone, nb.rows(alone, ks[-1])[0], ks)
     return out
@@ -363,7 +364,7 @@ def aligned_jets(jets, normals):
     return (*turned_over(nrm, k1, k2, e1, e2, flip), ok)
 
 
-def choose_model(points, normals, nb, has_normal, ks, report, *, shared=None):
+def choose_model(points, normals, nb, has_normal, ks, report, *, shared=None, sat_out=None):
     """k per point by :func:`choose_jets`, and where the cubic jet itself is the result.
 
     Returns ``(k, on_jet, quiet, jets, degree)``: jets (aligned with ``normals``, of ``degree`` per point, see
@@ -377,7 +378,7 @@ def choose_model(points, normals, nb, has_normal, ks, report, *, shared=None):
     if not jks or ks[-1] < NOISE_KS[-1]:
         none = np.zeros(n, dtype=bool)
         return np.full(n, ks[0], dtype=np.int64), none, none, None, np.full(n, -1)
-    k, jets, noise, degree = choose_jets(points, normals, nb, has_normal, jks, report, shared=shared)
+    k, jets, noise, degree = choose_jets(points, normals, nb, has_normal, jks, report, shared=shared, sat_out=sat_out)
     quiet = jets[-1] & (noise <= JET_QUIET)
     reach = nb.take(jks[0])[1][:, -1] * np.maximum(np.abs(jets[1]), np.abs(jets[2]))
     tilt = np.abs(np.einsum("ij,ij->i", jets[0], np.nan_to_num(normals)))  # cos to the initial normal (NaN: no jet)

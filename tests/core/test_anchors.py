@@ -125,16 +125,18 @@ def test_the_default_with_anchors_is_as_accurate_as_without(monkeypatch):
 def test_a_noisy_point_takes_the_scale_of_an_anchor_among_its_nearest(monkeypatch):
     """With noise the jet rule grows to the largest size nearly everywhere; only anchors (as
     for fits of that size) run it, the other noisy points take their nearest anchor's size
-    (core.anchors.shared_scale), at nearly no cost in accuracy against running it everywhere."""
+    (core.anchors.shared_scale), at nearly no cost in accuracy against running it everywhere;
+    so do the points that sit out the rule (outlier scores above JET_SCORE), never anchors."""
     s = shapes.torus(6000, seed=5)
     pts = noise.add_noise(s.points, 0.2, seed=6)
     seen, shared, choose = [], anchors.shared_scale, scale.choose_jets
     monkeypatch.setattr(anchors, "shared_scale", lambda *a: seen.append((a, shared(*a))) or seen[-1][1])
     monkeypatch.setattr(scale, "choose_jets", lambda *a, **kw: seen.append(choose(*a, **kw)) or seen[-1])
     res = core.estimate(pts)
-    ((_, near, noisy, k_top, _), (follow, lead)), (k, jets, *_) = seen
-    assert k_top == 320 and noisy.mean() > 0.95 and 0.6 < len(follow) / noisy.sum() < 0.8
+    ((_, near, noisy, k_top, _, sat_out), (follow, lead)), (k, jets, *_) = seen
+    assert k_top == 320 and (noisy | sat_out).mean() > 0.95 and 0.6 < len(follow) / noisy.sum() < 0.8
     assert noisy[lead].all() and not np.isin(lead, follow).any()  # anchors run the rule themselves
+    assert sat_out[follow].sum() > 100 and (k[sat_out] > 0).mean() > 0.95  # robust mode's suspects follow too
     assert (near[follow, 1:anchors.ANCHOR_REACH + 1] == lead[:, None]).any(axis=1).all()
     np.testing.assert_array_equal(k[follow], k[lead])
     assert not jets[-1][follow].any() and jets[-1][lead].mean() > 0.99  # no jet of the size at a follower
