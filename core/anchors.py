@@ -49,7 +49,7 @@ _SALT, RATIOS = 0x5A17C0DE, 8
 
 
 def shares_scale(plan) -> bool:
-    """Whether the scale rule of ``plan`` may walk on at anchors only (:func:`shared_scale`):
+    """Whether the scale rule of ``plan`` runs at anchors, read by the other noisy points (:func:`shared_scale`):
     k="auto" with candidates of at least 1.5 x ANCHOR_ROWS (:func:`assign`). Independent of
     the fit's options, so a cached choice of scale holds for any of them."""
     return bool(plan.auto and np.rint(plan.k_search / ANCHOR_ROWS) >= 2)

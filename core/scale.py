@@ -79,9 +79,10 @@ from .kernels import jets as jet_kernels, pool as pool_kernels
 from .kernels.frame import intrinsic_frames
 from .linalg import tangent_basis
 from .patch import Chunk
-from .tuning import (AUTO_DEGREE, AUTO_KS, DEGREE_PIVOT, FOLD_COS, FOLD_FRACTION, FOLD_MIN_BAD, FOLD_NOISE, GAMMA,
-                     ANCHOR_REACH, INITIAL_K0, INITIAL_SHARE, JET_DEGREE, JET_GAMMA, JET_DEGREES, JET_KS, JET_QUIET, JET_REACH, JET_SCORE,
-                     NEIGHBOUR_BUDGET, NOISE_KS, NOISE_POOL, RCOND, JET_RCOND, JET_THIN_TILT, JET_TILT, ROUNDING_NOISE, WIDEN_SHARE)
+from .tuning import (ANCHOR_REACH, AUTO_DEGREE, AUTO_KS, DEGREE_PIVOT, FOLD_COS, FOLD_FRACTION, FOLD_MIN_BAD, FOLD_NOISE,
+                     GAMMA, INITIAL_K0, INITIAL_SHARE, JET_DEGREE, JET_GAMMA, JET_DEGREES, JET_KS, JET_QUIET, JET_REACH,
+                     JET_SCORE, NEIGHBOUR_BUDGET, NOISE_KS, NOISE_POOL, RCOND, JET_RCOND, JET_THIN_TILT, JET_TILT,
+                     ROUNDING_NOISE, WIDEN_SHARE)
 
 __all__ = ["AUTO_DEGREE", "AUTO_KS", "GAMMA", "INITIAL_K0", "NEIGHBOUR_BUDGET", "JET_KS", "JET_DEGREE", "JET_SCORE",
            "candidates", "choose_k", "noise_ratio", "initial_k", "jet_candidates", "noise_variance", "choose_jets",
@@ -229,9 +230,9 @@ def _jet_rule():
     return kernels.ScaleRule(JET_DEGREE, JET_GAMMA, JET_RCOND, FOLD_FRACTION, FOLD_COS, FOLD_NOISE, FOLD_MIN_BAD, JET_RCOND)
 
 
-def choose_jets(points, normals, nb, has_normal, ks, report, *, shared=None, sat_out=None):
+def choose_jets(points, normals, nb, has_normal, ks, report, *, priority=None, sat_out=None):
     """Per point: the size of a cubic jet by ICI with an outside noise level (see module);
-    ``shared`` (N,), optional: the anchors' priorities (:func:`core.anchors.priority`) where
+    ``priority`` (N,), optional: the anchors' draw (:func:`core.anchors.priority`) where
     k="auto"'s wide fits are shared: a noisy point that follows an anchor takes its size
     (:func:`core.anchors.shared_scale`; its jet's frame is not valid), and so do the
     points ``sat_out`` (N,) bool, which run no jet of their own (robust mode's suspects).
@@ -255,7 +256,7 @@ def choose_jets(points, normals, nb, has_normal, ks, report, *, shared=None, sat
     sigma2, plain = _measured_noise(points, normals, idx_all, usable, s, t1, t2)
     with np.errstate(invalid="ignore", divide="ignore"):
         noise = np.where(s > 0, np.maximum(np.sqrt(sigma2), 0.5 * np.sqrt(plain)) / s, np.inf)
-    if shared is None and nb.width < ks[-1] and np.count_nonzero(noise[usable] > JET_QUIET) > WIDEN_SHARE * len(usable):
+    if priority is None and nb.width < ks[-1] and np.count_nonzero(noise[usable] > JET_QUIET) > WIDEN_SHARE * len(usable):
         idx_all, dist_all = nb.take(ks[-1])  # noisy: most jets grow past the columns held, search all at once
     report(0.2, "choosing k")
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -266,8 +267,8 @@ def choose_jets(points, normals, nb, has_normal, ks, report, *, shared=None, sat
 
     deg = _degree_rule(ks, noise <= JET_QUIET)
     lead = None
-    if shared is not None and idx_all.shape[1] > ANCHOR_REACH:  # its nearest, to find their anchors among
-        lead = lambda noisy: anchors.shared_scale(points, idx_all, noisy, ks[-1], shared, sat_out)  # noqa: E731
+    if priority is not None and idx_all.shape[1] > ANCHOR_REACH:  # its nearest, to find their anchors among
+        lead = lambda noisy: anchors.shared_scale(points, idx_all, noisy, ks[-1], priority, sat_out)  # noqa: E731
     chosen, coef, walked = _jet_ici(nb, idx_all, usable, ks, frames, sigma2_h, deg, report, lead=lead)
     ks_arr = np.asarray(ks, dtype=np.int64)
     fitted = chosen >= 0
@@ -320,8 +321,8 @@ def _jet_ici(nb, idx, usable, ks, frames, sigma2_h, deg, report, *, lead=None):
             dst[c] = src
 
     follow = lead_of = usable[:0]
+    noisy = np.zeros(n, dtype=bool)
     if lead is not None:
-        noisy = np.zeros(n, dtype=bool)
         noisy[usable[~deg.quiet[usable]]] = True
         follow, lead_of = lead(noisy)
         usable = np.setdiff1d(usable, follow, assume_unique=True)
@@ -336,7 +337,7 @@ def _jet_ici(nb, idx, usable, ks, frames, sigma2_h, deg, report, *, lead=None):
             c = again[start:start + _CHUNK]
             run(c, nb.rows(c, ks[-1])[0], ks)
     chosen[follow] = chosen[lead_of]
-    alone = follow[(chosen[follow] < 0) & noisy[follow]] if len(follow) else follow  # their anchor's failed: their own
+    alone = follow[(chosen[follow] < 0) & noisy[follow]]  # their anchor's rule failed: their own (not the sat-out)
     if len(alone):
         run(alone, nb.rows(alone, ks[-1])[0], ks)
     return out
@@ -364,7 +365,7 @@ def aligned_jets(jets, normals):
     return (*turned_over(nrm, k1, k2, e1, e2, flip), ok)
 
 
-def choose_model(points, normals, nb, has_normal, ks, report, *, shared=None, sat_out=None):
+def choose_model(points, normals, nb, has_normal, ks, report, *, priority=None, sat_out=None):
     """k per point by :func:`choose_jets`, and where the cubic jet itself is the result.
 
     Returns ``(k, on_jet, quiet, jets, degree)``: jets (aligned with ``normals``, of ``degree`` per point, see
@@ -378,7 +379,7 @@ def choose_model(points, normals, nb, has_normal, ks, report, *, shared=None, sa
     if not jks or ks[-1] < NOISE_KS[-1]:
         none = np.zeros(n, dtype=bool)
         return np.full(n, ks[0], dtype=np.int64), none, none, None, np.full(n, -1)
-    k, jets, noise, degree = choose_jets(points, normals, nb, has_normal, jks, report, shared=shared, sat_out=sat_out)
+    k, jets, noise, degree = choose_jets(points, normals, nb, has_normal, jks, report, priority=priority, sat_out=sat_out)
     quiet = jets[-1] & (noise <= JET_QUIET)
     reach = nb.take(jks[0])[1][:, -1] * np.maximum(np.abs(jets[1]), np.abs(jets[2]))
     tilt = np.abs(np.einsum("ij,ij->i", jets[0], np.nan_to_num(normals)))  # cos to the initial normal (NaN: no jet)

@@ -175,10 +175,10 @@ def choose_scale(pts, nrm, nb, inliers, plan, report, *, scores=None, k_initial=
     candidate >= ``k_initial``: a jet stopped early by a noise tail or an outlier is no
     reason to fit fewer points; a fold is (:func:`core.scale.fold_capped`: the far side
     of a thin part). Where the scale is shared (:func:`core.anchors.shares_scale`) the
-    suspects take their nearest anchor's size (it was the floor: k = 40 amid 320). Where NR's neighbours do not span the tangent plane, k="auto" takes
-    the smallest candidate whose neighbours do (:mod:`core.plane_spread`; the jets judge
-    their own lever arms, through the variance of their Hessian); ``Scale.spans`` tells
-    where none does."""
+    suspects take their nearest anchor's size (it was the floor: k = 40 amid 320). Where
+    NR's neighbours do not span the tangent plane, k="auto" takes the smallest candidate
+    whose neighbours do (:mod:`core.plane_spread`; the jets judge their own lever arms,
+    through the variance of their Hessian); ``Scale.spans`` tells where none does."""
     n = len(pts)
     if not plan.auto:
         kc, none = np.full(n, plan.k, dtype=np.int64), np.zeros(n, dtype=bool)
@@ -188,7 +188,7 @@ def choose_scale(pts, nrm, nb, inliers, plan, report, *, scores=None, k_initial=
     steady = inliers & ~suspect  # the jets are least squares: suspects sit out the choice of k
     masked = np.where(steady[:, None], nrm, np.nan)
     prio = anchors.priority(pts, nb.take_indices(anchors.RATIOS + 1)) if anchors.shares_scale(plan) else None
-    kc, on_jet, quiet, jets, degree = scale.choose_model(pts, masked, nb, steady, ks, report, shared=prio,
+    kc, on_jet, quiet, jets, degree = scale.choose_model(pts, masked, nb, steady, ks, report, priority=prio,
                                                          sat_out=inliers & suspect)
     floor = np.full(n, ks[min(int(np.searchsorted(ks, k_initial or 0)), len(ks) - 1)])  # a candidate >= k_initial
     lifted = np.flatnonzero(steady & ~quiet & (kc < floor))

@@ -192,8 +192,8 @@ IRLS_ITERATIONS = 2
 #: outliers flagged and (robust mode) left out, so one reweighting finds the same weights. 2026-12-04, k="auto", 6000
 #: points of torus, ellipsoid, saddle, chirp, sphere, cylinder, graded, range scan at noise 0.1/0.2/0.5 spacing and 0.2
 #: with 3 % outliers (32 cells): H, K, e1 errors 0.83-1.03x those with 2 (the gains at 0.5 spacing and with outliers);
-#: hold-out race unchanged (3/84 cells lost, geometric mean 0.456x), tuning race 0/72; noisy 100k torus (0.2 spacing) 13
-#: % less wall time. Zero reweightings: 30 % less time but 1.2-2.2x the errors with outliers.
+#: hold-out race unchanged (3/84 cells lost, geometric mean 0.456x), tuning race 0/72; noisy 100k torus (0.2 spacing)
+#: 13 % less wall time. Zero reweightings: 30 % less time but 1.2-2.2x the errors with outliers.
 IRLS_LATER = 1
 #: ... and the fewest rows they fit on (k="auto"): of k >= 2 x ROWS_LATER neighbours, every (k // ROWS_LATER)-th by
 #: distance (the same disc); a pass fits the previous fit's normals, each already a wide average, so half of them
