@@ -73,7 +73,7 @@ import warnings
 
 import numpy as np
 
-from . import anchors, kernels, plane_spread
+from . import anchors, kernels, neighbour_budget, plane_spread
 from .frame import jet_frames, turned_over
 from .kernels import jets as jet_kernels, pool as pool_kernels
 from .kernels.frame import intrinsic_frames
@@ -81,10 +81,10 @@ from .linalg import tangent_basis
 from .patch import Chunk
 from .tuning import (ANCHOR_REACH, AUTO_DEGREE, AUTO_KS, DEGREE_PIVOT, FOLD_COS, FOLD_FRACTION, FOLD_MIN_BAD, FOLD_NOISE,
                      GAMMA, INITIAL_K0, INITIAL_SHARE, JET_DEGREE, JET_GAMMA, JET_DEGREES, JET_KS, JET_QUIET, JET_REACH,
-                     JET_SCORE, NEIGHBOUR_BUDGET, NOISE_KS, NOISE_POOL, RCOND, JET_RCOND, JET_THIN_TILT, JET_TILT,
+                     JET_SCORE, NOISE_KS, NOISE_POOL, RCOND, JET_RCOND, JET_THIN_TILT, JET_TILT,
                      ROUNDING_NOISE, WIDEN_SHARE)
 
-__all__ = ["AUTO_DEGREE", "AUTO_KS", "GAMMA", "INITIAL_K0", "NEIGHBOUR_BUDGET", "JET_KS", "JET_DEGREE", "JET_SCORE",
+__all__ = ["AUTO_DEGREE", "AUTO_KS", "GAMMA", "INITIAL_K0", "JET_KS", "JET_DEGREE", "JET_SCORE",
            "candidates", "choose_k", "noise_ratio", "initial_k", "jet_candidates", "noise_variance", "choose_jets",
            "aligned_jets", "choose_model"]
 
@@ -92,10 +92,8 @@ _CHUNK = 32_768
 
 
 def candidates(n_points: int) -> tuple[int, ...]:
-    """The candidate k that a cloud of ``n_points`` allows (and the memory budget)."""
-    cap = min(n_points, max(AUTO_KS[0], NEIGHBOUR_BUDGET // max(n_points, 1)))
-    ks = tuple(k for k in AUTO_KS if k <= cap)
-    return ks or (n_points,)
+    """The candidate k that a cloud of ``n_points`` allows (and the memory budget, :mod:`core.neighbour_budget`)."""
+    return neighbour_budget.affordable(AUTO_KS, n_points, AUTO_KS[0]) or (n_points,)
 
 
 def choose_k(points, normals, nb, has_normal, ks, degree, report):
@@ -163,16 +161,17 @@ def noise_ratio(height, h) -> float:
 
 
 def initial_k(noise: float, k_min: int, k_max: int, n_points: int) -> int:
-    """Initial normals' neighbours at a ``noise_ratio`` (tuning.INITIAL_K0), at most n_points / INITIAL_SHARE."""
+    """Initial normals' neighbours at a ``noise_ratio`` (tuning.INITIAL_K0), at most n_points / INITIAL_SHARE
+    and what every point may hold (:func:`core.neighbour_budget.whole_cap`: the initial normals fit at every point)."""
     k = int(round(INITIAL_K0 * np.sqrt(max(noise, 0.0))))
-    return int(min(max(k, k_min), max(min(k_max, n_points // INITIAL_SHARE), k_min)))
+    k_max = min(k_max, n_points // INITIAL_SHARE, neighbour_budget.whole_cap(n_points, k_min, k_max))
+    return int(min(max(k, k_min), max(k_max, k_min)))
 
 
 # ----------------------------------------------------------------------------- jets (issue 15)
 def jet_candidates(n_points: int) -> tuple[int, ...]:
     """The sizes of :data:`JET_KS` that a cloud of ``n_points`` allows within the budget."""
-    cap = min(n_points, max(JET_KS[1], NEIGHBOUR_BUDGET // max(n_points, 1)))
-    return tuple(k for k in JET_KS if k <= cap)
+    return neighbour_budget.affordable(JET_KS, n_points, JET_KS[1])
 
 
 def noise_variance(rss_a, rss_b, s, idx, ka=NOISE_KS[0], kb=NOISE_KS[1]):
@@ -256,7 +255,8 @@ def choose_jets(points, normals, nb, has_normal, ks, report, *, priority=None, s
     sigma2, plain = _measured_noise(points, normals, idx_all, usable, s, t1, t2)
     with np.errstate(invalid="ignore", divide="ignore"):
         noise = np.where(s > 0, np.maximum(np.sqrt(sigma2), 0.5 * np.sqrt(plain)) / s, np.inf)
-    if priority is None and nb.width < ks[-1] and np.count_nonzero(noise[usable] > JET_QUIET) > WIDEN_SHARE * len(usable):
+    if (priority is None and nb.width < ks[-1] <= neighbour_budget.whole_cap(n, ks[0])
+            and np.count_nonzero(noise[usable] > JET_QUIET) > WIDEN_SHARE * len(usable)):
         idx_all, dist_all = nb.take(ks[-1])  # noisy: most jets grow past the columns held, search all at once
     report(0.2, "choosing k")
     with np.errstate(invalid="ignore", divide="ignore"):

@@ -155,8 +155,11 @@ FOLD_FLAT = 0.45
 #: 48), then checked on the hold-out: 11 -> 6 of 84 lost, worst 1.46x -> 1.37x, 0.500 -> 0.460. It costs H and K up to
 #: ~10 % on the fast-curving chirp and saddle, and a noisy 100k cloud ~1.3x the CPU time.
 AUTO_KS = (20, 28, 40, 56, 80, 113, 160, 226, 320)
-#: the candidates stop where N x k would exceed this many cached neighbours (~0.8 GB)
-NEIGHBOUR_BUDGET = 64_000_000
+#: neighbour entries (index + distance, 12 bytes) k="auto"'s lists may hold (~0.96 GB; core.neighbour_budget): the whole
+#: graph widens to at most this / N columns, and the candidates stop where the lists of their fits would exceed it
+#: (the held columns, and the wider rows as indices at the points that fit on them). 80M (it was 64M, every row whole)
+#: lets a 1M-point cloud's noisy fits reach 320 at anchors (66.7M; 113 at every point: 77.7M)
+NEIGHBOUR_BUDGET = 80_000_000
 #: degree of the normal fit used by k="auto" (a cubic normal field: bias O(h^3))
 AUTO_DEGREE = 3
 #: width of the confidence intervals in standard deviations. The least-squares variance treats the neighbours' normals

@@ -21,8 +21,12 @@ import numpy as np
 
 from ._progress import Progress
 from .kernels.kdtree import query_rows
+from .neighbour_budget import whole_cap
 from .neighbours import _CHUNK, Neighbours, _query_tree, _search, _self_first
 from .tuning import SEARCH_RADIUS_NODE, SEARCH_REACH
+
+#: (row, neighbour) entries searched at a time for :func:`rows_at_least` (their distances: 32 MB)
+_SEARCHED = 1 << 22
 
 __all__ = ["WidenableNeighbours", "LazyNeighbours", "rows_at_least", "held_h", "search_in_spatial_order"]
 
@@ -260,7 +264,7 @@ def rows_at_least(nb, kc, fits=None):
     wide = np.flatnonzero(kc > nb.width) if k > nb.width else np.empty(0, dtype=np.int64)
     if fits is not None:
         wide = wide[fits[wide]]
-    if 2 * len(wide) > n:
+    if 2 * len(wide) > n and k <= whole_cap(n, nb.width):
         nb.widen(k)
         wide = wide[:0]
     if k <= nb.width:
@@ -268,9 +272,20 @@ def rows_at_least(nb, kc, fits=None):
         return idx, dist[np.arange(n), kc - 1]
     idx = nb.take(nb.width)[0]
     h = held_h(nb, kc)
-    w_idx, w_dist = nb.rows(wide, k)
-    h[wide] = w_dist[np.arange(len(wide)), kc[wide] - 1]
-    return _Rows(idx, wide, w_idx, kc, nb), h
+    return _Rows(idx, wide, _wide_rows(nb, wide, k, kc, h), kc, nb), h
+
+
+def _wide_rows(nb, centres, k, kc, h):
+    """The ``k`` nearest (indices) of ``centres`` (M,), searched in chunks; writes the
+    distance to each one's ``kc``-th into ``h`` (the distances are not kept: at 1M points
+    the anchors' 320 were 640 MB)."""
+    w_idx = np.empty((len(centres), k), dtype=nb.take(1)[0].dtype)
+    step = max(1, _SEARCHED // k)
+    for start in range(0, len(centres), step):
+        c = centres[start:start + step]
+        w_idx[start:start + len(c)], dist = nb.rows(c, k)
+        h[c] = dist[np.arange(len(c)), kc[c] - 1]
+    return w_idx
 
 
 def held_h(nb, kc):
@@ -296,8 +311,7 @@ class _Rows:
         c = c[(self.kc[c] > self.held.shape[1]) & ~np.isin(c, self.wide)]
         if not len(c):
             return
-        w_idx, w_dist = self.nb.rows(c, self.w_idx.shape[1])
-        h[c] = w_dist[np.arange(len(c)), self.kc[c] - 1]
+        w_idx = _wide_rows(self.nb, c, self.w_idx.shape[1], self.kc, h)
         wide = np.concatenate([self.wide, c])
         order = np.argsort(wide, kind="stable")
         self.wide, self.w_idx = wide[order], np.concatenate([self.w_idx, w_idx])[order]

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import core
-from core import kernels, metrics, noise, scale, shapes, tuning
+from core import kernels, metrics, neighbour_budget, noise, scale, shapes, tuning
 from core.kernels import jets
 from core.linalg import tangent_basis
 from core.neighbours import build_neighbours
@@ -73,7 +73,8 @@ def test_noise_free_jets_as_accurate_as_the_best_fixed_jet():
 
 
 def test_candidates_respect_the_budget():
-    assert scale.jet_candidates(1_000_000)[-1] <= scale.NEIGHBOUR_BUDGET // 1_000_000
+    top = scale.jet_candidates(1_000_000)[-1]
+    assert 1_000_000 * neighbour_budget.entries(top) <= tuning.NEIGHBOUR_BUDGET
     assert scale.jet_candidates(5000) == scale.JET_KS
     assert scale.jet_candidates(100)[-1] <= 100
 

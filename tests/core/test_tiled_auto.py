@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import core
-from core import anchors, noise, passes, scale, shapes, shapes_thin
+from core import anchors, neighbour_budget, noise, passes, shapes, shapes_thin
 from core.io import read_cloud
 from core.tiled import auto, estimate_tiled, halo, task, wholecloud
 
@@ -34,7 +34,7 @@ def _same(path, mem):
 def small_candidates(monkeypatch):
     """Candidates (20, 28) and jets (15, 20, 28) for 4000-8000 points, as a cloud of 2 million
     gets them (core.scale.candidates): a short chain, so 16 tiles need only small halos."""
-    monkeypatch.setattr(scale, "NEIGHBOUR_BUDGET", 240_000)
+    monkeypatch.setattr(neighbour_budget, "NEIGHBOUR_BUDGET", 240_000)
 
 
 def _noisy_torus(n=8000):
@@ -186,7 +186,7 @@ def test_a_work_directory_of_other_auto_rules_is_not_resumed(monkeypatch):
 
     spec = task.TileSpec(k="auto", method="nr", passes=4, orientation="propagate", n_points=8000)
     before = run._auto_rules(spec)
-    monkeypatch.setattr(scale, "NEIGHBOUR_BUDGET", 240_000)
+    monkeypatch.setattr(neighbour_budget, "NEIGHBOUR_BUDGET", 240_000)
     assert run._auto_rules(spec) != before
     assert run._auto_rules(task.TileSpec(k=15, method="nr", passes=1, orientation="propagate")) is None
 
