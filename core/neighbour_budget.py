@@ -8,9 +8,10 @@ indices only (4 bytes, a third of an entry), and only at the points that fit on 
 (:func:`core.anchors.assign`: 1 in round(k / ANCHOR_ROWS) points, from 1.5 x ANCHOR_ROWS)
 about ANCHOR_ROWS per point whatever k, else every point's k. So a size is a
 candidate if every point may hold it whole (:func:`whole_cap`, the rule before the
-anchors) or if the points' lists at that size fit the budget (:func:`affordable`): a noisy
-cloud of 1M points reaches 320 neighbours (56 before: its mean |H| error 0.21 against 0.022,
-README "Wide fits at sparse anchors"). The whole graph is widened past the held columns only
+anchors) or if the points' lists at that size fit the budget on the way to a size whose
+fits are shared (:func:`affordable`): a noisy cloud of 1M points reaches 320 neighbours
+(56 before: its mean |H| error 0.21 against 0.022, README "Wide fits at sparse anchors");
+from ~1.03M points the bridge (113 at every point) no longer fits and the sizes end at 56. The whole graph is widened past the held columns only
 within :func:`whole_cap` (:func:`core.wide_neighbours.rows_at_least`, the initial normals).
 """
 
@@ -48,10 +49,13 @@ def _per_anchor(k: int) -> float:
 
 def affordable(sizes, n_points: int, floor: int) -> tuple[int, ...]:
     """The first of ``sizes`` (ascending) up to ``n_points`` that a cloud of ``n_points`` may
-    consider: those within :func:`whole_cap`, then while ``n_points x entries(k)`` fits the budget."""
+    consider: those within :func:`whole_cap`, then while ``n_points x entries(k)`` fits the
+    budget, if they reach a size shared at anchors (else they end at the whole cap)."""
     cap, kept = whole_cap(n_points, floor), []
     for k in sizes:
         if k > n_points or (k > cap and n_points * entries(k) > NEIGHBOUR_BUDGET):
             break
         kept.append(k)
+    while kept and kept[-1] > cap and _per_anchor(kept[-1]) < 2:  # past the whole graph only on the way to
+        kept.pop()  # shared sizes: alone, every point would fit on its index rows (1.1M at 0.5 spacing: 50 -> 71 s)
     return tuple(kept)

@@ -16,9 +16,13 @@ def test_candidates_fit_the_budget(n):
     whole = neighbour_budget.whole_cap(n, tuning.AUTO_KS[0])
     for k in ks:
         assert k <= whole or n * neighbour_budget.entries(k) <= tuning.NEIGHBOUR_BUDGET
-    if len(ks) < len(tuning.AUTO_KS):  # stopped by the budget: the next size does not fit it
-        nxt = tuning.AUTO_KS[len(ks)]
-        assert nxt > whole and n * neighbour_budget.entries(nxt) > tuning.NEIGHBOUR_BUDGET
+    if ks[-1] > whole:  # past the whole graph only to sizes whose fits are shared at anchors
+        assert np.rint(ks[-1] / tuning.ANCHOR_ROWS) >= 2
+    if len(ks) < len(tuning.AUTO_KS):  # stopped by the budget: the next size does not fit it, or
+        nxt = tuning.AUTO_KS[len(ks)]  # it and those after it that fit are every point's own
+        assert nxt > whole
+        fit = [k for k in tuning.AUTO_KS[len(ks):] if n * neighbour_budget.entries(k) <= tuning.NEIGHBOUR_BUDGET]
+        assert all(np.rint(k / tuning.ANCHOR_ROWS) < 2 for k in fit[:1]) or not fit
 
 
 def test_a_million_points_reach_the_shared_sizes():
@@ -28,6 +32,7 @@ def test_a_million_points_reach_the_shared_sizes():
     assert scale.candidates(1_000_000)[-1] == scale.jet_candidates(1_000_000)[-1] == 320
     assert anchors.shares_scale(_Plan(auto=True, k_search=320))
     assert scale.candidates(5_000_000) == (20,)  # the floor: a whole graph of 20
+    assert scale.candidates(1_100_000)[-1] == 56  # 80 fits the budget, but as every point's own index rows
     per_point = [neighbour_budget.entries(k) for k in (160, 226, 320)]
     assert max(per_point) < 40 + tuning.ANCHOR_ROWS / 2  # the held columns and a third of ~ANCHOR_ROWS rows
 
