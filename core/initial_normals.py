@@ -10,7 +10,6 @@ from typing import NamedTuple
 import numpy as np
 
 from . import anchors, kernels, plane_spread, scale, tuning
-from .neighbour_budget import whole_cap
 from .normals import jet_normals, pca_normals
 
 
@@ -62,7 +61,7 @@ def _initial_normals(pts, nb, plan, outlier, report) -> tuple[Initial, np.ndarra
     k_init = scale.initial_k(noise, plan.k_initial, plan.k_search, plan.n_points)
     if k_init > nb.width:  # noise this large grows most jets to k_search too: search them all once, unless
         del idx_p, dist_p  # only anchors walk on (core.anchors.shares_scale; views of the narrow graph would keep it alive)
-        nb.widen(k_init if anchors.shares_scale(plan) else min(plan.k_search, whole_cap(plan.n_points, k_init)))
+        nb.widen(k_init if anchors.shares_scale(plan) else plan.k_search)
         idx_p, dist_p = nb.take(plan.k_initial)
     small, height = _small_normals(pts, nrm, ok, idx_p, dist_p, jet, plan)
     if k_init == plan.k_initial and not (plan.robust and outlier.any()):

@@ -11,8 +11,9 @@ candidate if every point may hold it whole (:func:`whole_cap`, the rule before t
 anchors) or if the points' lists at that size fit the budget on the way to a size whose
 fits are shared (:func:`affordable`): a noisy cloud of 1M points reaches 320 neighbours
 (56 before: its mean |H| error 0.21 against 0.022, README "Wide fits at sparse anchors");
-from ~1.03M points the bridge (113 at every point) no longer fits and the sizes end at 56. The whole graph is widened past the held columns only
-within :func:`whole_cap` (:func:`core.wide_neighbours.rows_at_least`, the initial normals).
+from ~1.03M points the bridge (113 at every point) no longer fits and the sizes end at 56.
+The whole graph is widened past the held columns only within :func:`whole_cap`
+(:func:`core.wide_neighbours.rows_at_least`, the initial normals).
 """
 
 from __future__ import annotations

@@ -9,8 +9,9 @@ reference and the end-to-end estimate are each timed twice and the faster run is
 on 100k points < 0.5 s; k="auto" <= 3x NR at k = 15; the ratio to the same fit (cubic,
 robust, the passes auto kept) at the largest candidate k is printed too, the cost of
 *choosing* k and passes (where every point may hold that k: :func:`core.neighbour_budget.whole_cap`).
-Each run's peak is above the memory the process holds when it starts (freed heap returned first). ``--noise`` adds isotropic Gaussian noise of that fraction of the
-mean spacing (:func:`core.noise.add_noise`) to the torus: with noise k="auto" fits far wider.
+Each run's peak is above the memory the process holds when it starts (freed heap returned
+first). ``--noise`` adds isotropic Gaussian noise of that fraction of the mean spacing
+(:func:`core.noise.add_noise`) to the torus: with noise k="auto" fits far wider.
 """
 
 from __future__ import annotations
