@@ -48,11 +48,17 @@ from .tuning import ANCHOR_BLEND, ANCHOR_REACH, ANCHOR_ROWS
 _SALT, RATIOS = 0x5A17C0DE, 8
 
 
+def per_anchor(k):
+    """Points per anchor at fits of ``k`` neighbours (scalar or array): round(k / ANCHOR_ROWS),
+    the anchor and the m = that - 1 nearest it beats (:func:`assign`); shared from 2."""
+    return np.rint(np.asarray(k) / ANCHOR_ROWS)
+
+
 def shares_scale(plan) -> bool:
     """Whether the scale rule of ``plan`` runs at anchors, read by the other noisy points (:func:`shared_scale`):
-    k="auto" with candidates of at least 1.5 x ANCHOR_ROWS (:func:`assign`). Independent of
+    k="auto" with candidates of at least 1.5 x ANCHOR_ROWS (:func:`per_anchor` >= 2). Independent of
     the fit's options, so a cached choice of scale holds for any of them."""
-    return bool(plan.auto and np.rint(plan.k_search / ANCHOR_ROWS) >= 2)
+    return bool(plan.auto and per_anchor(plan.k_search) >= 2)
 
 
 def in_use(plan) -> bool:
@@ -72,7 +78,7 @@ def assign(pts, near, kc, eligible, prio=None, lead=None) -> np.ndarray | None:
     (about 1 in m + 1 points); ``prio``: :func:`priority`'s answer, if computed already;
     ``lead`` (N,) bool, optional: the eligible points that may be anchors (the others only follow)."""
     kc = np.asarray(kc)
-    m = np.clip(np.rint(kc / ANCHOR_ROWS).astype(np.int64) - 1, 0, ANCHOR_REACH)
+    m = np.clip(per_anchor(kc).astype(np.int64) - 1, 0, ANCHOR_REACH)
     prio = priority(pts, near) if prio is None else prio
     rival = np.where(np.arange(1, m.max() + 1) <= m[:, None], prio[np.asarray(near[:, 1:m.max() + 1])], 0)
     anchors = (eligible if lead is None else eligible & lead) & (prio > rival.max(axis=1, initial=0))

@@ -5,7 +5,7 @@ bytes); :data:`core.tuning.NEIGHBOUR_BUDGET` counts such entries (~0.8 GB). k="a
 holds :data:`core.tuning.SEARCH_WIDTH` columns of every row; wider rows are kept as
 indices only (4 bytes, a third of an entry), and only at the points that fit on them
 (:func:`core.wide_neighbours.rows_at_least`): for a size shared at anchors
-(:func:`core.anchors.assign`: 1 in round(k / ANCHOR_ROWS) points, from 1.5 x ANCHOR_ROWS)
+(:func:`core.anchors.per_anchor`: 1 in round(k / ANCHOR_ROWS) points, from 1.5 x ANCHOR_ROWS)
 about ANCHOR_ROWS per point whatever k, else every point's k. So a size is a
 candidate if every point may hold it whole (:func:`whole_cap`, the rule before the
 anchors) or if the points' lists at that size fit the budget on the way to a size whose
@@ -18,9 +18,8 @@ The whole graph is widened past the held columns only within :func:`whole_cap`
 
 from __future__ import annotations
 
-import numpy as np
-
-from .tuning import ANCHOR_ROWS, NEIGHBOUR_BUDGET, SEARCH_WIDTH
+from .anchors import per_anchor
+from .tuning import NEIGHBOUR_BUDGET, SEARCH_WIDTH
 
 #: an index-only row entry against a whole one (int32 against int32 + float64)
 INDEX_SHARE = 4 / 12
@@ -30,7 +29,7 @@ def whole_cap(n_points: int, floor: int, k_top: int = 0) -> int:
     """The most neighbours every point of a cloud of ``n_points`` may hold (at least ``floor``);
     where fits of up to ``k_top`` are shared at anchors, less the anchors' rows held beside
     (a 1M-point cloud's initial normals: 80 -> 53 whole columns)."""
-    beside = entries(k_top) - SEARCH_WIDTH if _per_anchor(k_top) >= 2 else 0.0
+    beside = entries(k_top) - SEARCH_WIDTH if per_anchor(k_top) >= 2 else 0.0
     return min(n_points, max(floor, int(NEIGHBOUR_BUDGET / max(n_points, 1) - beside)))
 
 
@@ -38,14 +37,9 @@ def entries(k: int) -> float:
     """Whole-entry equivalents per point that fits of up to ``k`` neighbours hold (module)."""
     if k <= SEARCH_WIDTH:
         return float(k)
-    per = _per_anchor(k)
+    per = per_anchor(k)
     rows = k / per if per >= 2 else k  # the anchors' rows spread over the points, or every point's
     return SEARCH_WIDTH + INDEX_SHARE * rows
-
-
-def _per_anchor(k: int) -> float:
-    """Points per anchor at fits of ``k`` (:func:`core.anchors.assign`; below 2: none)."""
-    return float(np.rint(k / ANCHOR_ROWS))
 
 
 def affordable(sizes, n_points: int, floor: int) -> tuple[int, ...]:
@@ -57,6 +51,6 @@ def affordable(sizes, n_points: int, floor: int) -> tuple[int, ...]:
         if k > n_points or (k > cap and n_points * entries(k) > NEIGHBOUR_BUDGET):
             break
         kept.append(k)
-    while kept and kept[-1] > cap and _per_anchor(kept[-1]) < 2:  # past the whole graph only on the way to
+    while kept and kept[-1] > cap and per_anchor(kept[-1]) < 2:  # past the whole graph only on the way to
         kept.pop()  # shared sizes: alone, every point would fit on its index rows (1.1M at 0.5 spacing: 50 -> 71 s)
     return tuple(kept)
