@@ -83,7 +83,7 @@ def fit_scratch(kmax):
                    np.zeros((MAX_TERMS, MAX_TERMS)), np.zeros(5))
 
 
-@njit(**OPTS)
+@njit(**OPTS, inline="always")
 def monomials(u, v, n, degree, R):
     """R[:, j] = the monomials (:func:`poly_row`) of neighbour j < n, once per point:
     every reweighting and every nested size reuses them. Row by row (each monomial is the
@@ -151,16 +151,25 @@ def _accumulate_linear(R, X, Y, wt, j0, j1, vec, G, acc):
     acc[2] += yy
 
 
-@njit(**OPTS, fastmath=True)
+@njit(**OPTS, inline="always")
 def accumulate(R, X, Y, wt, j0, j1, degree, vec, G, acc):
     """Add neighbours j0..j1-1 to the weighted normal equations of X and Y on the
     monomials R (G lower triangle, right-hand sides vec[BX], vec[BY]) and to acc =
     (sum w, sum w X^2, sum w Y^2). Sums run over neighbours innermost (vectorised), once
     per distinct moment of G (the other entries are copies); degree 1 sums everything in
-    one pass (its few sums over short neighbourhoods gain nothing from vectors)."""
+    one pass (its few sums over short neighbourhoods gain nothing from vectors). Inlined
+    into the caller, so a centre pays one call, not two (a call that passes arrays costs
+    about as much as the linear sums of 15 neighbours); the sums themselves keep their
+    own fastmath, which inlining would drop."""
     if degree == 1:
         _accumulate_linear(R, X, Y, wt, j0, j1, vec, G, acc)
-        return
+    else:
+        _accumulate_moments(R, X, Y, wt, j0, j1, degree, vec, G, acc)
+
+
+@njit(**OPTS, fastmath=True)
+def _accumulate_moments(R, X, Y, wt, j0, j1, degree, vec, G, acc):
+    """:func:`accumulate` for degree 2 or 3."""
     p = n_terms(degree)
     for a in range(p):
         sx = 0.0
@@ -193,11 +202,16 @@ def accumulate(R, X, Y, wt, j0, j1, degree, vec, G, acc):
 
 @njit(**OPTS, inline="always")
 def reset(degree, vec, G, acc):
+    """Zero the sums of :func:`accumulate` for a fit of ``degree`` (loops: slices of these
+    small arrays cost more than zeroing them)."""
     p = n_terms(degree)
-    G[:p, :p] = 0.0
-    vec[BX, :p] = 0.0
-    vec[BY, :p] = 0.0
-    acc[:] = 0.0
+    for a in range(p):
+        for c in range(p):
+            G[a, c] = 0.0
+        vec[BX, a] = 0.0
+        vec[BY, a] = 0.0
+    for a in range(len(acc)):
+        acc[a] = 0.0
 
 
 @njit(**OPTS, inline="always")
@@ -240,7 +254,7 @@ def solve_linear(rcond, vec, G, acc):
     return True
 
 
-@njit(**OPTS)
+@njit(**OPTS, inline="always")
 def solve(degree, rcond, vec, G, L, acc):
     """Least squares of X and Y on the monomials (eqs. 25–26 for degree 1).
 
@@ -300,7 +314,7 @@ def solve_determined(degree, rcond, pivot, vec, G, L, acc, columns):
     return 0
 
 
-@njit(**OPTS)
+@njit(**OPTS, inline="always")
 def slope_variances(degree, n, vec, acc):
     """Least-squares variances of W11, (W12 + W21)/2 and W22 from the residuals."""
     p = n_terms(degree)
