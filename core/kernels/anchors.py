@@ -9,7 +9,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
-from ._base import OPTS
+from ._base import BLOCK, OPTS
 from .frame import _shape_operator, tangent_basis_of
 
 
@@ -80,11 +80,14 @@ def _offsets(pts, p, nrm, picked, x, y, d2):
 
 
 @njit(**OPTS)
-def _weights(pts, p, nrm, picked, w, floor):
+def _weights(pts, p, nrm, picked, w, floor, xyd):
     """w[0:B] = the affine weights of :func:`core.anchor_blend.affine_weights` for point p
-    (none below ``-floor``, else inverse squared distances)."""
+    (none below ``-floor``, else inverse squared distances); ``xyd`` (3, B) scratch."""
     B = len(picked)
-    x, y, d2 = np.zeros(B), np.zeros(B), np.zeros(B)
+    x, y, d2 = xyd[0], xyd[1], xyd[2]
+    x[:] = 0.0
+    y[:] = 0.0
+    d2[:] = 0.0
     count, s = _offsets(pts, p, nrm, picked, x, y, d2)
     m00 = m01 = m02 = m11 = m12 = m22 = 0.0
     for b in range(B):
@@ -108,11 +111,12 @@ def _weights(pts, p, nrm, picked, w, floor):
 
 
 @njit(**OPTS)
-def _accumulate(pts, p, picked, w, fits, project, max_tilt2, N, S):
+def _accumulate(pts, p, picked, w, fits, project, max_tilt2, N, S, vecs):
     """N += w_b n_b, S += w_b (the shape operator in world coordinates) over the anchors
     ``picked`` of point p, each turned to the first one's side; False if a fit read is not
-    usable there."""
-    val, n, u1, u2, first = np.empty(6), np.empty(3), np.empty(3), np.empty(3), np.zeros(3)
+    usable there. ``vecs`` (5, 6) scratch."""
+    val, n, u1, u2, first = vecs[0], vecs[1, :3], vecs[2, :3], vecs[3, :3], vecs[4, :3]
+    first[:] = 0.0
     for b in range(len(picked)):
         a = picked[b]
         if a < 0:
@@ -121,7 +125,7 @@ def _accumulate(pts, p, picked, w, fits, project, max_tilt2, N, S):
         _read(pts, p, a, q, fits.coef, fits.frame, fits.h, project, val)
         X, Y = val[0], val[1]
         tilt2 = X * X + Y * Y
-        if not (fits.ok[q] and np.isfinite(val).all() and tilt2 < max_tilt2):
+        if not (fits.ok[q] and _finite(val) and tilt2 < max_tilt2):
             return False
         Z0 = math.sqrt(1.0 - tilt2)
         s11, s12, s22, b1, b2 = _shape_operator(X, Y, Z0, val[2], val[3], val[4], val[5])
@@ -137,6 +141,15 @@ def _accumulate(pts, p, picked, w, fits, project, max_tilt2, N, S):
             N[i] += wb * n[i]
             for j in range(3):
                 S[i, j] += wb * (s11 * u1[i] * u1[j] + s12 * (u1[i] * u2[j] + u2[i] * u1[j]) + s22 * u2[i] * u2[j])
+    return True
+
+
+@njit(**OPTS, inline="always")
+def _finite(a):
+    """Whether every value of ``a`` is finite (np.isfinite(a).all() allocates)."""
+    for i in range(len(a)):
+        if not math.isfinite(a[i]):
+            return False
     return True
 
 
@@ -174,12 +187,19 @@ def blend(pts, nrm, points, picked, fits, project, max_tilt2, floor, out, good):
     operator in world coordinates (the augmented Darboux frame of :mod:`core.kernels.frame`),
     averaged with the affine weights (:func:`_weights`) and diagonalised in the averaged
     normal's tangent plane, into the :class:`Blended` ``out``; ``good[m]``: every anchor read
-    usable (written here: numba drops a parallel loop's own writes to a record's arrays)."""
-    for m in prange(len(points)):
-        p = points[m]
-        w, N, S = np.empty(picked.shape[1]), np.zeros(3), np.zeros((3, 3))
-        _weights(pts, p, nrm, picked[m], w, floor)
-        fine = _accumulate(pts, p, picked[m], w, fits, project, max_tilt2, N, S)
-        if fine:
-            fine = _principal(N, S, out, m)
-        good[m] = fine
+    usable (written here: numba drops a parallel loop's own writes to a record's arrays).
+    Scratch arrays are allocated once per block of followers: per follower, their eleven
+    allocations cost more than the arithmetic."""
+    n_blocks = (len(points) + BLOCK - 1) // BLOCK
+    for blk in prange(n_blocks):
+        B = picked.shape[1]
+        w, N, S, xyd, vecs = np.empty(B), np.empty(3), np.empty((3, 3)), np.empty((3, B)), np.empty((5, 6))
+        for m in range(blk * BLOCK, min(len(points), (blk + 1) * BLOCK)):
+            p = points[m]
+            N[:] = 0.0
+            S[:, :] = 0.0
+            _weights(pts, p, nrm, picked[m], w, floor, xyd)
+            fine = _accumulate(pts, p, picked[m], w, fits, project, max_tilt2, N, S, vecs)
+            if fine:
+                fine = _principal(N, S, out, m)
+            good[m] = fine
