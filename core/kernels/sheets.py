@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from ._base import OPTS
+from ._base import BLOCK, OPTS
 
 
 @njit(**OPTS, inline="always")
@@ -63,20 +63,30 @@ def own_sheet_first(points, normals, ok, scales, rows, centres, rule, perm):
     """``perm[r]`` (int64): the columns of ``rows[r]`` (the neighbour row of point
     ``centres[r]``) in the order that puts its own sheet first (the point itself, then the
     neighbours not on a sheet of :func:`_sides`, then those that are, each in the row's
-    order)."""
+    order). The flags are scratch of each block of rows (an allocation per row cost more
+    than the tests)."""
     w = rows.shape[1]
-    for r in prange(len(centres)):
-        i = centres[r]
-        up, down = _sides(points, normals, ok, scales, rows, r, i, rule)
+    for blk in prange((len(centres) + BLOCK - 1) // BLOCK):
         other = np.zeros(w, dtype=np.bool_)
-        for m in range(1, w):
-            s = _side(points, normals, ok, scales, i, rows[r, m], rule)
-            other[m] = (s > 0 and up) or (s < 0 and down)
-        front, back = 0, w - 1 - np.count_nonzero(other)  # own sheet from the start, the others after it
-        for m in range(w):
-            if other[m]:
-                back += 1
-                perm[r, back] = m
-            else:
-                perm[r, front] = m
-                front += 1
+        for r in range(blk * BLOCK, min(len(centres), (blk + 1) * BLOCK)):
+            _sheet_order(points, normals, ok, scales, rows, centres[r], r, rule, other, perm)
+
+
+@njit(**OPTS)
+def _sheet_order(points, normals, ok, scales, rows, i, r, rule, other, perm):
+    """:func:`own_sheet_first` at row r (point i), with ``other`` (w,) scratch."""
+    w = rows.shape[1]
+    up, down = _sides(points, normals, ok, scales, rows, r, i, rule)
+    n_other = 0
+    for m in range(1, w):
+        s = _side(points, normals, ok, scales, i, rows[r, m], rule)
+        other[m] = (s > 0 and up) or (s < 0 and down)
+        n_other += other[m]
+    front, back = 0, w - 1 - n_other  # own sheet from the start, the others after it
+    for m in range(w):
+        if other[m]:
+            back += 1
+            perm[r, back] = m
+        else:
+            perm[r, front] = m
+            front += 1
