@@ -7,7 +7,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from ._base import OPTS, theta
+from ._base import BLOCK, OPTS, theta
 from .algebra import add_outer, chol_solve, cholesky, row_scatter, smallest_eigvec_sym3, tangent_pair
 
 
@@ -100,51 +100,60 @@ def curve_shares(points, rows, flat, curve):
     v: about noise / width for points along one curve, near 1 for a surface's. NaN where
     degenerate or the quartic is not determined."""
     k = rows.shape[1]
-    for r in prange(rows.shape[0]):
-        cx, cy, cz, c00, c01, c02, c11, c12, c22 = row_scatter(points, rows, r, 0, k)
-        l0, l1, _, nx, ny, nz = smallest_eigvec_sym3(c00, c01, c02, c11, c12, c22)
-        flat[r] = math.sqrt(max(l0, 0.0) / l1) if l1 > 0.0 else math.nan
-        curve[r] = math.nan
-        if not math.isfinite(nx):
-            continue
-        ax, ay, az, bx, by, bz = tangent_pair(nx, ny, nz)  # of the plane normal to n
-        saa = ax * (c00 * ax + c01 * ay + c02 * az) + ay * (c01 * ax + c11 * ay + c12 * az) + az * (c02 * ax + c12 * ay + c22 * az)
-        sbb = bx * (c00 * bx + c01 * by + c02 * bz) + by * (c01 * bx + c11 * by + c12 * bz) + bz * (c02 * bx + c12 * by + c22 * bz)
-        sab = ax * (c00 * bx + c01 * by + c02 * bz) + ay * (c01 * bx + c11 * by + c12 * bz) + az * (c02 * bx + c12 * by + c22 * bz)
-        t = 0.5 * math.atan2(2.0 * sab, saa - sbb)  # the widest axis of the plane's 2x2 scatter
-        ct, st = math.cos(t), math.sin(t)
-        ux, uy, uz = ct * ax + st * bx, ct * ay + st * by, ct * az + st * bz
-        vx, vy, vz = -st * ax + ct * bx, -st * ay + ct * by, -st * az + ct * bz
-        reach = 0.0
-        for j in range(k):
-            q = rows[r, j]
-            reach = max(reach, abs((points[q, 0] - cx) * ux + (points[q, 1] - cy) * uy + (points[q, 2] - cz) * uz))
-        if not reach > 0.0:
-            continue
-        power = np.zeros(2 * _CURVE_TERMS - 1)  # sums of u^p: the Gram matrix is a Hankel matrix
-        rhs = np.zeros(_CURVE_TERMS)
-        vv = 0.0
-        for j in range(k):
-            q = rows[r, j]
-            dx, dy, dz = points[q, 0] - cx, points[q, 1] - cy, points[q, 2] - cz
-            u = (dx * ux + dy * uy + dz * uz) / reach
-            v = dx * vx + dy * vy + dz * vz
-            vv += v * v
-            up = 1.0
-            for p in range(2 * _CURVE_TERMS - 1):
-                power[p] += up
-                if p < _CURVE_TERMS:
-                    rhs[p] += v * up
-                up *= u
-        gram = np.empty((_CURVE_TERMS, _CURVE_TERMS))
-        for a in range(_CURVE_TERMS):
-            for c in range(_CURVE_TERMS):
-                gram[a, c] = power[a + c]
-        d, low, coef = np.empty(_CURVE_TERMS), np.zeros((_CURVE_TERMS, _CURVE_TERMS)), np.empty(_CURVE_TERMS)
-        if not vv > 0.0 or not cholesky(gram, _CURVE_TERMS, 1e-12, d, low):
-            continue
-        chol_solve(low, d, _CURVE_TERMS, rhs, coef)
-        fitted = 0.0
-        for a in range(_CURVE_TERMS):
-            fitted += coef[a] * rhs[a]
-        curve[r] = math.sqrt(max(vv - fitted, 0.0) / vv)  # residual sum of squares: v.v - c.b
+    for blk in prange((rows.shape[0] + BLOCK - 1) // BLOCK):
+        work = np.empty((4, 2 * _CURVE_TERMS - 1))  # scratch of the block: six allocations per row cost more
+        gram, low = np.empty((_CURVE_TERMS, _CURVE_TERMS)), np.empty((_CURVE_TERMS, _CURVE_TERMS))
+        for r in range(blk * BLOCK, min(rows.shape[0], (blk + 1) * BLOCK)):
+            _curve_share(points, rows, r, k, flat, curve, work, gram, low)
+
+
+@njit(**OPTS)
+def _curve_share(points, rows, r, k, flat, curve, work, gram, low):
+    """:func:`curve_shares` at row r with the block's scratch (``low``: only its lower
+    triangle is read, as :func:`cholesky` writes it)."""
+    cx, cy, cz, c00, c01, c02, c11, c12, c22 = row_scatter(points, rows, r, 0, k)
+    l0, l1, _, nx, ny, nz = smallest_eigvec_sym3(c00, c01, c02, c11, c12, c22)
+    flat[r] = math.sqrt(max(l0, 0.0) / l1) if l1 > 0.0 else math.nan
+    curve[r] = math.nan
+    if not math.isfinite(nx):
+        return
+    ax, ay, az, bx, by, bz = tangent_pair(nx, ny, nz)  # of the plane normal to n
+    saa = ax * (c00 * ax + c01 * ay + c02 * az) + ay * (c01 * ax + c11 * ay + c12 * az) + az * (c02 * ax + c12 * ay + c22 * az)
+    sbb = bx * (c00 * bx + c01 * by + c02 * bz) + by * (c01 * bx + c11 * by + c12 * bz) + bz * (c02 * bx + c12 * by + c22 * bz)
+    sab = ax * (c00 * bx + c01 * by + c02 * bz) + ay * (c01 * bx + c11 * by + c12 * bz) + az * (c02 * bx + c12 * by + c22 * bz)
+    t = 0.5 * math.atan2(2.0 * sab, saa - sbb)  # the widest axis of the plane's 2x2 scatter
+    ct, st = math.cos(t), math.sin(t)
+    ux, uy, uz = ct * ax + st * bx, ct * ay + st * by, ct * az + st * bz
+    vx, vy, vz = -st * ax + ct * bx, -st * ay + ct * by, -st * az + ct * bz
+    reach = 0.0
+    for j in range(k):
+        q = rows[r, j]
+        reach = max(reach, abs((points[q, 0] - cx) * ux + (points[q, 1] - cy) * uy + (points[q, 2] - cz) * uz))
+    if not reach > 0.0:
+        return
+    power, rhs, d, coef = work[0], work[1, :_CURVE_TERMS], work[2, :_CURVE_TERMS], work[3, :_CURVE_TERMS]
+    power[:] = 0.0  # sums of u^p: the Gram matrix is a Hankel matrix
+    rhs[:] = 0.0
+    vv = 0.0
+    for j in range(k):
+        q = rows[r, j]
+        dx, dy, dz = points[q, 0] - cx, points[q, 1] - cy, points[q, 2] - cz
+        u = (dx * ux + dy * uy + dz * uz) / reach
+        v = dx * vx + dy * vy + dz * vz
+        vv += v * v
+        up = 1.0
+        for p in range(2 * _CURVE_TERMS - 1):
+            power[p] += up
+            if p < _CURVE_TERMS:
+                rhs[p] += v * up
+            up *= u
+    for a in range(_CURVE_TERMS):
+        for c in range(_CURVE_TERMS):
+            gram[a, c] = power[a + c]
+    if not vv > 0.0 or not cholesky(gram, _CURVE_TERMS, 1e-12, d, low):
+        return
+    chol_solve(low, d, _CURVE_TERMS, rhs, coef)
+    fitted = 0.0
+    for a in range(_CURVE_TERMS):
+        fitted += coef[a] * rhs[a]
+    curve[r] = math.sqrt(max(vv - fitted, 0.0) / vv)  # residual sum of squares: v.v - c.b
