@@ -1,14 +1,34 @@
-"""The compiled pieces of the robust normal fit against plain numpy: the median of the
-reweighting, and the whole Huber/Tukey IRLS of NF at degrees 1-3."""
+"""The compiled pieces of the robust normal fit against plain numpy: the monomials of the
+neighbours, the median of the reweighting, and the whole Huber/Tukey IRLS of NF at degrees 1-3."""
 
 import numpy as np
 import pytest
 
 import core
+from core.kernels.algebra import MAX_TERMS, poly_row
+from core.kernels.lstsq import monomials
 from core.kernels.robust import HUBER_C, MAD_SIGMA, MIN_SCALE, TUKEY_C, root_median, select
 from core.methods import get_method
 from core.patch import Chunk
 from core.tuning import IRLS_ITERATIONS
+
+
+@pytest.mark.parametrize("degree", [1, 2, 3])
+def test_monomials_row_by_row_are_poly_row_per_neighbour_to_the_last_bit(degree):
+    """The NF kernel computes the monomials a row at a time (vectorised); the anchors' and
+    the jets' readers evaluate poly_row's order of products: they must agree bit for bit,
+    and leave the columns past n and the rows past the degree alone."""
+    rng = np.random.default_rng(degree)
+    n, width = 37, 40
+    u, v = rng.normal(size=width) * 1.7, rng.normal(size=width) * 0.3
+    R = np.full((MAX_TERMS, width), -7.0)
+    monomials(u, v, n, degree, R)
+    p = (degree + 1) * (degree + 2) // 2
+    want = np.empty(MAX_TERMS)
+    for j in range(n):
+        poly_row.py_func(u[j], v[j], degree, want)
+        assert np.array_equal(R[:p, j], want[:p])
+    assert (R[p:] == -7.0).all() and (R[:, n:] == -7.0).all()
 
 
 @pytest.mark.parametrize("size", [1, 2, 3, 7, 8, 15, 226, 227])
