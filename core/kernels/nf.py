@@ -175,7 +175,7 @@ def _fit_point(f, opt, r, row, n, s, stride):
         if it > 0:
             robust_weights(s, n, degree, opt.robust)
         reset(degree, s.vec, s.G, s.acc)
-        accumulate(s.R, s.X, s.Y, s.wt, 0, n, degree, s.vec, s.G, s.acc)
+        accumulate(s.R, s.X, s.Y, s.wt, 0, n, degree, s.vec, s.G, s.acc, s.WR)
         if it > 0 and not _spans(s.G, opt.spread):
             return _unweighted(degree, opt, n, s)
         fitted = _solve_round(degree, opt.rcond, opt.pivot, s, it == rounds)
@@ -225,7 +225,7 @@ def _unweighted(degree, opt, n, s):
     for j in range(n):
         s.wt[j] = s.base[j]
     reset(degree, s.vec, s.G, s.acc)
-    accumulate(s.R, s.X, s.Y, s.wt, 0, n, degree, s.vec, s.G, s.acc)
+    accumulate(s.R, s.X, s.Y, s.wt, 0, n, degree, s.vec, s.G, s.acc, s.WR)
     return _solve_round(degree, opt.rcond, opt.pivot, s, True)
 
 

@@ -186,7 +186,7 @@ def _ici(s, ks, stop, rule, bounds):
     pick = ks[0]
     prev = 0
     for c in range(stop):
-        accumulate(s.R, s.X, s.Y, s.base, prev, ks[c], degree, vec, s.G, acc)
+        accumulate(s.R, s.X, s.Y, s.base, prev, ks[c], degree, vec, s.G, acc, s.WR)
         prev = ks[c]
         fitted = solve_determined(degree, rule.rcond, rule.pivot, vec, s.G, s.L, acc, True)
         if fitted == 0:
