@@ -259,16 +259,23 @@ class _Fitter(NamedTuple):
         for start in range(0, n, step):
             stop = min(n, start + step)
             c = start + np.flatnonzero(usable[start:stop])
-            if len(c):
-                _fit_chunk(self._chunk(nrm, c, whole), self.method, self.options, out, kept)
+            for chunk in self._chunks(nrm, c, whole):
+                _fit_chunk(chunk, self.method, self.options, out, kept)
             report(stop / n, self.method.name)
 
-    def _chunk(self, nrm, c, whole):
-        """The :class:`Chunk` of centres ``c``: on the whole graph by row (``whole``: the NF kernel reads
-        the rows in place; a copy of 32k rows of 320 was 4 % of a noisy k="auto" estimate), else on their rows."""
+    def _chunks(self, nrm, c, whole):
+        """The :class:`Chunk` of centres ``c`` on the rows in place, where the NF kernel reads
+        them (a copy of 32k rows of 320 was 4 % of a noisy k="auto" estimate): the whole
+        graph's (``whole``), or held and searched rows' (:meth:`core.wide_neighbours._Rows.parts`);
+        else on a copy of their rows."""
+        if not len(c):
+            return []
         if whole:
-            return Chunk.build(self.pts, nrm, self.idx, self.h[c], c, self.kc[c], rows=c)
-        return Chunk.build(self.pts, nrm, self.idx[c], self.h[c], c, self.kc[c])
+            return [Chunk.build(self.pts, nrm, self.idx, self.h[c], c, self.kc[c], rows=c)]
+        if hasattr(self.idx, "parts"):
+            return [Chunk.build(self.pts, nrm, rows_of, self.h[at], at, self.kc[at], rows=rows)
+                    for rows_of, rows, at in self.idx.parts(c)]
+        return [Chunk.build(self.pts, nrm, self.idx[c], self.h[c], c, self.kc[c])]
 
     def _follow(self, out: Fit, kept, nrm, points) -> np.ndarray:
         """Store at the followers ``points`` their anchors' fits read at their offsets and

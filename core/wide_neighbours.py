@@ -304,7 +304,7 @@ class _Rows:
     __slots__ = ("held", "wide", "w_idx", "kc", "nb")
 
     def __init__(self, held, wide, w_idx, kc, nb):
-        self.held, self.wide, self.w_idx, self.kc, self.nb = held, wide, w_idx, kc, nb
+        self.held, self.wide, self.w_idx, self.kc, self.nb = np.ascontiguousarray(held), wide, w_idx, kc, nb
 
     def ensure(self, c, h) -> None:
         """Search the wider rows of centres ``c`` not held yet, and write their ``h``."""
@@ -315,6 +315,22 @@ class _Rows:
         wide = np.concatenate([self.wide, c])
         order = np.argsort(wide, kind="stable")
         self.wide, self.w_idx = wide[order], np.concatenate([self.w_idx, w_idx])[order]
+
+    def parts(self, c):
+        """The rows of centres ``c`` without a copy where they are held: ``(array, rows,
+        centres)`` per part, row ``rows[r]`` of ``array`` listing the neighbours of
+        ``centres[r]`` (its first ``kc`` columns: what the fits read): the held columns
+        where they suffice, the rows searched wider for those in ``wide``, and a copy
+        (:meth:`__getitem__`) for any other (a centre fitted before its rows were searched)."""
+        width = self.held.shape[1]
+        short = self.kc[c] <= width
+        pos = np.minimum(np.searchsorted(self.wide, c), len(self.wide) - 1) if len(self.wide) else np.zeros(0, int)
+        searched = ~short & (self.wide[pos] == c) if len(self.wide) else np.zeros(len(c), dtype=bool)
+        rest = ~short & ~searched
+        out = [(self.held, c[short], c[short]), (self.w_idx, pos[searched], c[searched])]
+        if rest.any():
+            out.append((self[c[rest]], np.arange(np.count_nonzero(rest)), c[rest]))
+        return [part for part in out if len(part[2])]
 
     def __getitem__(self, c):
         k = int(self.kc[c].max()) if len(c) else 1

@@ -273,3 +273,11 @@ def test_rows_of_points_that_may_not_fit_are_searched_when_they_do(quantised):
     for i, row in zip(c, got):
         np.testing.assert_array_equal(row[:kc[i]], full.indices[i, :kc[i]])
     assert (rows[later[1::2]][:, 24:] == later[1::2, None]).all()  # not searched: the centre itself
+    every = np.arange(n)
+    parts = rows.parts(every)  # the fits read the rows in place: held, searched, and a copy for the rest
+    assert [a is rows.held for a, _, _ in parts[:1]] == [True] and parts[1][0] is rows.w_idx and len(parts) == 3
+    assert np.array_equal(np.sort(np.concatenate([at for _, _, at in parts])), every)
+    for array, at_rows, at in parts:
+        for i, r in zip(at, at_rows):
+            want = full.indices[i, :kc[i]] if now[i] else rows[np.array([i])][0, :kc[i]]
+            np.testing.assert_array_equal(array[r, :kc[i]], want)
