@@ -41,6 +41,7 @@ from __future__ import annotations
 import numpy as np
 
 from .kernels.algebra import MAX_TERMS
+from .kernels.anchors import anchors_among, first_anchors
 from .passes import mix64
 from .tuning import ANCHOR_BLEND, ANCHOR_REACH, ANCHOR_ROWS
 
@@ -77,18 +78,16 @@ def assign(pts, near, kc, eligible, prio=None, lead=None) -> np.ndarray | None:
     its :func:`priority` is above those of its m = round(k / ANCHOR_ROWS) - 1 nearest
     (about 1 in m + 1 points); ``prio``: :func:`priority`'s answer, if computed already;
     ``lead`` (N,) bool, optional: the eligible points that may be anchors (the others only follow)."""
-    kc = np.asarray(kc)
-    m = np.clip(per_anchor(kc).astype(np.int64) - 1, 0, ANCHOR_REACH)
+    kc = np.ascontiguousarray(kc, dtype=np.int64)
+    m = np.clip(per_anchor(kc).astype(np.int64) - 1, 0, min(ANCHOR_REACH, near.shape[1] - 1))
     prio = priority(pts, near) if prio is None else prio
-    rival = np.where(np.arange(1, m.max() + 1) <= m[:, None], prio[np.asarray(near[:, 1:m.max() + 1])], 0)
-    anchors = (eligible if lead is None else eligible & lead) & (prio > rival.max(axis=1, initial=0))
+    anchors = np.empty(len(kc), dtype=bool)
+    anchors_among(near, prio, m, np.asarray(eligible if lead is None else eligible & lead, dtype=bool), anchors)
     rows = np.flatnonzero(eligible & ~anchors)
     if not len(rows):
         return None
-    cand = np.asarray(near[rows, 1:ANCHOR_REACH + 1])
-    ok = anchors[cand] & (kc[cand] == kc[rows, None])
-    first = np.argsort(~ok, axis=1, kind="stable")[:, :ANCHOR_BLEND]  # the first anchors of each row, in order
-    picked = np.where(np.take_along_axis(ok, first, 1), np.take_along_axis(cand, first, 1), -1)
+    picked = np.empty((len(rows), ANCHOR_BLEND), dtype=np.int64)  # the first anchors of each row, in order
+    first_anchors(near, rows, anchors, kc, min(ANCHOR_REACH, near.shape[1] - 1), picked)
     found = picked[:, 0] >= 0
     anchor = np.full((len(kc), ANCHOR_BLEND), -1, dtype=np.int64)
     anchor[:, 0] = np.arange(len(kc))

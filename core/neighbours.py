@@ -14,7 +14,7 @@ from ._progress import Progress
 from ._validate import as_points, check_int
 from .kernels.kd_order import kd_order
 from .kernels.kdtree import build_tree, query_sorted
-from .kernels.knn import keep_nearest
+from .kernels.knn import keep_nearest, unflagged_first
 from .kernels.repeats import coordinate_hashes
 from .spacing import mean_spacing
 from .tuning import ORDER_LEAF, SEARCH_LEAF, SEARCH_RADIUS_NODE, SEARCH_REACH
@@ -80,22 +80,16 @@ class Neighbours:
         n, width = held_idx.shape
         idx = np.empty((n, k), dtype=held_idx.dtype)
         dist = np.empty((n, k), dtype=held_dist.dtype)
-        for start in range(0, n, _ROWS):
-            rows = slice(start, min(n, start + _ROWS))
-            flagged = drop[held_idx[rows]]
-            flagged[:, 0] = False
-            order = np.argsort(flagged, axis=1, kind="stable")[:, :k]
-            idx[rows] = np.take_along_axis(held_idx[rows], order, axis=1)
-            dist[rows] = np.take_along_axis(held_dist[rows], order, axis=1)
-            if width < self.k_max:  # rows with fewer than k unflagged among those held: their whole list
-                short = start + np.flatnonzero((~flagged).sum(axis=1) < k)
-                if len(short):
-                    w_idx, w_dist = self.rows(short, self.k_max)
-                    flagged = drop[w_idx]
-                    flagged[:, 0] = False
-                    order = np.argsort(flagged, axis=1, kind="stable")[:, :k]
-                    idx[short] = np.take_along_axis(w_idx, order, axis=1)
-                    dist[short] = np.take_along_axis(w_dist, order, axis=1)
+        free = np.empty(n, dtype=np.int64)
+        drop = np.ascontiguousarray(drop, dtype=np.bool_)
+        unflagged_first(held_idx, held_dist, drop, idx, dist, free)
+        short = np.flatnonzero(free < k) if width < self.k_max else free[:0]
+        for start in range(0, len(short), _ROWS):  # fewer than k unflagged among those held: their whole list
+            rows = short[start:start + _ROWS]
+            w_idx, w_dist = self.rows(rows, self.k_max)
+            part_idx, part_dist = np.empty((len(rows), k), dtype=idx.dtype), np.empty((len(rows), k))
+            unflagged_first(w_idx, w_dist, drop, part_idx, part_dist, free[rows])
+            idx[rows], dist[rows] = part_idx, part_dist
         return idx, dist
 
     def _held(self):
