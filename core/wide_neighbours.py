@@ -324,7 +324,7 @@ class _Rows:
         (:meth:`__getitem__`) for any other (a centre fitted before its rows were searched)."""
         width = self.held.shape[1]
         short = self.kc[c] <= width
-        pos = np.minimum(np.searchsorted(self.wide, c), len(self.wide) - 1) if len(self.wide) else np.zeros(0, int)
+        pos = np.minimum(np.searchsorted(self.wide, c), max(len(self.wide) - 1, 0))
         searched = ~short & (self.wide[pos] == c) if len(self.wide) else np.zeros(len(c), dtype=bool)
         rest = ~short & ~searched
         out = [(self.held, c[short], c[short]), (self.w_idx, pos[searched], c[searched])]

@@ -281,3 +281,5 @@ def test_rows_of_points_that_may_not_fit_are_searched_when_they_do(quantised):
         for i, r in zip(at, at_rows):
             want = full.indices[i, :kc[i]] if now[i] else rows[np.array([i])][0, :kc[i]]
             np.testing.assert_array_equal(array[r, :kc[i]], want)
+    none, _ = rows_at_least(narrow, kc, np.zeros(n, dtype=bool))  # nothing searched yet: held, and copies
+    assert len(none.wide) == 0 and [len(at) for _, _, at in none.parts(every)] == [(kc <= 24).sum(), (kc > 24).sum()]
