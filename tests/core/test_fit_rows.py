@@ -38,9 +38,10 @@ def test_the_fitter_reads_a_contiguous_graph_in_place():
     n = len(p)
     fitter = _Fitter(p, idx, np.full(n, 60), dist[:, -1], get_method("nr"), {})
     c = np.arange(10, 20)
-    chunk = fitter._chunk(nrm, c, True)
+    [chunk] = fitter._chunks(nrm, c, True)
     assert chunk.idx is idx and np.array_equal(chunk.rows, c)
-    assert fitter._chunk(nrm, c, False).rows is None
+    assert fitter._chunks(nrm, c, False)[0].rows is None
+    assert fitter._chunks(nrm, c[:0], True) == []
 
 
 @pytest.mark.parametrize("rows", [20, 25])
