@@ -87,6 +87,8 @@ class Neighbours:
         for start in range(0, len(short), _ROWS):  # fewer than k unflagged among those held: their whole list
             rows = short[start:start + _ROWS]
             w_idx, w_dist = self.rows(rows, self.k_max)
+            w_idx.setflags(write=False)  # the held rows' type (a cached graph's are read-only): one compiled variant
+            w_dist.setflags(write=False)
             part_idx, part_dist = np.empty((len(rows), k), dtype=idx.dtype), np.empty((len(rows), k))
             unflagged_first(w_idx, w_dist, drop, part_idx, part_dist, free[rows])
             idx[rows], dist[rows] = part_idx, part_dist

@@ -50,14 +50,27 @@ def _data_dependent_types(method) -> int:
     wider, ``kdtree.query_rows``, and the jets rerun on them); on a cube the points where a
     higher degree is tried are not one run of indices (rows copied rather than viewed). Each plainly, through a StageCache and on the read-only
     points of a given graph. Without these the first k="auto" estimate of a 100k torus
-    after warm-up compiled for ~8 s. Returns the count of runs."""
+    after warm-up compiled for ~8 s. A noisy cloud with points off its surface takes the
+    anchors' shared fits and robust mode's neighbours without the outliers, plainly and
+    through a StageCache (without it a noisy 100k torus compiled six kernels anew).
+    Returns the count of runs."""
     for cloud in (shapes.plane(400, seed=0), shapes.cube(600, seed=0)):
         estimate(cloud.points, method=method)
         estimate(cloud.points, method=method, cache=StageCache())
         pts = np.array(cloud.points)
         estimate(pts, method=method, neighbours=build_neighbours(pts, plan(len(pts), k="auto").k_search))
     estimate(_parallels(), method=method)  # scan lines far apart: initial normals on wider rows
-    return 7
+    noisy = _noisy_with_strays()
+    estimate(noisy, method=method)
+    estimate(noisy, method=method, cache=StageCache())
+    return 9
+
+
+def _noisy_with_strays(n: int = 6000) -> np.ndarray:
+    """A torus of ``n`` points at 0.2 spacing of noise (k="auto" fits 320 neighbours there, at
+    anchors) and 12 points off its surface (outliers to robust mode)."""
+    pts = add_noise(shapes.torus(n, seed=1).points, 0.2, seed=2)
+    return np.vstack([pts, 1.4 * pts[:12] + np.random.default_rng(0).normal(size=(12, 3)) * 0.05])
 
 
 def _parallels(n_line: int = 60, lines: int = 8, ratio: float = 10.0) -> np.ndarray:

@@ -47,6 +47,9 @@ def test_warm_up_covers_cached_stages_and_given_neighbours():
             pts = np.array(cloud.points)
             estimate(pts, k=k, method=method, neighbours=build_neighbours(pts, plan(len(pts), k=k).k_search))
     estimate(shapes.torus(20_000, seed=5).points, method="nr")  # data-dependent types of a larger cloud
+    for n, level in ((60_000, 0.2), (30_000, 0.5)):  # ... and of larger noisy ones with strays (anchors, outliers)
+        pts = add_noise(shapes.torus(n, seed=6).points, level, seed=7)
+        estimate(np.vstack([pts, 1.3 * pts[:20]]), method="nr")
     after = _signatures()
     added = {f.py_func.__qualname__: sorted(after[f] - before.get(f, set()))
              for f in after if after[f] - before.get(f, set())}
