@@ -79,7 +79,8 @@ def assign(pts, near, kc, eligible, prio=None, lead=None) -> np.ndarray | None:
     (about 1 in m + 1 points); ``prio``: :func:`priority`'s answer, if computed already;
     ``lead`` (N,) bool, optional: the eligible points that may be anchors (the others only follow)."""
     kc = np.ascontiguousarray(kc, dtype=np.int64)
-    m = np.clip(per_anchor(kc).astype(np.int64) - 1, 0, min(ANCHOR_REACH, near.shape[1] - 1))
+    reach = min(ANCHOR_REACH, near.shape[1] - 1)
+    m = np.clip(per_anchor(kc).astype(np.int64) - 1, 0, reach)
     prio = priority(pts, near) if prio is None else prio
     anchors = np.empty(len(kc), dtype=bool)
     anchors_among(near, prio, m, np.asarray(eligible if lead is None else eligible & lead, dtype=bool), anchors)
@@ -87,7 +88,7 @@ def assign(pts, near, kc, eligible, prio=None, lead=None) -> np.ndarray | None:
     if not len(rows):
         return None
     picked = np.empty((len(rows), ANCHOR_BLEND), dtype=np.int64)  # the first anchors of each row, in order
-    first_anchors(near, rows, anchors, kc, min(ANCHOR_REACH, near.shape[1] - 1), picked)
+    first_anchors(near, rows, anchors, kc, reach, picked)
     found = picked[:, 0] >= 0
     anchor = np.full((len(kc), ANCHOR_BLEND), -1, dtype=np.int64)
     anchor[:, 0] = np.arange(len(kc))

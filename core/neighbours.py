@@ -90,7 +90,7 @@ class Neighbours:
             w_idx.setflags(write=False)  # the held rows' type (a cached graph's are read-only): one compiled variant
             w_dist.setflags(write=False)
             part_idx, part_dist = np.empty((len(rows), k), dtype=idx.dtype), np.empty((len(rows), k))
-            unflagged_first(w_idx, w_dist, drop, part_idx, part_dist, free[rows])
+            unflagged_first(w_idx, w_dist, drop, part_idx, part_dist, np.empty(len(rows), dtype=np.int64))
             idx[rows], dist[rows] = part_idx, part_dist
         return idx, dist
 

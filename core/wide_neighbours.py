@@ -308,7 +308,7 @@ class _Rows:
 
     def ensure(self, c, h) -> None:
         """Search the wider rows of centres ``c`` not held yet, and write their ``h``."""
-        c = c[(self.kc[c] > self.held.shape[1]) & ~np.isin(c, self.wide)]
+        c = c[(self.kc[c] > self.held.shape[1]) & ~self._slots(c)[1]]
         if not len(c):
             return
         w_idx = _wide_rows(self.nb, c, self.w_idx.shape[1], self.kc, h)
@@ -324,8 +324,8 @@ class _Rows:
         (:meth:`__getitem__`) for any other (a centre fitted before its rows were searched)."""
         width = self.held.shape[1]
         short = self.kc[c] <= width
-        pos = np.minimum(np.searchsorted(self.wide, c), max(len(self.wide) - 1, 0))
-        searched = ~short & (self.wide[pos] == c) if len(self.wide) else np.zeros(len(c), dtype=bool)
+        pos, found = self._slots(c)
+        searched = ~short & found
         rest = ~short & ~searched
         out = [(self.held, c[short], c[short]), (self.w_idx, pos[searched], c[searched])]
         if rest.any():
@@ -340,7 +340,14 @@ class _Rows:
         idx = np.empty((len(c), k), dtype=self.held.dtype)
         idx[:, :width] = self.held[c]
         idx[:, width:] = c[:, None]
-        pos = np.minimum(np.searchsorted(self.wide, c), len(self.wide) - 1)
-        mine = np.flatnonzero(self.wide[pos] == c) if len(self.wide) else pos[:0]
+        pos, found = self._slots(c)
+        mine = np.flatnonzero(found)
         idx[mine] = self.w_idx[pos[mine], :k]
         return idx
+
+    def _slots(self, c):
+        """``(pos, found)``: each centre's row of ``w_idx`` and whether it has one (``wide`` is sorted)."""
+        if not len(self.wide):
+            return np.zeros(len(c), dtype=np.int64), np.zeros(len(c), dtype=bool)
+        pos = np.minimum(np.searchsorted(self.wide, c), len(self.wide) - 1)
+        return pos, self.wide[pos] == c

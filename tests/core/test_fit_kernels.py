@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import core
-from core.kernels.algebra import MAX_TERMS, poly_row
+from core.kernels.algebra import MAX_TERMS, n_terms, poly_row
 from core.kernels.lstsq import monomials
 from core.kernels.robust import HUBER_C, MAD_SIGMA, MIN_SCALE, TUKEY_C, root_median, select
 from core.methods import get_method
@@ -23,7 +23,7 @@ def test_monomials_row_by_row_are_poly_row_per_neighbour_to_the_last_bit(degree)
     u, v = rng.normal(size=width) * 1.7, rng.normal(size=width) * 0.3
     R = np.full((MAX_TERMS, width), -7.0)
     monomials(u, v, n, degree, R)
-    p = (degree + 1) * (degree + 2) // 2
+    p = n_terms.py_func(degree)
     want = np.empty(MAX_TERMS)
     for j in range(n):
         poly_row.py_func(u[j], v[j], degree, want)

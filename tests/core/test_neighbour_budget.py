@@ -17,12 +17,12 @@ def test_candidates_fit_the_budget(n):
     for k in ks:
         assert k <= whole or n * neighbour_budget.entries(k) <= tuning.NEIGHBOUR_BUDGET
     if ks[-1] > whole:  # past the whole graph only to sizes whose fits are shared at anchors
-        assert np.rint(ks[-1] / tuning.ANCHOR_ROWS) >= 2
+        assert anchors.per_anchor(ks[-1]) >= 2
     if len(ks) < len(tuning.AUTO_KS):  # stopped by the budget: the next size does not fit it, or
         nxt = tuning.AUTO_KS[len(ks)]  # it and those after it that fit are every point's own
         assert nxt > whole
         fit = [k for k in tuning.AUTO_KS[len(ks):] if n * neighbour_budget.entries(k) <= tuning.NEIGHBOUR_BUDGET]
-        assert all(np.rint(k / tuning.ANCHOR_ROWS) < 2 for k in fit[:1]) or not fit
+        assert all(anchors.per_anchor(k) < 2 for k in fit[:1]) or not fit
 
 
 def test_a_million_points_reach_the_shared_sizes():
