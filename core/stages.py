@@ -188,6 +188,8 @@ def choose_scale(pts, nrm, nb, inliers, plan, report, *, scores=None, k_initial=
     steady = inliers & ~suspect  # the jets are least squares: suspects sit out the choice of k
     masked = np.where(steady[:, None], nrm, np.nan)
     prio = anchors.priority(pts, nb.take_indices(anchors.RATIOS + 1)) if anchors.shares_scale(plan) else None
+    if prio is not None and hasattr(nb, "keep_rows"):  # the anchors' fits read the rows their jets search
+        nb.keep_rows(ks[-1])
     kc, on_jet, quiet, jets, degree = scale.choose_model(pts, masked, nb, steady, ks, report, priority=prio,
                                                          sat_out=inliers & suspect)
     floor = np.full(n, ks[min(int(np.searchsorted(ks, k_initial or 0)), len(ks) - 1)])  # a candidate >= k_initial

@@ -20,7 +20,7 @@ import threading
 import numpy as np
 
 from ._progress import Progress
-from .kernels.kdtree import query_rows
+from .kernels.kdtree import distances_at, query_rows
 from .neighbour_budget import whole_cap
 from .neighbours import _CHUNK, Neighbours, _query_tree, _search, _self_first
 from .tuning import SEARCH_RADIUS_NODE, SEARCH_REACH
@@ -62,6 +62,7 @@ class WidenableNeighbours(Neighbours):
         object.__setattr__(self, "_k_max", int(k_max))
         object.__setattr__(self, "_tree", tree)
         object.__setattr__(self, "_rank", rank)
+        object.__setattr__(self, "_kept", None)  # (width, [(centres, rows), ...]) while keep_rows asks
 
     def __reduce__(self):  # pickled (and copied) as the whole graph: the lock and tree stay here
         return Neighbours, (self.points, self.indices, self.distances)
@@ -128,7 +129,26 @@ class WidenableNeighbours(Neighbours):
         _self_first(idx, dist, centres)
         if sheets is not None:
             sheets.put(idx, dist, pair, centres)
+        with self._lock:
+            if self._kept is not None and self._kept[0] == k:
+                self._kept[1].append((centres, idx))
         return idx, dist
+
+    def keep_rows(self, k: int) -> None:
+        """Keep the indices of the rows :meth:`rows` searches at width ``k`` from now on, for
+        :meth:`kept_rows`: k="auto"'s jets and its anchors' fits read the same rows of 320 at
+        nearly the same points, and searching them twice was 5 % of a noisy estimate."""
+        with self._lock:
+            object.__setattr__(self, "_kept", (int(k), []))
+
+    def kept_rows(self, k: int) -> list:
+        """``[(centres, rows), ...]`` searched at width ``k`` since :meth:`keep_rows` (their
+        distances are not kept: at 1M points they were 600 MB), handed over: this graph keeps
+        no more of them."""
+        with self._lock:
+            kept, width = self._kept, None if self._kept is None else self._kept[0]
+            object.__setattr__(self, "_kept", None)
+        return kept[1] if width == k else []
 
     def whole_rows(self, centres):
         """All ``k_max`` columns of the rows of ``centres``, which list their own sheet first
@@ -276,16 +296,37 @@ def rows_at_least(nb, kc, fits=None):
 
 
 def _wide_rows(nb, centres, k, kc, h):
-    """The ``k`` nearest (indices) of ``centres`` (M,), searched in chunks; writes the
+    """The ``k`` nearest (indices) of ``centres`` (M,): those the graph kept
+    (:meth:`WidenableNeighbours.kept_rows`), the others searched in chunks; writes the
     distance to each one's ``kc``-th into ``h`` (the distances are not kept: at 1M points
     the anchors' 320 were 640 MB)."""
     w_idx = np.empty((len(centres), k), dtype=nb.take(1)[0].dtype)
-    step = max(1, _SEARCHED // k)
-    for start in range(0, len(centres), step):
-        c = centres[start:start + step]
-        w_idx[start:start + len(c)], dist = nb.rows(c, k)
-        h[c] = dist[np.arange(len(c)), kc[c] - 1]
+    step = max(1, _SEARCHED // k)  # rows copied or searched at a time
+    todo = np.ones(len(centres), dtype=bool)
+    for kept, rows in nb.kept_rows(k) if hasattr(nb, "kept_rows") else ():
+        at, pos = _positions(centres, kept)
+        for start in range(0, len(at), step):
+            a = at[start:start + step]
+            w_idx[a] = rows[pos[start:start + step]]
+            distances_at(nb.points, centres[a], w_idx, a, kc[centres[a]] - 1, h, centres[a])
+        todo[at] = False
+    rest = np.flatnonzero(todo)
+    for start in range(0, len(rest), step):
+        r = rest[start:start + step]
+        w_idx[r], dist = nb.rows(centres[r], k)
+        h[centres[r]] = dist[np.arange(len(r)), kc[centres[r]] - 1]
     return w_idx
+
+
+def _positions(centres, kept):
+    """``(at, pos)``: the entries ``at`` of ``centres`` that are in ``kept`` (both without
+    repeats), at ``kept[pos]``."""
+    if not len(kept):
+        return np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64)
+    order = np.argsort(kept, kind="stable")
+    slot = np.minimum(np.searchsorted(kept, centres, sorter=order), len(kept) - 1)
+    at = np.flatnonzero(kept[order[slot]] == centres)
+    return at, order[slot[at]]
 
 
 def held_h(nb, kc):

@@ -218,6 +218,15 @@ def _bucket_sort(cd, cj, m, r, rank, k, work):
         lo = hi
 
 
+@njit(**OPTS)
+def distances_at(p, centres, idx, rows, col, out, at):
+    """``out[at[r]]``: the distance from point ``centres[r]`` to its neighbour
+    ``idx[rows[r], col[r]]``, the bits :func:`query_rows` gives it (:func:`_distance`): a row
+    searched earlier, whose distances were not kept."""
+    for r in range(len(centres)):
+        out[at[r]] = _distance(p, centres[r], idx[rows[r], col[r]])
+
+
 @njit(**OPTS, parallel=True)
 def query_sorted(p, tree, rank, start, dist, idx, want, reach):
     """Rows ``start .. start + len(dist)`` of the k = ``dist.shape[1]`` nearest neighbours of

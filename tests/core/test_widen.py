@@ -283,3 +283,33 @@ def test_rows_of_points_that_may_not_fit_are_searched_when_they_do(quantised):
             np.testing.assert_array_equal(array[r, :kc[i]], want)
     none, _ = rows_at_least(narrow, kc, np.zeros(n, dtype=bool))  # nothing searched yet: held, and copies
     assert len(none.wide) == 0 and [len(at) for _, _, at in none.parts(every)] == [(kc <= 24).sum(), (kc > 24).sum()]
+
+
+def test_rows_kept_for_the_fits_are_not_searched_again(quantised, monkeypatch):
+    """k="auto"'s jets search the wide rows of nearly the points whose fits read them
+    (core.stages.choose_scale keeps them): rows_at_least searches only the others and gives
+    the same rows and h as a full search; the graph hands them over (holds them no more)."""
+    import core.wide_neighbours as wide
+
+    narrow, _ = search_in_spatial_order(quantised, 120, width=24)
+    full, _ = search_in_spatial_order(quantised, 120)
+    n = len(quantised)
+    kc = np.where(np.arange(n) % 3 == 0, 120, 20)
+    fits = np.arange(n) % 4 != 1
+    narrow.keep_rows(120)
+    rng = np.random.default_rng(1)
+    kept = [np.sort(rng.choice(n, 400, replace=False)), rng.permutation(n)[:300]]  # overlapping, any order
+    for c in kept:
+        narrow.rows(c, 120)
+    narrow.rows(np.arange(50), 60)  # another width: not kept
+    searched = []
+    real = wide.query_rows
+    monkeypatch.setattr(wide, "query_rows", lambda p, t, r, c, *a: (searched.append(c.copy()), real(p, t, r, c, *a)))
+    rows, h = rows_at_least(narrow, kc, fits)
+    need = np.flatnonzero(fits & (kc > 24))
+    np.testing.assert_array_equal(np.sort(np.concatenate(searched)), np.setdiff1d(need, np.concatenate(kept)))
+    np.testing.assert_array_equal(h[need], full.distances[need, kc[need] - 1])
+    np.testing.assert_array_equal(rows[need], full.indices[need])
+    assert narrow.kept_rows(120) == [] and narrow._kept is None  # handed over
+    narrow.rows(need[:5], 120)
+    assert narrow._kept is None  # and no longer kept
