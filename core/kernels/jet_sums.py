@@ -10,6 +10,7 @@ from numba import njit
 
 from ._base import OPTS
 from .algebra import poly_row
+from .lstsq import MOMENT_OF, MOMENT_PAIR, monomials, n_terms
 
 #: terms of the cubic jet
 P3 = 10
@@ -37,18 +38,48 @@ def _offsets(f, r, j0, j1, uvw):
 
 
 @njit(**OPTS)
-def _add(uvw, j0, j1, row, G, b, acc):
-    """Cubic sums of neighbours j0 <= j < j1 into G (lower triangle), b and acc[0] = sum w^2."""
+def ring_sums(uvw, j0, j1, G, b, acc, packed, R):
+    """Cubic sums of the neighbours j0 <= j < j1 added onto G (lower triangle), b and acc[0] =
+    sum w^2 (NaN heights left out), by moments: those neighbours packed into ``packed`` (3,
+    >= j1 - j0), their monomials row by row (:func:`core.kernels.lstsq.monomials`), then each
+    of the 28 distinct moments of G as one dot product over them (:func:`_moments`). Adding
+    the 55 products of each neighbour into G one at a time (as :func:`_sums` does) took twice
+    as long (320 neighbours in the jet rule's 10 rings: 7.5 -> 3.8 us). The same sums to
+    rounding, not the same bits; the quiet points' degree rule keeps :func:`_sums`, whose
+    sums must not depend on where the neighbours are split (:mod:`core.kernels.jet_degree`)."""
+    n = 0
     for j in range(j0, j1):
         w = uvw[2, j]
-        if not math.isfinite(w):
-            continue
-        poly_row(uvw[0, j], uvw[1, j], 3, row)
-        acc[0] += w * w
-        for a in range(P3):
-            b[a] += row[a] * w
-            for c in range(a + 1):
-                G[a, c] += row[a] * row[c]
+        if math.isfinite(w):
+            packed[0, n], packed[1, n], packed[2, n] = uvw[0, j], uvw[1, j], w
+            n += 1
+    monomials(packed[0], packed[1], n, 3, R)
+    _moments(R, packed[2], n, G, b, acc)
+
+
+@njit(**OPTS, fastmath=True)
+def _moments(R, w, n, G, b, acc):
+    """G (lower triangle), b and acc[0] += the cubic sums over the n monomial columns of R
+    and heights w, one dot product per distinct moment (vectorised)."""
+    s = 0.0
+    for j in range(n):
+        s += w[j] * w[j]
+    acc[0] += s
+    for a in range(P3):
+        s = 0.0
+        for j in range(n):
+            s += R[a, j] * w[j]
+        b[a] += s
+    for m in range(n_terms(6)):
+        a, c = MOMENT_PAIR[m, 0], MOMENT_PAIR[m, 1]
+        s = 0.0
+        for j in range(n):
+            s += R[a, j] * R[c, j]
+        G[a, c] += s
+    for a in range(P3):
+        for c in range(a + 1):
+            m = MOMENT_OF[a, c]
+            G[a, c] = G[MOMENT_PAIR[m, 0], MOMENT_PAIR[m, 1]]
 
 
 @njit(**OPTS)
@@ -57,7 +88,8 @@ def _sums(uvw, j0, j1, degree, row, G, b, acc):
     ``uvw``, NaN heights left out) added onto G (lower triangle), b, acc[0] = sum w^2 and
     acc[1] = their count. Sums of a lower degree are the leading block of these (the
     monomials come by total degree, each computed the same way at every degree, and each
-    entry adds the same products in the same order as :func:`_add`)."""
+    entry adds the same products in the same order); a neighbour at a time, so the sums do
+    not depend on where the neighbours are split into rings."""
     p = (degree + 1) * (degree + 2) // 2
     for j in range(j0, j1):
         w = uvw[2, j]

@@ -22,7 +22,7 @@ from numba import njit, prange
 from ._base import BLOCK, OPTS
 from .algebra import chol_solve, cholesky
 from .jet_degree import DegreeRule, degree_scratch, grow, jet_degrees, stash_cubic, walk
-from .jet_sums import P3, P5, _add, _offsets
+from .jet_sums import P3, P5, _offsets, ring_sums
 from .scale import _folded, _local_reference
 
 __all__ = ["P3", "DegreeRule", "jet_residuals", "jet_ici", "jet_degrees"]
@@ -49,8 +49,9 @@ def jet_residuals(f, ks, rcond, rss):
 def _residuals_block(f, ks, rcond, rss, start, stop):
     kmax = ks[-1]
     uvw = np.empty((3, kmax))
-    row, b, x, d, acc = np.empty(P3), np.empty(P3), np.empty(P3), np.empty(P3), np.empty(1)
+    b, x, d, acc = np.empty(P3), np.empty(P3), np.empty(P3), np.empty(1)
     G, L = np.empty((P3, P3)), np.empty((P3, P3))
+    packed, R = np.empty((3, kmax)), np.empty((P3, kmax))
     for r in range(start, stop):
         _offsets(f, r, 0, kmax, uvw)
         G[:, :] = 0.0
@@ -58,7 +59,7 @@ def _residuals_block(f, ks, rcond, rss, start, stop):
         acc[0] = 0.0
         prev = 0
         for c in range(len(ks)):
-            _add(uvw, prev, ks[c], row, G, b, acc)
+            ring_sums(uvw, prev, ks[c], G, b, acc, packed, R)
             prev = ks[c]
             if cholesky(G, P3, rcond, d, L):
                 chol_solve(L, d, P3, b, x)
@@ -127,6 +128,7 @@ def _ici_block(f, ks, sigma2, rule, deg, chosen, coef, walked, start, stop):
     uvw = np.empty((3, ks[-1]))
     vecs = np.empty((9, P5))  # row, b, x, d, (unused), chosen coefficients, 3 rows of scratch
     G, L = np.empty((P5, P5)), np.empty((P3, P3))
+    ring = (np.empty((3, ks[-1])), np.empty((P3, ks[-1])))  # a ring's offsets packed, their monomials
     bounds, ref, acc = np.empty((4, 3)), np.empty(8), np.empty(2)  # lo, hi, est, sd; sum w^2, count
     ds = degree_scratch(len(deg.kd), len(ks))
     for r in range(start, stop):
@@ -137,7 +139,7 @@ def _ici_block(f, ks, sigma2, rule, deg, chosen, coef, walked, start, stop):
         acc[:] = 0.0
         bounds[0, :] = -math.inf
         bounds[1, :] = math.inf
-        chosen[r], prev = _ici_point(f, ks, sigma2[r], rule, deg, r, uvw, vecs, (G, L), bounds, ref, (acc, ds))
+        chosen[r], prev = _ici_point(f, ks, sigma2[r], rule, deg, r, uvw, vecs, (G, L), bounds, ref, (acc, ds, ring))
         coef[r, :] = vecs[5, :P3]
         walked[r] = -1
         if chosen[r] < 0:
@@ -163,11 +165,12 @@ def _grows(f, ks, rule, r, c, fold_here, ref):
 @njit(**OPTS)
 def _ici_point(f, ks, sigma2, rule, deg, r, uvw, vecs, mats, bounds, ref, sums):
     """(the chosen index for centre r, -1 if none; the neighbours summed); its
-    coefficients in vecs[5]. ``mats`` = (G, L), ``sums`` = (acc, the degree rule's scratch)."""
+    coefficients in vecs[5]. ``mats`` = (G, L), ``sums`` = (acc, the degree rule's scratch, the
+    rings' scratch of :func:`~core.kernels.jet_sums.ring_sums`)."""
     row, b, x, d = vecs[0], vecs[1], vecs[2], vecs[3]
     lo, hi, est, sd = bounds[0], bounds[1], bounds[2], bounds[3]
     G, L = mats
-    acc, ds = sums
+    acc, ds, ring = sums
     quiet = deg.quiet[r]
     chosen = -1
     prev = 0
@@ -181,7 +184,7 @@ def _ici_point(f, ks, sigma2, rule, deg, r, uvw, vecs, mats, bounds, ref, sums):
         if quiet:
             grow(uvw, prev, ks[c], deg, row, G, b, acc, sigma2, rule.rcond, ds)
         else:
-            _add(uvw, prev, ks[c], row, G, b, acc)
+            ring_sums(uvw, prev, ks[c], G, b, acc, ring[0], ring[1])
         prev = ks[c]
         if not cholesky(G, P3, rule.rcond, d, L):
             if chosen < 0:

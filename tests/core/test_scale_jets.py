@@ -134,3 +134,31 @@ def test_quiet_points_off_the_jet_stay_small_where_the_surface_ripples():
     scale_h = np.sqrt(np.mean(h[use] ** 2))
     # 0.130; 0.093 with the cap; the paper's k = 15: 0.19; a cubic jet on 15: 0.105
     assert np.median(np.abs(res.mean - h)[use]) < 0.11 * scale_h
+
+
+def test_ring_sums_are_the_cubic_least_squares_sums():
+    """The jets' cubic sums are added a ring at a time by moments (jet_sums.ring_sums,
+    vectorised): over rings of the jet rule's sizes they are numpy's R^T R, R^T w and w.w of
+    the neighbours so far, to rounding, neighbours without a height (NaN) left out, G's
+    whole lower triangle filled and nothing past the cubic's block touched."""
+    from core.kernels.algebra import poly_row
+    from core.kernels.jet_sums import P3, P5, ring_sums
+
+    rng = np.random.default_rng(7)
+    ks = [0, 15, 20, 28, 40, 56, 80, 113, 160, 226, 320]
+    uvw = rng.normal(size=(3, 320)) * [[2.0], [1.5], [0.2]]
+    uvw[2, [3, 17, 18, 200]] = np.nan
+    rows = np.empty((320, P3))
+    for j, (u, v) in enumerate(uvw[:2].T):
+        poly_row.py_func(u, v, 3, rows[j])
+    G, b, acc = np.zeros((P5, P5)), np.zeros(P5), np.zeros(2)
+    packed, R = np.empty((3, 320)), np.empty((P3, 320))
+    lower = np.tril_indices(P3)
+    for lo, hi in zip(ks, ks[1:]):
+        ring_sums(uvw, lo, hi, G, b, acc, packed, R)
+        has = np.isfinite(uvw[2, :hi])
+        M, w = rows[:hi][has], uvw[2, :hi][has]
+        np.testing.assert_allclose(G[lower], (M.T @ M)[lower], rtol=1e-12, atol=1e-13 * np.abs(M.T @ M).max())
+        np.testing.assert_allclose(b[:P3], M.T @ w, rtol=1e-12, atol=1e-13 * np.abs(M.T @ w).max())
+        np.testing.assert_allclose(acc, [w @ w, 0.0], rtol=1e-13)
+    assert (G[P3:] == 0).all() and (G[:, P3:] == 0).all() and (b[P3:] == 0).all()
