@@ -41,8 +41,7 @@ from __future__ import annotations
 import numpy as np
 
 from .kernels.algebra import MAX_TERMS
-from .kernels.anchors import anchors_among, first_anchors
-from .passes import mix64
+from .kernels.anchors import anchors_among, first_anchors, priorities
 from .tuning import ANCHOR_BLEND, ANCHOR_REACH, ANCHOR_ROWS
 
 #: the hash's seed, and how many nearest distances it reads (:func:`priority`)
@@ -112,23 +111,16 @@ def shared_scale(pts, near, noisy, k_top, prio=None, sat_out=None):
     return follow, anchor[follow, 0]
 
 
-def priority(pts, near, chunk=65_536) -> np.ndarray:
-    """(N,) uint64 > 0: a hash of each point's distances to its ``RATIOS`` nearest, sorted
-    and divided by the largest, rounded to 2^-20: a draw that depends on neither the order
-    of the points, the thread count or the tile that holds them, nor the pose or scale of
-    the cloud (a rotation moves the ratios by ~1e-16, far from the rounding's half-steps),
-    so a turned cloud reads the same anchors. Points with equal ratios (an exact grid's)
-    tie, and a tie is no anchor: such points fit their own."""
+def priority(pts, near) -> np.ndarray:
+    """(N,) uint64 > 0: a hash of each point's distances to its ``RATIOS`` nearest (``near``
+    (N, >= RATIOS + 1), itself first), sorted and divided by the largest, rounded to 2^-20
+    (:func:`core.kernels.anchors.priorities`): a draw that depends on neither the order of
+    the points, the thread count or the tile that holds them, nor the pose or scale of the
+    cloud (a rotation moves the ratios by ~1e-16, far from the rounding's half-steps), so a
+    turned cloud reads the same anchors. Points with equal ratios (an exact grid's) tie, and
+    a tie is no anchor: such points fit their own."""
     prio = np.empty(len(pts), dtype=np.uint64)
-    for start in range(0, len(pts), chunk):
-        rows = slice(start, start + chunk)
-        d = np.linalg.norm(pts[np.asarray(near[rows, 1:RATIOS + 1])] - pts[rows, None], axis=2)
-        d.sort(axis=1)
-        q = np.rint(d[:, :-1] / np.where(d[:, -1:] > 0.0, d[:, -1:], 1.0) * 2.0**20).astype(np.uint64)
-        h = np.full(len(q), _SALT, dtype=np.uint64)
-        for j in range(q.shape[1]):
-            h = mix64(h ^ q[:, j])
-        prio[rows] = h | np.uint64(1)
+    priorities(np.ascontiguousarray(pts, dtype=np.float64), near, RATIOS, _SALT, prio)
     return prio
 
 

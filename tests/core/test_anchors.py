@@ -59,6 +59,39 @@ def test_the_compiled_blend_is_the_numpy_reference(constraint, monkeypatch):
         assert dot.min() > 1 - 1e-9, name
 
 
+def _priority_numpy(pts, near):
+    """The anchors' draw as numpy computes it (the reference of the compiled loop)."""
+    from core.passes import mix64
+
+    d = np.linalg.norm(pts[near[:, 1:anchors.RATIOS + 1]] - pts[:, None], axis=2)
+    d.sort(axis=1)
+    q = np.rint(d[:, :-1] / np.where(d[:, -1:] > 0.0, d[:, -1:], 1.0) * 2.0**20).astype(np.uint64)
+    h = np.full(len(q), anchors._SALT, dtype=np.uint64)
+    for j in range(q.shape[1]):
+        h = mix64(h ^ q[:, j])
+    return h | np.uint64(1)
+
+
+@pytest.mark.parametrize("cloud", ["noisy", "grid", "far"])
+def test_the_compiled_draw_is_numpy_s_to_the_last_bit(cloud):
+    """anchors.priority (a compiled loop) equals numpy's norms, sort, rounding and hash bit
+    for bit: on a noisy torus, on a grid (ties at every distance, ratios on the rounding's
+    half-steps) and far from the origin (distances of large coordinates), with the neighbour
+    rows a strided view as the estimate passes them."""
+    rng = np.random.default_rng(3)
+    if cloud == "grid":
+        g = np.stack(np.meshgrid(np.arange(40.0), np.arange(40.0)), -1).reshape(-1, 2)
+        pts = np.c_[g, rng.integers(0, 2, len(g)) * 0.5]
+    else:
+        pts = noise.add_noise(shapes.torus(5000, seed=9).points, 0.2, seed=10)
+        pts = pts + 1e6 if cloud == "far" else pts
+    near = cKDTree(pts).query(pts, 16)[1][:, :anchors.RATIOS + 1]
+    assert not near.flags.c_contiguous
+    got = anchors.priority(pts, near)
+    np.testing.assert_array_equal(got, _priority_numpy(pts, near))
+    assert len(np.unique(got)) > (0.001 if cloud == "grid" else 0.99) * len(pts)
+
+
 def test_anchors_are_the_same_whatever_the_order_pose_or_scale(monkeypatch, helpers):
     pts = noise.add_noise(shapes.torus(6000, seed=2).points, 0.2, seed=3)
     anchor = _anchor(pts, 160, 40, monkeypatch)  # m = 3: an anchor's priority beats its 3 nearest
