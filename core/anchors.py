@@ -32,7 +32,7 @@ The choice of k is shared the same way (:func:`shared_scale`, 2026-12-06): with 
 jet rule of :mod:`core.scale` grows to the largest size nearly everywhere, so it runs at
 the anchors of that size, and the other noisy points (and robust mode's suspects, which
 sit the rule out) take their nearest anchor's size; a follower's own wide neighbours are
-searched only if it fits after all (:func:`core.wide_neighbours.rows_at_least`). Noisy
+searched only if it fits after all (:func:`core.wide_rows.rows_at_least`). Noisy
 100k torus 7.7 -> 5.2 s, races unchanged (README, "Wide fits at sparse anchors").
 """
 

@@ -4,7 +4,7 @@ A neighbour held in a whole graph costs an index and a distance (int32 + float64
 bytes); :data:`core.tuning.NEIGHBOUR_BUDGET` counts such entries (~0.8 GB). k="auto"
 holds :data:`core.tuning.SEARCH_WIDTH` columns of every row; wider rows are kept as
 indices only (4 bytes, a third of an entry), and only at the points that fit on them
-(:func:`core.wide_neighbours.rows_at_least`): for a size shared at anchors
+(:func:`core.wide_rows.rows_at_least`): for a size shared at anchors
 (:func:`core.anchors.per_anchor`: 1 in round(k / ANCHOR_ROWS) points, from 1.5 x ANCHOR_ROWS)
 about ANCHOR_ROWS per point whatever k, else every point's k. So a size is a
 candidate if every point may hold it whole (:func:`whole_cap`, the rule before the
@@ -13,7 +13,7 @@ fits are shared (:func:`affordable`): a noisy cloud of 1M points reaches 320 nei
 (56 before: its mean |H| error 0.21 against 0.022, README "Wide fits at sparse anchors");
 from ~1.03M points the bridge (113 at every point) no longer fits and the sizes end at 56.
 The whole graph is widened past the held columns only within :func:`whole_cap`
-(:func:`core.wide_neighbours.rows_at_least`, the initial normals).
+(:func:`core.wide_rows.rows_at_least`, the initial normals).
 """
 
 from __future__ import annotations

@@ -16,7 +16,7 @@ from .passes import PassRule, few_fits
 from .initial_normals import Initial
 from .stages import Fit, Scale, _empty_fit, _Fitter
 from .tuning import ANCHOR_REACH, DRIFT_POOL, HOLD_TURN, IRLS_LATER, PASS_DECAY, RESETTLE_K, ROWS_LATER
-from .wide_neighbours import held_h, rows_at_least
+from .wide_rows import held_h, rows_at_least
 
 
 class Refined(NamedTuple):
@@ -98,7 +98,7 @@ def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n
 def _anchors(pts, nb, kc, h, sc: Scale, outlier, plan):
     """The anchors whose fits each point reads (:func:`core.anchors.assign`) with k="auto",
     else None; anchors and followers are points fitted in every pass (outliers fit their own),
-    ``h`` > 0 (:func:`core.wide_neighbours.held_h`: the rows of followers are not searched)."""
+    ``h`` > 0 (:func:`core.wide_rows.held_h`: the rows of followers are not searched)."""
     if not anchors.in_use(plan):
         return None
     eligible = ~sc.on_jet & sc.spans & (h > 0) & ~outlier

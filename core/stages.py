@@ -268,7 +268,7 @@ class _Fitter(NamedTuple):
     def _chunks(self, nrm, c, whole):
         """The :class:`Chunk` of centres ``c`` on the rows in place, where the NF kernel reads
         them (a copy of 32k rows of 320 was 4 % of a noisy k="auto" estimate): the whole
-        graph's (``whole``), or held and searched rows' (:meth:`core.wide_neighbours._Rows.parts`);
+        graph's (``whole``), or held and searched rows' (:meth:`core.wide_rows._Rows.parts`);
         else on a copy of their rows."""
         if not len(c):
             return []

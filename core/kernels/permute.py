@@ -57,3 +57,14 @@ def put_rows(good, rows, src, dst):
             r = rows[m]
             for c in range(src.shape[1]):
                 dst[r, c] = src[m, c]
+
+
+@njit(**OPTS, parallel=True)
+def copy_rows(src, pos, dst, at):
+    """``dst[at] = src[pos]`` for (M, k) rows (numpy reference), in parallel and without the
+    temporary of ``src[pos]``: rows searched earlier moved into an array of their own (240k
+    rows of 320 at 1M points, 0.2-0.6 s in numpy)."""
+    k = min(src.shape[1], dst.shape[1])
+    for r in prange(len(pos)):
+        for c in range(k):
+            dst[at[r], c] = src[pos[r], c]

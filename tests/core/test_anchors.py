@@ -7,7 +7,7 @@ import pytest
 from scipy.spatial import cKDTree
 
 import core
-from core import anchor_blend, anchors, noise, refinement, scale, shapes, stages, wide_neighbours
+from core import anchor_blend, anchors, noise, refinement, scale, shapes, stages, wide_rows
 from core._progress import Progress
 from core.methods import METHODS
 from core.stages import _empty_fit, _Fitter
@@ -182,7 +182,7 @@ def test_a_noisy_point_takes_the_scale_of_an_anchor_among_its_nearest(monkeypatc
 
 
 def test_a_follower_whose_anchor_fails_fits_its_own_on_rows_searched_then(monkeypatch):
-    """A follower's wide rows are not searched up front (core.wide_neighbours.rows_at_least);
+    """A follower's wide rows are not searched up front (core.wide_rows.rows_at_least);
     where its anchor's fit fails it fits its own on rows searched then: the same numbers as
     with every row searched first."""
     pts = noise.add_noise(shapes.torus(6000, seed=5).points, 0.2, seed=6)
@@ -196,7 +196,7 @@ def test_a_follower_whose_anchor_fails_fits_its_own_on_rows_searched_then(monkey
     monkeypatch.setattr(stages, "blended", failing)
     lazy = core.estimate(pts)
     assert min(failed) > 100
-    monkeypatch.setattr(refinement, "rows_at_least", lambda nb, kc, fits=None: wide_neighbours.rows_at_least(nb, kc))
+    monkeypatch.setattr(refinement, "rows_at_least", lambda nb, kc, fits=None: wide_rows.rows_at_least(nb, kc))
     full = core.estimate(pts)
     for name in ("normals", "k1", "k2", "e1", "valid", "k_point"):
         np.testing.assert_array_equal(getattr(lazy, name), getattr(full, name), err_msg=name)

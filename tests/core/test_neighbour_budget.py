@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from core import anchors, neighbour_budget, scale, shapes, tuning
-from core.wide_neighbours import rows_at_least, search_in_spatial_order
+from core.wide_neighbours import search_in_spatial_order
+from core.wide_rows import rows_at_least
 
 
 @pytest.mark.parametrize("n", [1000, 100_000, 300_000, 1_000_000, 1_100_000, 2_000_000, 10_000_000])

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from core import anchors, build_neighbours, estimate, noise, plan, scale, shapes, stages
-from core.wide_neighbours import LazyNeighbours, WidenableNeighbours, rows_at_least, search_in_spatial_order
+from core.wide_neighbours import LazyNeighbours, WidenableNeighbours, search_in_spatial_order
+from core.wide_rows import rows_at_least
 from core.stage_cache import StageCache
 
 FIELDS = ("normals", "k1", "k2", "e1", "e2", "valid", "k_point", "degree_point", "outlier_score", "crease",

@@ -1,0 +1,140 @@
+"""The rows k="auto"'s fits read (issue 15, speed): the columns a
+:class:`core.wide_neighbours.WidenableNeighbours` holds, and for the points that fit on more
+neighbours than that, their rows searched wider: those the scale's jets searched at nearly
+the same points, which the graph kept for the fits
+(:meth:`~core.wide_neighbours.WidenableNeighbours.keep_rows`), and the others searched here.
+Only indices are held (the anchors' 320 distances were 640 MB at 1M points)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .kernels.kdtree import distances_at
+from .kernels.permute import copy_rows
+from .neighbour_budget import whole_cap
+
+#: (row, neighbour) entries searched at a time (their distances: 32 MB)
+_SEARCHED = 1 << 22
+
+__all__ = ["rows_at_least", "held_h"]
+
+
+def rows_at_least(nb, kc, fits=None):
+    """``(rows, h)``: the neighbours of every point, at least ``kc[i]`` for point i, as an
+    (N, kc.max()) array or, when ``nb`` holds fewer columns and only a minority of the
+    points needs more, a :class:`_Rows` that adds them per chunk; ``h[i]`` the distance
+    to point i's ``kc[i]``-th neighbour. ``fits`` (N,) bool, optional: the points expected
+    to fit (k="auto"'s anchors, :mod:`core.anchors`); the others' wider rows are searched
+    when they do (:meth:`_Rows.ensure`), and until then ``h`` is :func:`held_h`'s. Takes
+    over the rows ``nb`` kept (:meth:`~core.wide_neighbours.WidenableNeighbours.kept_rows`)."""
+    n, k = len(kc), int(kc.max())
+    kept = nb.kept_rows(k) if hasattr(nb, "kept_rows") else []  # the graph holds them no more, used or not
+    wide = np.flatnonzero(kc > nb.width) if k > nb.width else np.empty(0, dtype=np.int64)
+    if fits is not None:
+        wide = wide[fits[wide]]
+    if 2 * len(wide) > n and k <= whole_cap(n, nb.width):
+        nb.widen(k)
+        wide = wide[:0]
+    if k <= nb.width:
+        idx, dist = nb.take(k)
+        return idx, dist[np.arange(n), kc - 1]
+    idx = nb.take(nb.width)[0]
+    h = held_h(nb, kc)
+    return _Rows(idx, wide, _wide_rows(nb, wide, k, kc, h, kept), kc, nb), h
+
+
+def _wide_rows(nb, centres, k, kc, h, kept=()):
+    """The ``k`` nearest (indices) of ``centres`` (M,): those in the ``kept`` blocks
+    ``(centres, rows)`` copied (:func:`core.kernels.permute.copy_rows`), the others searched
+    in chunks; writes the distance to each one's ``kc``-th into ``h`` (for a kept row, the
+    search's own distance recomputed: :func:`core.kernels.kdtree.distances_at`)."""
+    w_idx = np.empty((len(centres), k), dtype=nb.take(1)[0].dtype)
+    todo = np.ones(len(centres), dtype=bool)
+    for got, rows in kept:
+        at, pos = _positions(centres, got)
+        copy_rows(rows, pos, w_idx, at)
+        distances_at(nb.points, centres[at], rows, pos, kc[centres[at]] - 1, h, centres[at])
+        todo[at] = False
+    rest = np.flatnonzero(todo)
+    step = max(1, _SEARCHED // k)
+    for start in range(0, len(rest), step):
+        r = rest[start:start + step]
+        w_idx[r], dist = nb.rows(centres[r], k)
+        h[centres[r]] = dist[np.arange(len(r)), kc[centres[r]] - 1]
+    return w_idx
+
+
+def _positions(centres, got):
+    """``(at, pos)``: the entries ``at`` of ``centres`` that are in ``got`` (both without
+    repeats), at ``got[pos]``."""
+    if not len(got):
+        return np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64)
+    order = np.argsort(got, kind="stable")
+    slot = order[np.minimum(np.searchsorted(got, centres, sorter=order), len(got) - 1)]
+    at = np.flatnonzero(got[slot] == centres)
+    return at, slot[at]
+
+
+def held_h(nb, kc):
+    """(N,): the distance to each point's ``kc``-th neighbour where ``nb`` holds it, else to
+    the last neighbour held (a lower bound, > 0 as the exact one is: duplicates are merged before)."""
+    dist = nb.take(min(nb.width, int(kc.max())))[1]
+    return dist[np.arange(len(kc)), np.minimum(kc, dist.shape[1]) - 1].copy()
+
+
+class _Rows:
+    """The neighbours of a chunk of centres ``c`` (``self[c]``), as wide as the most any of
+    them uses (``kc``): the ``held`` columns, and for the centres in ``wide`` (sorted) their
+    rows ``w_idx`` searched wider (by ``nb``, :meth:`ensure`). Columns a centre does not use
+    hold the centre itself (the fits read a centre's first kc only)."""
+
+    __slots__ = ("held", "wide", "w_idx", "kc", "nb")
+
+    def __init__(self, held, wide, w_idx, kc, nb):
+        self.held, self.wide, self.w_idx, self.kc, self.nb = np.ascontiguousarray(held), wide, w_idx, kc, nb
+
+    def ensure(self, c, h) -> None:
+        """Search the wider rows of centres ``c`` not held yet, and write their ``h``."""
+        c = c[(self.kc[c] > self.held.shape[1]) & ~self._slots(c)[1]]
+        if not len(c):
+            return
+        w_idx = _wide_rows(self.nb, c, self.w_idx.shape[1], self.kc, h)
+        wide = np.concatenate([self.wide, c])
+        order = np.argsort(wide, kind="stable")
+        self.wide, self.w_idx = wide[order], np.concatenate([self.w_idx, w_idx])[order]
+
+    def parts(self, c):
+        """The rows of centres ``c`` without a copy where they are held: ``(array, rows,
+        centres)`` per part, row ``rows[r]`` of ``array`` listing the neighbours of
+        ``centres[r]`` (its first ``kc`` columns: what the fits read): the held columns
+        where they suffice, the rows searched wider for those in ``wide``, and a copy
+        (:meth:`__getitem__`) for any other (a centre fitted before its rows were searched)."""
+        width = self.held.shape[1]
+        short = self.kc[c] <= width
+        pos, found = self._slots(c)
+        searched = ~short & found
+        rest = ~short & ~searched
+        out = [(self.held, c[short], c[short]), (self.w_idx, pos[searched], c[searched])]
+        if rest.any():
+            out.append((self[c[rest]], np.arange(np.count_nonzero(rest)), c[rest]))
+        return [part for part in out if len(part[2])]
+
+    def __getitem__(self, c):
+        k = int(self.kc[c].max()) if len(c) else 1
+        width = self.held.shape[1]
+        if k <= width:
+            return self.held[c, :k]
+        idx = np.empty((len(c), k), dtype=self.held.dtype)
+        idx[:, :width] = self.held[c]
+        idx[:, width:] = c[:, None]
+        pos, found = self._slots(c)
+        mine = np.flatnonzero(found)
+        idx[mine] = self.w_idx[pos[mine], :k]
+        return idx
+
+    def _slots(self, c):
+        """``(pos, found)``: each centre's row of ``w_idx`` and whether it has one (``wide`` is sorted)."""
+        if not len(self.wide):
+            return np.zeros(len(c), dtype=np.int64), np.zeros(len(c), dtype=bool)
+        pos = np.minimum(np.searchsorted(self.wide, c), len(self.wide) - 1)
+        return pos, self.wide[pos] == c
