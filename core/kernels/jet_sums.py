@@ -10,7 +10,7 @@ from numba import njit
 
 from ._base import OPTS
 from .algebra import poly_row
-from .lstsq import MOMENT_OF, MOMENT_PAIR, monomials, n_terms
+from .lstsq import MOMENT_PAIR, copy_moments, monomials, n_terms
 
 #: terms of the cubic jet
 P3 = 10
@@ -76,10 +76,7 @@ def _moments(R, w, n, G, b, acc):
         for j in range(n):
             s += R[a, j] * R[c, j]
         G[a, c] += s
-    for a in range(P3):
-        for c in range(a + 1):
-            m = MOMENT_OF[a, c]
-            G[a, c] = G[MOMENT_PAIR[m, 0], MOMENT_PAIR[m, 1]]
+    copy_moments(G, P3)
 
 
 @njit(**OPTS)

@@ -192,10 +192,7 @@ def _accumulate_moments(R, X, Y, wt, j0, j1, degree, vec, G, acc, WR):
         for j in range(j0, j1):
             g += WR[a, j] * R[c, j]
         G[a, c] += g
-    for a in range(p):
-        for c in range(a + 1):
-            m = MOMENT_OF[a, c]
-            G[a, c] = G[MOMENT_PAIR[m, 0], MOMENT_PAIR[m, 1]]
+    copy_moments(G, p)
     s1 = 0.0
     s2 = 0.0
     for j in range(j0, j1):
@@ -204,6 +201,16 @@ def _accumulate_moments(R, X, Y, wt, j0, j1, degree, vec, G, acc, WR):
     acc[0] = G[0, 0]  # sum w: both are summed since the last reset
     acc[1] += s1
     acc[2] += s2
+
+
+@njit(**OPTS, inline="always")
+def copy_moments(G, p):
+    """Fill the lower triangle of the first ``p`` rows of G from its distinct moments: each
+    entry (a, c) becomes the one entry :data:`MOMENT_PAIR` sums for their moment R_a R_c."""
+    for a in range(p):
+        for c in range(a + 1):
+            m = MOMENT_OF[a, c]
+            G[a, c] = G[MOMENT_PAIR[m, 0], MOMENT_PAIR[m, 1]]
 
 
 @njit(**OPTS, inline="always")
