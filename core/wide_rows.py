@@ -53,14 +53,17 @@ def _wide_rows(nb, centres, k, kc, h, kept=()):
     for got, rows in kept:
         at, pos = _positions(centres, got)
         copy_rows(rows, pos, w_idx, at)
-        distances_at(nb.points, centres[at], rows, pos, kc[centres[at]] - 1, h, centres[at])
+        c, dist = centres[at], np.empty(len(at))
+        distances_at(nb.points, c, rows, pos, kc[c] - 1, dist)
+        h[c] = dist
         todo[at] = False
     rest = np.flatnonzero(todo)
     step = max(1, _SEARCHED // k)
     for start in range(0, len(rest), step):
         r = rest[start:start + step]
-        w_idx[r], dist = nb.rows(centres[r], k)
-        h[centres[r]] = dist[np.arange(len(r)), kc[centres[r]] - 1]
+        c = centres[r]
+        w_idx[r], dist = nb.rows(c, k)
+        h[c] = dist[np.arange(len(r)), kc[c] - 1]
     return w_idx
 
 

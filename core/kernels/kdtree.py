@@ -219,12 +219,12 @@ def _bucket_sort(cd, cj, m, r, rank, k, work):
 
 
 @njit(**OPTS)
-def distances_at(p, centres, idx, rows, col, out, at):
-    """``out[at[r]]``: the distance from point ``centres[r]`` to its neighbour
+def distances_at(p, centres, idx, rows, col, out):
+    """``out[r]``: the distance from point ``centres[r]`` to its neighbour
     ``idx[rows[r], col[r]]``, the bits :func:`query_rows` gives it (:func:`_distance`): a row
     searched earlier, whose distances were not kept."""
     for r in range(len(centres)):
-        out[at[r]] = _distance(p, centres[r], idx[rows[r], col[r]])
+        out[r] = _distance(p, centres[r], idx[rows[r], col[r]])
 
 
 @njit(**OPTS, parallel=True)
