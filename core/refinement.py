@@ -53,6 +53,7 @@ def refine(pts, initial: Initial, outlier, nb, sc: Scale, plan, report) -> Refin
         elif best.passes_run == 1:  # pass 2 undone, fitted everywhere: where it repeats pass 1's change, drift
             pool = nb.take(min(DRIFT_POOL, plan.k_search))[0]
             best = best._replace(fit=drift.step_back(before.fit, best.fit, complete(), pool))
+        del fit, complete  # not held while the next pass is fitted (a fit is 106 MB at 1M points)
         if not more:
             break
     return finish(best, sc, outlier, plan)
@@ -86,6 +87,7 @@ def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n
                          held)
         yield p, fit, nrm, complete
         complete()
+        kept = complete = None  # the next pass builds its own (the anchors' fits: 54 MB at 1M points)
         if p == 0:
             fitter = _refining(fitter, plan)
         new = np.where(fit.valid[:, None], fit.normals, nrm)
@@ -189,6 +191,7 @@ class _Rest:
             self.fitter.into(*args)
         if self.reported is None:
             self.reported = self.fit if self.held is None else self.held.report(self.fit, self.nrm)
+            self.fit = self.nrm = None  # what it was reported from is no longer needed here
         return self.reported
 
 

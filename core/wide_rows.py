@@ -87,37 +87,37 @@ def held_h(nb, kc):
 
 class _Rows:
     """The neighbours of a chunk of centres ``c`` (``self[c]``), as wide as the most any of
-    them uses (``kc``): the ``held`` columns, and for the centres in ``wide`` (sorted) their
-    rows ``w_idx`` searched wider (by ``nb``, :meth:`ensure`). Columns a centre does not use
-    hold the centre itself (the fits read a centre's first kc only)."""
+    them uses (``kc``): the ``held`` columns, and for the centres of each of the ``blocks``
+    ``(centres, rows)`` (centres sorted) their rows searched wider: the first block by
+    :func:`rows_at_least`, one more per :meth:`ensure` that searched any (a new block, never
+    a copy of the others: at 1M points the first holds 365 MB, and joining 12 rows to it
+    took 730 MB more). Columns a centre does not use hold the centre itself (the fits read
+    a centre's first kc only)."""
 
-    __slots__ = ("held", "wide", "w_idx", "kc", "nb")
+    __slots__ = ("held", "blocks", "kc", "nb")
 
     def __init__(self, held, wide, w_idx, kc, nb):
-        self.held, self.wide, self.w_idx, self.kc, self.nb = np.ascontiguousarray(held), wide, w_idx, kc, nb
+        self.held, self.blocks, self.kc, self.nb = np.ascontiguousarray(held), [(wide, w_idx)], kc, nb
 
     def ensure(self, c, h) -> None:
-        """Search the wider rows of centres ``c`` not held yet, and write their ``h``."""
-        c = c[(self.kc[c] > self.held.shape[1]) & ~self._slots(c)[1]]
-        if not len(c):
-            return
-        w_idx = _wide_rows(self.nb, c, self.w_idx.shape[1], self.kc, h)
-        wide = np.concatenate([self.wide, c])
-        order = np.argsort(wide, kind="stable")
-        self.wide, self.w_idx = wide[order], np.concatenate([self.w_idx, w_idx])[order]
+        """Search the wider rows of centres ``c`` (sorted) not held yet, and write their ``h``."""
+        c = c[(self.kc[c] > self.held.shape[1]) & (self._slots(c)[0] < 0)]
+        if len(c):
+            self.blocks.append((c, _wide_rows(self.nb, c, self.blocks[0][1].shape[1], self.kc, h)))
 
     def parts(self, c):
         """The rows of centres ``c`` without a copy where they are held: ``(array, rows,
         centres)`` per part, row ``rows[r]`` of ``array`` listing the neighbours of
         ``centres[r]`` (its first ``kc`` columns: what the fits read): the held columns
-        where they suffice, the rows searched wider for those in ``wide``, and a copy
+        where they suffice, the rows of each block for its centres, and a copy
         (:meth:`__getitem__`) for any other (a centre fitted before its rows were searched)."""
-        width = self.held.shape[1]
-        short = self.kc[c] <= width
-        pos, found = self._slots(c)
-        searched = ~short & found
-        rest = ~short & ~searched
-        out = [(self.held, c[short], c[short]), (self.w_idx, pos[searched], c[searched])]
+        short = self.kc[c] <= self.held.shape[1]
+        block, pos = self._slots(c)
+        out = [(self.held, c[short], c[short])]
+        for b, (_, rows) in enumerate(self.blocks):
+            mine = ~short & (block == b)
+            out.append((rows, pos[mine], c[mine]))
+        rest = ~short & (block < 0)
         if rest.any():
             out.append((self[c[rest]], np.arange(np.count_nonzero(rest)), c[rest]))
         return [part for part in out if len(part[2])]
@@ -130,14 +130,20 @@ class _Rows:
         idx = np.empty((len(c), k), dtype=self.held.dtype)
         idx[:, :width] = self.held[c]
         idx[:, width:] = c[:, None]
-        pos, found = self._slots(c)
-        mine = np.flatnonzero(found)
-        idx[mine] = self.w_idx[pos[mine], :k]
+        block, pos = self._slots(c)
+        for b, (_, rows) in enumerate(self.blocks):
+            mine = np.flatnonzero(block == b)
+            idx[mine] = rows[pos[mine], :k]
         return idx
 
     def _slots(self, c):
-        """``(pos, found)``: each centre's row of ``w_idx`` and whether it has one (``wide`` is sorted)."""
-        if not len(self.wide):
-            return np.zeros(len(c), dtype=np.int64), np.zeros(len(c), dtype=bool)
-        pos = np.minimum(np.searchsorted(self.wide, c), len(self.wide) - 1)
-        return pos, self.wide[pos] == c
+        """``(block, pos)``: each centre's block and its row there (block -1: none)."""
+        block = np.full(len(c), -1)
+        pos = np.zeros(len(c), dtype=np.int64)
+        for b, (centres, _) in enumerate(self.blocks):
+            if not len(centres):
+                continue
+            at = np.minimum(np.searchsorted(centres, c), len(centres) - 1)
+            mine = (centres[at] == c) & (block < 0)
+            block[mine], pos[mine] = b, at[mine]
+        return block, pos

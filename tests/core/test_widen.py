@@ -265,7 +265,11 @@ def test_rows_of_points_that_may_not_fit_are_searched_when_they_do(quantised):
     np.testing.assert_array_equal(h[exact], full.distances[exact, kc[exact] - 1])
     assert (h <= full.distances[np.arange(n), kc - 1]).all()  # the others: a lower bound until searched
     later = np.flatnonzero(~exact)
+    first = rows.blocks[0][1]
     rows.ensure(later[::2], h)
+    assert rows.blocks[0][1] is first and len(rows.blocks) == 2  # a block of their own: the others not copied
+    rows.ensure(later[::2], h)
+    assert len(rows.blocks) == 2  # held already: not searched again
     now = exact.copy()
     now[later[::2]] = True
     np.testing.assert_array_equal(h[now], full.distances[now, kc[now] - 1])
@@ -275,15 +279,16 @@ def test_rows_of_points_that_may_not_fit_are_searched_when_they_do(quantised):
         np.testing.assert_array_equal(row[:kc[i]], full.indices[i, :kc[i]])
     assert (rows[later[1::2]][:, 24:] == later[1::2, None]).all()  # not searched: the centre itself
     every = np.arange(n)
-    parts = rows.parts(every)  # the fits read the rows in place: held, searched, and a copy for the rest
-    assert [a is rows.held for a, _, _ in parts[:1]] == [True] and parts[1][0] is rows.w_idx and len(parts) == 3
+    parts = rows.parts(every)  # the fits read the rows in place: held, each block, and a copy for the rest
+    in_place = [rows.held, *(block for _, block in rows.blocks)]
+    assert len(parts) == 4 and all(a is b for (a, _, _), b in zip(parts, in_place))
     assert np.array_equal(np.sort(np.concatenate([at for _, _, at in parts])), every)
     for array, at_rows, at in parts:
         for i, r in zip(at, at_rows):
             want = full.indices[i, :kc[i]] if now[i] else rows[np.array([i])][0, :kc[i]]
             np.testing.assert_array_equal(array[r, :kc[i]], want)
     none, _ = rows_at_least(narrow, kc, np.zeros(n, dtype=bool))  # nothing searched yet: held, and copies
-    assert len(none.wide) == 0 and [len(at) for _, _, at in none.parts(every)] == [(kc <= 24).sum(), (kc > 24).sum()]
+    assert len(none.blocks[0][0]) == 0 and [len(at) for _, _, at in none.parts(every)] == [(kc <= 24).sum(), (kc > 24).sum()]
 
 
 def test_rows_kept_for_the_fits_are_not_searched_again(quantised, monkeypatch):
