@@ -43,14 +43,17 @@ def rows_at_least(nb, kc, fits=None):
     return _Rows(idx, wide, _wide_rows(nb, wide, k, kc, h, kept), kc, nb), h
 
 
-def _wide_rows(nb, centres, k, kc, h, kept=()):
+def _wide_rows(nb, centres, k, kc, h, kept=None):
     """The ``k`` nearest (indices) of ``centres`` (M,): those in the ``kept`` blocks
-    ``(centres, rows)`` copied (:func:`core.kernels.permute.copy_rows`), the others searched
+    ``(centres, rows)`` copied (:func:`core.kernels.permute.copy_rows`; the list is emptied,
+    each block freed once copied: all of them beside the new rows were 365 MB more at 1M
+    points), the others searched
     in chunks; writes the distance to each one's ``kc``-th into ``h`` (for a kept row, the
     search's own distance recomputed: :func:`core.kernels.kdtree.distances_at`)."""
     w_idx = np.empty((len(centres), k), dtype=nb.take(1)[0].dtype)
     todo = np.ones(len(centres), dtype=bool)
-    for got, rows in kept:
+    while kept:
+        got, rows = kept.pop(0)
         at, pos = _positions(centres, got)
         copy_rows(rows, pos, w_idx, at)
         c, dist = centres[at], np.empty(len(at))

@@ -3,10 +3,12 @@ k="auto" exactly what a search of every point's k_search neighbours gives (issue
 
 from __future__ import annotations
 
+import weakref
+
 import numpy as np
 import pytest
 
-from core import anchors, build_neighbours, estimate, noise, plan, scale, shapes, stages
+from core import anchors, build_neighbours, estimate, noise, plan, scale, shapes, stages, wide_rows
 from core.wide_neighbours import LazyNeighbours, WidenableNeighbours, search_in_spatial_order
 from core.wide_rows import rows_at_least
 from core.stage_cache import StageCache
@@ -308,10 +310,19 @@ def test_rows_kept_for_the_fits_are_not_searched_again(quantised, monkeypatch):
     for c in kept:
         narrow.rows(c, 120)
     narrow.rows(np.arange(50), 60)  # another width: not kept
-    searched = []
+    searched, copied = [], []
     real = wide.query_rows
     monkeypatch.setattr(wide, "query_rows", lambda p, t, r, c, *a: (searched.append(c.copy()), real(p, t, r, c, *a)))
+    copy = wide_rows.copy_rows
+
+    def copied_one_by_one(block, *args):  # each kept block is freed once copied (not all beside the new rows)
+        assert all(ref() is None for ref in copied)
+        copied.append(weakref.ref(block))
+        return copy(block, *args)
+
+    monkeypatch.setattr(wide_rows, "copy_rows", copied_one_by_one)
     rows, h = rows_at_least(narrow, kc, fits)
+    assert len(copied) == 2
     need = np.flatnonzero(fits & (kc > 24))
     np.testing.assert_array_equal(np.sort(np.concatenate(searched)), np.setdiff1d(need, np.concatenate(kept)))
     np.testing.assert_array_equal(h[need], full.distances[need, kc[need] - 1])
