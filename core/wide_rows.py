@@ -45,11 +45,11 @@ def rows_at_least(nb, kc, fits=None):
 
 def _wide_rows(nb, centres, k, kc, h, kept=None):
     """The ``k`` nearest (indices) of ``centres`` (M,): those in the ``kept`` blocks
-    ``(centres, rows)`` copied (:func:`core.kernels.permute.copy_rows`; the list is emptied,
-    each block freed once copied: all of them beside the new rows were 365 MB more at 1M
-    points), the others searched
+    ``(centres, rows)`` copied (:func:`core.kernels.permute.copy_rows`), the others searched
     in chunks; writes the distance to each one's ``kc``-th into ``h`` (for a kept row, the
-    search's own distance recomputed: :func:`core.kernels.kdtree.distances_at`)."""
+    search's own distance recomputed: :func:`core.kernels.kdtree.distances_at`). The list
+    ``kept`` is emptied, each block freed once copied (all of them beside the new rows were
+    365 MB more at 1M points)."""
     w_idx = np.empty((len(centres), k), dtype=nb.take(1)[0].dtype)
     todo = np.ones(len(centres), dtype=bool)
     while kept:
@@ -103,8 +103,8 @@ class _Rows:
         self.held, self.blocks, self.kc, self.nb = np.ascontiguousarray(held), [(wide, w_idx)], kc, nb
 
     def ensure(self, c, h) -> None:
-        """Search the wider rows of centres ``c`` (sorted) not held yet, and write their ``h``."""
-        c = c[(self.kc[c] > self.held.shape[1]) & (self._slots(c)[0] < 0)]
+        """Search the wider rows of centres ``c`` not held yet, and write their ``h``."""
+        c = np.unique(c[(self.kc[c] > self.held.shape[1]) & (self._slots(c)[0] < 0)])  # a block's centres are sorted
         if len(c):
             self.blocks.append((c, _wide_rows(self.nb, c, self.blocks[0][1].shape[1], self.kc, h)))
 

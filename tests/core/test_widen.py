@@ -268,7 +268,7 @@ def test_rows_of_points_that_may_not_fit_are_searched_when_they_do(quantised):
     assert (h <= full.distances[np.arange(n), kc - 1]).all()  # the others: a lower bound until searched
     later = np.flatnonzero(~exact)
     first = rows.blocks[0][1]
-    rows.ensure(later[::2], h)
+    rows.ensure(later[::2][::-1], h)  # in any order
     assert rows.blocks[0][1] is first and len(rows.blocks) == 2  # a block of their own: the others not copied
     rows.ensure(later[::2], h)
     assert len(rows.blocks) == 2  # held already: not searched again
