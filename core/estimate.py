@@ -138,7 +138,7 @@ def estimate(
         if cache is not None:
             cache.remember(pts, found.merged)
         return _on_distinct(found.merged, pts, kept, normals, asked, **args)
-    if front.scale.jets is not None and not front.scale.on_jet.any():  # no jet is a result: not held while fitting
+    if not front.scale.on_jet.any():  # no jet is a result: their frames are not held while fitting
         front = front._replace(scale=front.scale._replace(jets=None))
     best = refine(front.pts, front.init, front.outlier, front.fit_nb, front.scale, plan,
                   report.sub(0.7 if plan.auto else 0.45, 1.0))

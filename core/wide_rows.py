@@ -73,12 +73,20 @@ def _wide_rows(nb, centres, k, kc, h, kept=None):
 def _positions(centres, got):
     """``(at, pos)``: the entries ``at`` of ``centres`` that are in ``got`` (both without
     repeats), at ``got[pos]``."""
-    if not len(got):
-        return np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64)
-    order = np.argsort(got, kind="stable")
-    slot = order[np.minimum(np.searchsorted(got, centres, sorter=order), len(got) - 1)]
-    at = np.flatnonzero(got[slot] == centres)
+    slot, found = _found(got, centres, np.argsort(got, kind="stable"))
+    at = np.flatnonzero(found)
     return at, slot[at]
+
+
+def _found(keys, c, order=None):
+    """``(slot, found)``: for each of ``c``, an index into ``keys`` (sorted, or sorted by the
+    permutation ``order``) and whether ``keys[slot]`` is that value."""
+    if not len(keys):
+        return np.zeros(len(c), dtype=np.int64), np.zeros(len(c), dtype=bool)
+    slot = np.minimum(np.searchsorted(keys, c, sorter=order), len(keys) - 1)
+    if order is not None:
+        slot = order[slot]
+    return slot, keys[slot] == c
 
 
 def held_h(nb, kc):
@@ -144,9 +152,7 @@ class _Rows:
         block = np.full(len(c), -1)
         pos = np.zeros(len(c), dtype=np.int64)
         for b, (centres, _) in enumerate(self.blocks):
-            if not len(centres):
-                continue
-            at = np.minimum(np.searchsorted(centres, c), len(centres) - 1)
-            mine = (centres[at] == c) & (block < 0)
+            at, found = _found(centres, c)
+            mine = found & (block < 0)
             block[mine], pos[mine] = b, at[mine]
         return block, pos

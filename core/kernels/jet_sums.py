@@ -9,8 +9,8 @@ import math
 from numba import njit
 
 from ._base import OPTS
-from .algebra import poly_row
-from .lstsq import MOMENT_PAIR, copy_moments, monomials, n_terms
+from .algebra import n_terms, poly_row
+from .lstsq import MOMENT_PAIR, copy_moments, monomials
 
 #: terms of the cubic jet
 P3 = 10
