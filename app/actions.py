@@ -10,7 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from PySide6.QtGui import QAction, QKeySequence
-from PySide6.QtWidgets import QFileDialog, QMessageBox
+from PySide6.QtWidgets import QFileDialog, QMenu, QMenuBar, QMessageBox
 
 import core.io
 import core.shapes
@@ -21,7 +21,32 @@ from .presenter import result_parameters
 from .text import safe_text
 from .widgets import RecentFilesMenu, ShapeDialog
 
-__all__ = ["WindowActions", "read_filter", "write_filter"]
+__all__ = ["DockToggle", "WindowActions", "read_filter", "write_filter"]
+
+
+class DockToggle(QAction):
+    """A checkable action that shows and hides ``dock``, held from Python: what
+    ``dock.toggleViewAction()`` gives, but that getter once returned a stale wrapper of
+    another, deleted object (a QSurface) at the same address (PySide6; a newcomer run:
+    ``QMenu.addAction(QSurface)``, and every later window test erred), as ``combo.model()``
+    did before (:class:`app.widgets.field_panel.FieldPanel`). Checked while the dock is not
+    hidden (a tab behind another stays checked); shown, it is raised."""
+
+    def __init__(self, dock, parent, text=None):
+        super().__init__(dock.windowTitle() if text is None else text, parent)
+        self._dock = dock
+        self.setCheckable(True)
+        self.setChecked(not dock.isHidden())
+        self.triggered.connect(self._show)
+        dock.visibilityChanged.connect(self._follow)  # a bound slot: disconnected with this action
+
+    def _show(self, on: bool) -> None:
+        self._dock.setVisible(on)
+        if on:
+            self._dock.raise_()
+
+    def _follow(self, _visible: bool) -> None:
+        self.setChecked(not self._dock.isHidden())
 
 
 def write_filter() -> str:
@@ -42,7 +67,10 @@ class WindowActions:
     """Menus, file and shape loading, export, screenshots, drag-and-drop."""
 
     def _build_menus(self) -> None:
-        menu = self.menuBar().addMenu("&File")
+        """The menu bar, its menus and actions, all created and held here (see :class:`DockToggle`)."""
+        self.menu_bar = QMenuBar(self)
+        self.setMenuBar(self.menu_bar)
+        menu = self.add_menu("&File")
         self._action(menu, "&Open…", self.open_dialog, QKeySequence.StandardKey.Open)
         self.recent_menu = RecentFilesMenu(self.settings, self)
         self.recent_menu.open_requested.connect(self.open_file)
@@ -54,13 +82,13 @@ class WindowActions:
         menu.addSeparator()
         self._action(menu, "&Quit", self.close, QKeySequence.StandardKey.Quit)
 
-        menu = self.menuBar().addMenu("&Shapes")
+        menu = self.shapes_menu = self.add_menu("&Shapes")
         for name in core.shapes.SHAPES:
             self._action(menu, name.capitalize(), lambda _=False, n=name: self.load_shape(n))
         menu.addSeparator()
         self._action(menu, "&Generate…", self.shape_dialog)
 
-        menu = self.menuBar().addMenu("&View")
+        menu = self.add_menu("&View")
         self._action(menu, "&Fit view", self.fit_view, "F")
         self._action(menu, "&Reset camera", self.reset_view, "R")
         self._action(menu, "&Clear picked point", lambda: self.state.set(picked=None), "Esc")
@@ -70,10 +98,16 @@ class WindowActions:
         self.eye_dome_action.setCheckable(True)
         menu.addSeparator()
         for dock in (self.controls_dock, self.histogram_dock, self.inspector_dock):
-            menu.addAction(dock.toggleViewAction())
+            menu.addAction(DockToggle(dock, self))
 
-        menu = self.menuBar().addMenu("&Help")
+        menu = self.add_menu("&Help")
         self._action(menu, "&About Darboux", self._about)
+
+    def add_menu(self, title) -> QMenu:
+        """A menu of the menu bar, held from Python (see :class:`DockToggle`)."""
+        menu = QMenu(title, self)
+        self.menu_bar.addMenu(menu)
+        return menu
 
     def _action(self, menu, text, slot, shortcut=None) -> QAction:
         action = QAction(text, self)

@@ -6,8 +6,9 @@ from pathlib import Path
 
 from PySide6.QtCore import Qt
 from PySide6.QtGui import QAction
-from PySide6.QtWidgets import QDockWidget, QFileDialog
+from PySide6.QtWidgets import QDockWidget, QFileDialog, QMenu
 
+from ..actions import DockToggle
 from .controller import TeachController
 from .dock import TeachPanel, TeachSettings
 from .examples import EXAMPLES, OVERLAYS, pick_for
@@ -40,10 +41,8 @@ class Teach:
         self._build_menus()
 
     def _build_menus(self) -> None:
-        bar = self.window.menuBar()
-        menu = bar.addMenu("&Teach")
-        self.toggle_action = self.dock.toggleViewAction()
-        self.toggle_action.setText("&Teaching mode")
+        menu = self.window.add_menu("&Teach")  # menus and actions held from Python (app.actions.DockToggle)
+        self.toggle_action = DockToggle(self.dock, self.window, "&Teaching mode")
         self.toggle_action.setShortcut("Ctrl+T")
         menu.addAction(self.toggle_action)
         focus = QAction("&Zoom to the picked point", self.window)
@@ -51,12 +50,13 @@ class Teach:
         focus.triggered.connect(self.controller.focus)
         menu.addAction(focus)
         menu.addSeparator()
-        examples = menu.addMenu("&Guided examples")
+        examples = QMenu("&Guided examples", self.window)
+        menu.addMenu(examples)
         for key, example in EXAMPLES.items():
             action = QAction(example.title, self.window)
             action.triggered.connect(lambda _=False, k=key: self.run_example(k))
             examples.addAction(action)
-        shapes = next((a.menu() for a in bar.actions() if a.text().replace("&", "") == "Shapes"), None)
+        shapes = getattr(self.window, "shapes_menu", None)
         if shapes is not None:
             shapes.addSeparator()
             shapes.addMenu(examples)
