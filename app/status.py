@@ -72,8 +72,8 @@ class WindowStatus:
         if self._closed:
             return
         colour = {"error": "#b2182b", "warning": "#b35806"}.get(note.level, "")
-        self.statusBar().setStyleSheet(f"QStatusBar {{ color: {colour}; }}" if colour else "")
-        self.statusBar().showMessage(note.message, 15000 if note.level == "error" else 6000)
+        self.status_bar.setStyleSheet(f"QStatusBar {{ color: {colour}; }}" if colour else "")
+        self.status_bar.showMessage(note.message, 15000 if note.level == "error" else 6000)
         self._message_gen = self.estimator.generation
         if note.level == "error" and self.dialogs:
             self._error_box(note)
@@ -102,7 +102,7 @@ class WindowStatus:
     def _clear_message(self, gen: int | None = None) -> None:
         """Take down a notification about something older: any for a new cloud (``gen`` None),
         one posted before the request of the result ``gen`` otherwise."""
-        bar = self.statusBar()
+        bar = self.status_bar
         if bar.currentMessage() and (gen is None or gen > self._message_gen):
             bar.clearMessage()
             bar.setStyleSheet("")

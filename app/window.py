@@ -19,7 +19,7 @@ import logging
 
 from PySide6.QtCore import QSettings, Qt, QTimer, Signal
 from PySide6.QtGui import QIcon
-from PySide6.QtWidgets import QLabel, QMainWindow, QMessageBox, QSplitter
+from PySide6.QtWidgets import QLabel, QMainWindow, QMessageBox, QSplitter, QStatusBar
 
 from . import ICON, _refguard
 from .actions import WindowActions
@@ -136,7 +136,8 @@ class MainWindow(WindowActions, WindowStatus, QMainWindow):
         self.setCentralWidget(self.splitter)
 
     def _build_status(self) -> None:
-        bar = self.statusBar()
+        bar = self.status_bar = QStatusBar(self)  # held from Python, not fetched (app.actions.DockToggle)
+        self.setStatusBar(bar)
         self.status_label = ElidedLabel("No cloud")
         self.summary_label = ElidedLabel("")
         self.summary_label.setStyleSheet("color: #5a3d8a;")

@@ -110,15 +110,15 @@ def test_export_during_a_preview_says_which_result_it_wrote(make_window, qtbot, 
 def test_a_new_cloud_or_result_clears_an_older_message(make_window, qtbot, torus):
     window = make_window(torus, k_auto=False)
     window.notifier.error("The estimate failed: something about the old cloud")
-    assert "old cloud" in window.statusBar().currentMessage()
+    assert "old cloud" in window.status_bar.currentMessage()
     with wait_result(qtbot, window, 30_000):
         window.set_source(make_shape("sphere", 500))
-    assert window.statusBar().currentMessage() == "" and window.status_label.isVisible()
+    assert window.status_bar.currentMessage() == "" and window.status_label.isVisible()
     assert "old cloud" in window.notifier.history[-1].message  # kept in the history
     window.notifier.warning("about the previous estimate")
     with wait_result(qtbot, window, 30_000):
         window.state.set(k=14)
-    assert window.statusBar().currentMessage() == ""
+    assert window.status_bar.currentMessage() == ""
 
 
 # -- 5 ---------------------------------------------------------------------------------
@@ -195,7 +195,7 @@ def test_a_file_with_nan_rows_loads_without_them_and_says_so(make_window, qtbot,
         window.open_file(path)
     assert blocker.args[0].request.source.n_points == 500 - 72
     assert any("dropped 72 of 500" in n.message and n.level == "warning" for n in window.notifier.history)
-    assert "dropped 72 of 500" in window.statusBar().currentMessage()  # not hidden by the cloud's first result
+    assert "dropped 72 of 500" in window.status_bar.currentMessage()  # not hidden by the cloud's first result
 
 
 def test_load_file_keeps_only_the_file_s_warnings(tmp_path, monkeypatch):

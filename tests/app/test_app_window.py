@@ -157,7 +157,7 @@ def test_bad_file_shows_message_and_app_survives(make_window, qtbot, torus, tmp_
         note = window.notifier.last
         assert len(window.notifier.history) == before + 1
         assert note.level == "error" and path.name in note.message
-        assert path.name in window.statusBar().currentMessage()
+        assert path.name in window.status_bar.currentMessage()
         assert window.state.source is torus  # the current cloud stays loaded
     assert window.recent_menu.paths() == []
     # and the app keeps working
