@@ -153,3 +153,34 @@ def test_weighted_spread_counts_neighbours_as_the_pca_weighs_them():
     weighted_plane_spread(ring, np.tile([0.0, 0.0, 1.0], (9, 1)), 0, np.ascontiguousarray(idx), np.ascontiguousarray(dist),
                           THETA_REACH, out)
     assert out[0] == pytest.approx(1.0)
+
+
+def test_widening_searches_twice_and_reads_the_rows_each_candidate_would():
+    """plane_spread._CandidateRows: the rows of the centres still widened at each candidate
+    are those a search at that width gives (ties included: a grid has many), though only the
+    first candidate beyond the graph's held columns and then the widest are searched."""
+    from core.wide_neighbours import search_in_spatial_order
+
+    g = np.mgrid[0:60, 0:60].reshape(2, -1).T * 0.1  # a grid: equal distances everywhere
+    pts = np.c_[g, 0.05 * np.sin(g[:, 0])]
+    nb, _ = search_in_spatial_order(pts, 160, width=24)
+    searched = []
+    real_rows = nb.rows
+
+    class Counting:
+        width = nb.width
+
+        def rows(self, centres, k):
+            searched.append(k) if k > nb.width else None
+            return real_rows(centres, k)
+
+    rows = plane_spread._CandidateRows(Counting(), 160)
+    centres = np.arange(0, len(pts), 3)
+    rng = np.random.default_rng(0)
+    for cand in (16, 40, 64, 100, 160):
+        idx, dist = rows(centres, cand)
+        want_idx, want_dist = real_rows(centres, cand)
+        assert np.array_equal(idx, want_idx) and np.array_equal(dist, want_dist), cand
+        assert idx.flags.c_contiguous and dist.flags.c_contiguous
+        centres = np.sort(rng.choice(centres, len(centres) * 2 // 3, replace=False))
+    assert searched == [40, 160]
