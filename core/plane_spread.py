@@ -134,7 +134,7 @@ def determined_normals(pts, normals, undetermined, nb, k: int, ks):
 
 def _determine(pts, normals, nb, todo, ks) -> None:
     """:func:`determined_normals` of the centres ``todo``, in place in ``normals``."""
-    rows = _CandidateRows(nb, ks[-1])
+    rows = _CandidateRows(nb, max(ks, default=0))
     for cand in ks:
         idx, dist = rows(todo, cand)
         frame, has = np.empty((len(todo), 3)), np.empty(len(todo), dtype=bool)
@@ -164,7 +164,7 @@ def _widen(pts, normals, nb, thin, ks, line, sheet, small) -> None:
     last = np.full((len(thin), 3), np.nan)  # the widest candidate that passed all but the turn
     first = np.full((len(thin), 3), np.nan)  # the first that passed all, its 2-jet not determined
     pos = np.arange(len(thin))
-    rows = _CandidateRows(nb, ks[-1])
+    rows = _CandidateRows(nb, max(ks, default=0))
     for cand in ks:
         idx, dist = rows(thin, cand)
         idx.flags.writeable = False  # the compiled signature :func:`spreads` uses

@@ -184,3 +184,13 @@ def test_widening_searches_twice_and_reads_the_rows_each_candidate_would():
         assert idx.flags.c_contiguous and dist.flags.c_contiguous
         centres = np.sort(rng.choice(centres, len(centres) * 2 // 3, replace=False))
     assert searched == [40, 160]
+
+
+def test_widening_with_no_candidate_beyond_k_keeps_the_normals():
+    """Thin points and no candidate wider than k (a small cloud's plan): nothing to try."""
+    s = shapes_thin.stripe_scan(3000, ratio=8.0, seed=0)
+    nb = core.build_neighbours(s.points, 15)
+    ok = np.ones(len(s.points), dtype=bool)
+    assert (plane_spread.spreads(s.points, s.normals, nb, 15) < THIN_SPREAD).mean() > 0.5
+    nrm, _ = plane_spread.spanning_normals(s.points, s.normals, ok, nb, 15, (10, 15))
+    assert np.array_equal(nrm, s.normals)
