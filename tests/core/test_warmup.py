@@ -50,6 +50,9 @@ def test_warm_up_covers_cached_stages_and_given_neighbours():
     for n, level in ((60_000, 0.2), (30_000, 0.5)):  # ... and of larger noisy ones with strays (anchors, outliers)
         pts = add_noise(shapes.torus(n, seed=6).points, level, seed=7)
         estimate(np.vstack([pts, 1.3 * pts[:20]]), method="nr")
+    rng = np.random.default_rng(8)  # clouds that are not a smooth surface: a volume (foliage), a long strip (a road)
+    estimate(rng.normal(size=(8000, 3)), method="nr")
+    estimate(np.c_[rng.uniform(0, 2000, 8000), rng.uniform(0, 1, 8000), rng.normal(0, 0.01, 8000)], method="nr")
     after = _signatures()
     added = {f.py_func.__qualname__: sorted(after[f] - before.get(f, set()))
              for f in after if after[f] - before.get(f, set())}
