@@ -53,9 +53,10 @@ def _data_dependent_types(method) -> int:
     after warm-up compiled for ~8 s. A noisy cloud with points off its surface takes the
     anchors' shared fits and robust mode's neighbours without the outliers, plainly and
     through a StageCache (without it a noisy 100k torus compiled six kernels anew). Clouds
-    that are no smooth surface take copied rows of their own types: a volume of points
-    (foliage; a first Gaussian blob compiled six of orientation's kernels and a pool, ~10 s)
-    and a strip 1000x longer than wide (the jets' kept rows read-only in the scale's fits).
+    that are no smooth surface pass arrays of other layouts: a volume of points (foliage; a
+    first Gaussian blob compiled six of orientation's kernels and a pool on C-contiguous
+    writable rows, ~10 s) and a strip 1000x longer than wide (``distances_at`` on read-only
+    rows).
     Returns the count of runs."""
     for cloud in (shapes.plane(400, seed=0), shapes.cube(600, seed=0)):
         estimate(cloud.points, method=method)
@@ -67,7 +68,7 @@ def _data_dependent_types(method) -> int:
     estimate(noisy, method=method)
     estimate(noisy, method=method, cache=StageCache())
     rng = np.random.default_rng(0)
-    estimate(rng.normal(size=(3000, 3)), method=method)  # no surface (foliage): orientation's and the pools' copied rows
+    estimate(rng.normal(size=(3000, 3)), method=method)  # no surface (foliage)
     estimate(np.c_[rng.uniform(0, 1000, 3000), rng.uniform(0, 1, 3000), rng.normal(0, 0.01, 3000)], method=method)
     return 11
 
