@@ -222,3 +222,34 @@ def test_thin_rim_does_not_bridge_the_two_faces():
     99.425, 99.375, 99.27 %; main 99.285, 99.325, 99.265, 98.73 %)."""
     faces = _faces("thin_wedge", "auto", (0, 3, 5, 9))
     assert min(faces) >= 0.992 and np.mean(faces) >= 0.9935, faces
+
+
+def test_strongest_first_is_a_stable_counting_sort_in_the_callers_order():
+    """kernels.sign_evidence.strongest_first (parallel over blocks of the caller's order):
+    the edges by decreasing |evidence| level, ties in the order ``rows`` then column, the
+    same list as a stable sort in numpy, and with one thread as with two."""
+    import numba
+
+    from core.kernels.sign_evidence import strongest_first
+
+    rng = np.random.default_rng(3)
+    n, k, levels = 30_000, 6, 64  # 7 blocks; few levels: many ties
+    ev = np.where(rng.random((n, k)) < 0.2, 0.0, rng.uniform(-1, 1, (n, k)))
+    use = rng.random((n, k)) < 0.9
+    idx = rng.integers(0, n, (n, k)).astype(np.int32)
+    rows = rng.permutation(n)
+    keep = (ev[rows] != 0.0) & use[rows]
+    t, m = np.nonzero(keep)
+    i = rows[t]
+    level = levels - np.minimum(levels - 1, (np.abs(ev[i, m]) * levels).astype(int))
+    order = np.argsort(level, kind="stable")
+    want = (i[order], idx[i, m][order], ev[i, m][order])
+    threads = numba.get_num_threads()
+    try:
+        for nt in sorted({1, threads}):
+            numba.set_num_threads(nt)
+            got = strongest_first(ev, use, levels, rows, idx)
+            for g, w in zip(got, want):
+                assert np.array_equal(g, w), nt
+    finally:
+        numba.set_num_threads(threads)
