@@ -56,10 +56,8 @@ class Teach:
             action = QAction(example.title, self.window)
             action.triggered.connect(lambda _=False, k=key: self.run_example(k))
             examples.addAction(action)
-        shapes = getattr(self.window, "shapes_menu", None)
-        if shapes is not None:
-            shapes.addSeparator()
-            shapes.addMenu(examples)
+        self.window.shapes_menu.addSeparator()
+        self.window.shapes_menu.addMenu(examples)
         menu.addSeparator()
         export = QAction("&Export figures for slides…", self.window)
         export.triggered.connect(self.export_dialog)

@@ -20,6 +20,7 @@ def test_every_overlay_follows_pick_theta_and_estimate(make_window, qtbot, torus
     window.state.set(picked=3)
     assert teach.controller.layer.names == set()
     assert "Teach" in [a.text().replace("&", "") for a in window.menuBar().actions()]
+    assert "Guided examples" in [a.text().replace("&", "") for a in window.shapes_menu.actions()]
     teach.configure(enabled=True, overlays=list(OVERLAYS), theta=30)
     window.state.set(picked=10)
     _teach_ready(qtbot, window)
