@@ -64,3 +64,29 @@ def test_thinned_rows_are_the_fit_of_every_stride_th_neighbour(rows):
     full = get_method("nf").fit(Chunk.build(p, nrm, idx[centres], h, centres, kc), **opts)
     for r, k in enumerate(kc):  # a centre is thinned only where it has 2 x rows neighbours
         assert np.array_equal(full.W[r], thinned.W[r]) == (k < 2 * rows)
+
+
+@pytest.mark.parametrize("weights", ["uniform", "theta"])
+@pytest.mark.parametrize("constraint", ["none", "project", "exact"])
+def test_the_direct_linear_fit_is_the_scratch_path(weights, constraint):
+    """The paper's linear fit without reweighting sums straight from the neighbours
+    (``nf._fit_linear``); a robust fit with no reweighting takes the scratch path of every other
+    fit. Both solve the same least squares: the same numbers to rounding, on thinned rows and
+    with neighbours that have no normal (weight 0)."""
+    p, nrm, idx, dist = _cloud()
+    nrm = nrm.copy()
+    nrm[::9] = np.nan
+    centres = np.arange(0, 2000, 7)
+    kc = np.where(centres % 2 == 0, 60, 31)
+    opts = {"weights": weights, "constraint": constraint}
+    chunk = Chunk.build(p, nrm, idx, dist[centres, -1], centres, kc, rows=centres)
+    for rows in (0, 20):
+        direct = get_method("nf").fit(chunk, **opts, rows=rows)
+        scratch = get_method("nf").fit(chunk, **opts, rows=rows, robust="huber", reweightings=0)
+        ok = direct.ok
+        assert np.array_equal(ok, scratch.ok) and ok.mean() > 0.8  # centres without a normal have no frame
+        np.testing.assert_allclose(direct.mu[ok], scratch.mu[ok], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(direct.W[ok], scratch.W[ok], rtol=0, atol=1e-10)
+        for key in ("var", "rms", "spread", "coef"):
+            np.testing.assert_allclose(direct.diag[key][ok], scratch.diag[key][ok], rtol=1e-9, atol=1e-14,
+                                       err_msg=key)
