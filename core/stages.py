@@ -293,7 +293,8 @@ class _Fitter(NamedTuple):
 
 
 def _fit_chunk(chunk, method, opts, out: Fit, kept=None) -> None:
-    mu, W, ok, diag = method.fit(chunk, **opts)
+    """Fit ``chunk`` into ``out``; ``kept`` keeps the anchors' fits, with their polynomials (NF's)."""
+    mu, W, ok, diag = method.fit(chunk, **opts) if kept is None else method.fit(chunk, **opts, coefficients=True)
     frame = darboux_frame(chunk.t1, chunk.t2, chunk.z, mu, W / chunk.h[:, None, None])
     good = ok & frame.ok
     if kept is not None:

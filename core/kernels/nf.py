@@ -86,7 +86,8 @@ class Fits(NamedTuple):
     their mean (how much the normals turn), degree (M,) the degree fitted
     (:func:`solve_determined`; 0 where no fit) and coef (M, 2, MAX_TERMS) the polynomials of
     X and Y in (u, v) by :func:`poly_row`'s monomials (zero past the degree fitted; without
-    the constraint), which :mod:`core.anchors` evaluates at the points around the centre."""
+    the constraint), which :mod:`core.anchors` evaluates at the points around the centre
+    (M, 2, 0 where no one reads them)."""
 
     mu: np.ndarray
     W: np.ndarray

@@ -52,13 +52,16 @@ def min_k(degree=1, **_):
     return (degree + 1) * (degree + 2) // 2 + 1
 
 
-def fit(chunk, *, weights="uniform", constraint="project", robust=None, degree=1, reweightings=IRLS_ITERATIONS, rows=0):
+def fit(chunk, *, weights="uniform", constraint="project", robust=None, degree=1, reweightings=IRLS_ITERATIONS, rows=0,
+        coefficients=False):
     """Fit (mu, W) per point of a :class:`core.patch.Chunk`; see :data:`NF_DOC`.
 
     ``reweightings`` (internal, not a user option): IRLS iterations when ``robust``; the
     refinement passes use fewer (:data:`core.tuning.IRLS_LATER`). ``rows`` (internal): 0, or
     the fewest neighbours a centre fits on, every (k // rows)-th (k="auto"'s refinement
-    passes: :data:`core.tuning.ROWS_LATER`).
+    passes: :data:`core.tuning.ROWS_LATER`). ``coefficients`` (internal): also return the
+    polynomials of X and Y (``diag["coef"]``), which only the anchors of k="auto" read
+    (:mod:`core.anchors`; 160 MB a pass at 1M points).
 
     Returns a :class:`MethodFit` whose ``diag`` holds the least-squares variances of
     W11, (W12 + W21)/2, W22 ("var", units of 1/h^2), the RMS residual of the normal components ("rms") and
@@ -72,9 +75,9 @@ def fit(chunk, *, weights="uniform", constraint="project", robust=None, degree=1
     rms = np.full(m, np.nan)
     spread = np.full(m, np.nan)
     fitted = np.zeros(m, dtype=np.int8)
-    coef = np.zeros((m, 2, MAX_TERMS))
+    coef = np.zeros((m, 2, MAX_TERMS if coefficients else 0))
     settings = kernels.Settings(THETA_REACH, _WEIGHTS.index(weights), _CONSTRAINTS.index(constraint),
                                 _ROBUST.index(robust), reweightings, degree, RCOND, DEGREE_PIVOT, THIN_SPREAD, rows)
     kernels.normal_fit(chunk.frames(), settings, kernels.Fits(mu, W, var, rms, spread, fitted, coef), chunk.kernel_rows())
-    return MethodFit(mu, W, fitted > 0, {"var": var, "rms": rms, "spread": spread, "degree": fitted,
-                                              "coef": coef})
+    diag = {"var": var, "rms": rms, "spread": spread, "degree": fitted}
+    return MethodFit(mu, W, fitted > 0, diag | {"coef": coef} if coefficients else diag)

@@ -78,7 +78,7 @@ def test_the_direct_linear_fit_is_the_scratch_path(weights, constraint):
     nrm[::9] = np.nan
     centres = np.arange(0, 2000, 7)
     kc = np.where(centres % 2 == 0, 60, 31)
-    opts = {"weights": weights, "constraint": constraint}
+    opts = {"weights": weights, "constraint": constraint, "coefficients": True}
     chunk = Chunk.build(p, nrm, idx, dist[centres, -1], centres, kc, rows=centres)
     for rows in (0, 20):
         direct = get_method("nf").fit(chunk, **opts, rows=rows)
