@@ -154,7 +154,7 @@ def _check_binary_layout(path, header, start: int) -> None:
                                                        "the end of the file"))
         pos += size
     extra = len(data) - pos
-    if extra >= _min_row_bytes(header["vertex"], header):
+    if extra >= max(_min_row_bytes(header["vertex"], header), 1):  # a vertex of no properties takes 0 bytes
         raise CloudFileError(path, _layout_problem(data, header, vstart, f"{extra} bytes are left after the "
                                                    f"last {header.elements[-1].name} row"))
 
@@ -178,9 +178,9 @@ def _found_vertices(data, header, vstart: int):
     elements, order = header.elements, header.byte_order
     index = [el.name for el in elements].index("vertex")
     vertex, later = elements[index], elements[index + 1 :]
-    if any(isinstance(p, PlyListProperty) for p in vertex.properties) or len(later) > 1:
-        return None
     size, have = vertex.dtype(order).itemsize, len(data) - vstart
+    if not size or any(isinstance(p, PlyListProperty) for p in vertex.properties) or len(later) > 1:
+        return None
     if not later:
         return have // size if have % size == 0 else None
     fits = _vertices_before_list(data, vstart, size, later[0], order)
@@ -283,7 +283,7 @@ def _read_vertex_fast(f, header, index, path):
             path, f"truncated: the header declares {vertex.count} vertices ({need} bytes) but only {have} bytes "
             "of vertex data follow",
         )
-    data = np.frombuffer(f.read(need), dtype=dtype)
+    data = np.frombuffer(f.read(need), dtype=dtype, count=vertex.count)  # a count: records of no properties are 0 bytes
     return {name: data[name] for name in dtype.names}
 
 
