@@ -170,6 +170,8 @@ def _cell_runs_problem(ids, n_cells: int, size: int) -> str | None:
             return (f"cell {cell} declares {count} point ids where {max(len(ids) - i - 1, 0)} of the {size} "
                     "entries remain")
         i += 1 + count
+    if i != len(ids):  # VTK walks the runs to the end of the array, not for n_cells: a count left over is read as one
+        return f"the {n_cells} cells take {i} of the {size} entries; the rest would be read as more cells"
     return None
 
 
