@@ -112,6 +112,7 @@ def check_record_counts(path) -> None:
         vlrs = _read_vlrs(f, header_size, n_vlrs)
         _check_extra_bytes(path, vlrs.get(_EXTRA_BYTES, b""))
         _check_laz_sizes(path, f, head, size, vlrs.get(_LASZIP))
+        _check_laz_layers(path, f, vlrs.get(_LASZIP), offset, size)
 
 
 def _check_evlrs(path, f, start: int, count: int, offset: int, size: int) -> None:
@@ -138,6 +139,11 @@ _EXTRA_BYTES, _LASZIP = (b"LASF_Spec", 4), (b"laszip encoded", 22204)
 _VARIABLE_CHUNKS = 0xFFFFFFFF
 #: a chunk buffer above this is refused when it is also larger than the file's points
 _MAX_CHUNK_BYTES = 1 << 30
+#: the LASzip compressor of point formats 6-10: each chunk stored as layers (x and y, z, intensity...)
+_LAYERED = 3
+#: LASzip item type -> the layers of a chunk it takes (point 14, RGB 14, RGB+NIR 14, wave packet 14);
+#: item type 14, extra bytes, takes one layer per byte
+_ITEM_LAYERS, _EXTRA_BYTES_ITEM = {10: 9, 11: 1, 12: 2, 13: 1}, 14
 
 
 def _read_vlrs(f, header_size: int, n_vlrs: int) -> dict:
@@ -190,3 +196,51 @@ def _check_laz_sizes(path, f, head: bytes, size: int, laszip) -> None:
     if chunk_size != _VARIABLE_CHUNKS and n_points > n_chunks * chunk_size:
         raise CloudFileError(path, f"corrupt LAZ header: it declares {n_points} points but its {n_chunks} chunks "
                                    f"of {chunk_size} points hold at most {n_chunks * chunk_size}")
+
+
+def _check_laz_layers(path, f, laszip, offset: int, size: int) -> None:
+    """A layered LAZ chunk starts with its first point, its point count and the byte count of
+    each layer; lazrs allocates each count (up to 4 GB) before reading the layer, and a failed
+    allocation aborts the process (a 1 kB file did). The layers of every chunk must fit in
+    the bytes the chunk table gives the chunk."""
+    items = _layered_items(laszip)
+    if not items:
+        return
+    n_layers = sum(item_size if kind == _EXTRA_BYTES_ITEM else _ITEM_LAYERS[kind] for kind, item_size in items)
+    first = sum(item_size for _, item_size in items) + 4  # the first point and the point count
+    start = offset + 8  # after the offset of the chunk table
+    for i, length in enumerate(_chunk_lengths(f, laszip, offset, size)):
+        f.seek(start + first)
+        layers, room = f.read(4 * n_layers), min(length, size - start)  # a chunk past the end: the bytes left
+        if len(layers) < 4 * n_layers:
+            return  # truncated: lazrs says so
+        need = first + len(layers) + sum(struct.unpack(f"<{n_layers}I", layers))
+        if need > room:
+            raise CloudFileError(path, f"corrupt or truncated LAZ data: chunk {i} declares layers of {need} bytes "
+                                       f"(with its header) but has {room}")
+        start += length
+
+
+def _layered_items(laszip) -> list:
+    """(item type, bytes) of the items of a layered LASzip record, or [] for another one."""
+    if laszip is None or len(laszip) < 34 or struct.unpack_from("<H", laszip, 0)[0] != _LAYERED:
+        return []
+    n_items = struct.unpack_from("<H", laszip, 32)[0]
+    items = [struct.unpack_from("<HH", laszip, 34 + 6 * i) for i in range(n_items) if 40 + 6 * i <= len(laszip)]
+    if any(kind not in _ITEM_LAYERS and kind != _EXTRA_BYTES_ITEM for kind, _ in items):
+        return []  # not items of a layered chunk: laspy or lazrs says what is wrong
+    return items
+
+
+def _chunk_lengths(f, laszip, offset: int, size: int) -> list:
+    """The bytes of each chunk from the chunk table (read by lazrs), or, without a table lazrs
+    can read, the first chunk taking the rest of the file."""
+    try:
+        import lazrs
+    except ImportError:
+        return []  # laspy refuses the file: no LAZ backend
+    f.seek(offset)
+    try:
+        return [int(length) for _, length in lazrs.read_chunk_table(f, lazrs.LazVlr(laszip))]
+    except (RuntimeError, ValueError, OSError, TypeError):  # lazrs.LazrsError is a RuntimeError
+        return [size - offset - 8]

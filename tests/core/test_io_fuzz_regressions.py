@@ -1,7 +1,8 @@
 """Reader defects found by a mutation fuzz of every format (byte flips, truncations, header
-edits): a binary PLY vertex element of no properties divided by zero, and a legacy VTK cell
-array with entries left after its cells crashed VTK (a segmentation fault). Files that could
-end the process are read in a subprocess with limited memory (``helpers.read_in_child``)."""
+edits): a binary PLY vertex element of no properties divided by zero, a legacy VTK cell
+array with entries left after its cells crashed VTK (a segmentation fault), and a layered
+LAZ chunk declaring a 4 GB layer aborted lazrs (a failed allocation). Files that could end
+the process are read in a subprocess with limited memory (``helpers.read_in_child``)."""
 
 from __future__ import annotations
 
@@ -65,3 +66,40 @@ def test_legacy_vtk_cell_entries_left_over_refused(tmp_path, helpers):
 def test_legacy_vtk_cells_using_every_entry_still_read(tmp_path):
     path = _legacy_vtk(tmp_path, "ok.vtk", False, "VERTICES 3 7", [1, 0, 0, 3, 1, 2, 3])  # an empty cell
     assert len(read_cloud(path)) == 12
+
+
+def _layered_laz(path, extra=False):
+    laspy = pytest.importorskip("laspy")
+    pytest.importorskip("lazrs")
+    header = laspy.LasHeader(point_format=7, version="1.4")
+    header.scales, header.offsets = [0.001] * 3, [0.0] * 3
+    if extra:
+        header.add_extra_dims([laspy.ExtraBytesParams(name="q", type=np.float32)])
+    las = laspy.LasData(header)
+    t = np.arange(30.0)
+    las.x, las.y, las.z = np.cos(t), np.sin(t), t / 10
+    las.write(path)
+    return path
+
+
+def test_laz_layer_size_beyond_its_chunk_refused(tmp_path, helpers):
+    """A layered chunk (point format 7) is its first point (36 bytes), its point count and one
+    size per layer (9 for the point, 1 for RGB): lazrs allocated a corrupt size of 4 GB at once."""
+    data = bytearray(_layered_laz(tmp_path / "a.laz").read_bytes())
+    offset = struct.unpack_from("<I", data, 96)[0]
+    struct.pack_into("<I", data, offset + 8 + 36 + 4 + 4 * 3, 0xFFFF0000)  # the flags layer
+    path = tmp_path / "layer.laz"
+    path.write_bytes(bytes(data))
+    message = helpers.read_in_child([path])[str(path)]
+    assert path.name in message and "chunk 0 declares layers of 4294" in message, message
+
+
+def test_layered_laz_of_several_chunks_with_extra_bytes_still_read(tmp_path):
+    """The layers counted per item: 9 + 1 (RGB) + 4 (extra bytes, one per byte), chunk by chunk."""
+    laspy = pytest.importorskip("laspy")
+    path = _layered_laz(tmp_path / "b.laz", extra=True)
+    las = laspy.read(path)
+    big = laspy.LasData(las.header)
+    big.points = las.points[np.arange(120_001) % len(las.points)]
+    big.write(tmp_path / "c.laz")
+    assert len(read_cloud(tmp_path / "c.laz")) == 120_001
