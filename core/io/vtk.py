@@ -10,6 +10,7 @@ becomes a :class:`CloudFileError` instead of a message on stderr.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import mmap
 import os
@@ -29,6 +30,7 @@ def read_vtk(path) -> RawCloud:
     from vtkmodules.vtkIOLegacy import vtkGenericDataObjectReader
 
     check_legacy_cells(path)
+    check_legacy_field_data(path)
     reader = vtkGenericDataObjectReader()
     for option in ("ReadAllScalarsOn", "ReadAllVectorsOn", "ReadAllNormalsOn", "ReadAllFieldsOn"):
         getattr(reader, option)()
@@ -67,23 +69,35 @@ def _read(reader, path) -> RawCloud:
 
 def _update_quietly(reader, path) -> None:
     """Run the reader with VTK's messages captured; an error message is a CloudFileError."""
+    reader.SetFileName(str(path))
+    with _vtk_messages() as window:
+        reader.Update()
+    messages = _output(window)
+    if "error" in messages.lower():
+        raise CloudFileError(path, f"VTK cannot read it: {_first_message(messages)}")
+
+
+@contextlib.contextmanager
+def _vtk_messages():
+    """VTK's messages captured in the vtkStringOutputWindow yielded, not printed."""
     from vtkmodules.vtkCommonCore import vtkLogger, vtkOutputWindow, vtkStringOutputWindow
 
-    reader.SetFileName(str(path))
     window, previous = vtkStringOutputWindow(), vtkOutputWindow.GetInstance()
     verbosity = vtkLogger.GetCurrentVerbosityCutoff()
     vtkOutputWindow.SetInstance(window)
     vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_OFF)
     try:
-        reader.Update()
+        yield window
     finally:
         vtkOutputWindow.SetInstance(previous)
         vtkLogger.SetStderrVerbosity(vtkLogger.ConvertToVerbosity(verbosity))
+
+
+def _output(window) -> str:
     messages = window.GetOutput()
     if isinstance(messages, bytes):  # VTK hands back bytes when a message is not valid UTF-8
         messages = messages.decode("utf-8", "replace")
-    if "error" in messages.lower():
-        raise CloudFileError(path, f"VTK cannot read it: {_first_message(messages)}")
+    return messages
 
 
 def _point_data(point_data):
@@ -173,6 +187,36 @@ def _cell_runs_problem(ids, n_cells: int, size: int) -> str | None:
     if i != len(ids):  # VTK walks the runs to the end of the array, not for n_cells: a count left over is read as one
         return f"the {n_cells} cells take {i} of the {size} entries; the rest would be read as more cells"
     return None
+
+
+#: a dataset's own field data: a FIELD keyword (VTK compares 5 letters) before POINT_DATA and CELL_DATA
+_DATASET_FIELD = re.compile(rb"^[ \t]*(field\w*)[ \t\r\n]", re.I | re.M)
+_ATTRIBUTES = re.compile(rb"^[ \t]*(point_data|cell_data)\b", re.I | re.M)
+
+
+def check_legacy_field_data(path) -> None:
+    """VTK's legacy dataset readers use a dataset's FIELD section even when they failed to
+    read it (fewer arrays than declared, a bad array header): a segmentation fault. The
+    first such section is read first on its own, after the file's 3 header lines, with
+    VTK's own field data parser."""
+    from vtkmodules.vtkIOLegacy import vtkDataReader
+
+    with open(path, "rb") as f, mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as data:
+        header = b"\n".join(data[:1024].split(b"\n", 3)[:3]) + b"\n"  # version, title, ASCII or BINARY
+        attributes = _ATTRIBUTES.search(data, len(header))
+        match = _DATASET_FIELD.search(data, len(header), attributes.start() if attributes else len(data))
+        if match is None:
+            return
+        keyword, text = match.group(1).decode("latin-1"), header + data[match.end(1) :]
+    reader = vtkDataReader()
+    reader.ReadFromInputStringOn()
+    reader.SetBinaryInputString(text, len(text))
+    with _vtk_messages() as window:
+        read = reader.OpenVTKFile() and reader.ReadHeader() and reader.ReadFieldData() is not None
+        reader.CloseVTKFile()
+    if not read:
+        raise CloudFileError(path, f"corrupt {keyword} section (the dataset's field data): VTK cannot read it: "
+                                   f"{_first_message(_output(window))}")
 
 
 _COUNT = re.compile(r"[ \t\r\n]*([0-9]+)[ \t\r\n]*")  # a count, with the white space XML allows

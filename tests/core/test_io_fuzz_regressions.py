@@ -1,8 +1,9 @@
 """Reader defects found by a mutation fuzz of every format (byte flips, truncations, header
 edits): a binary PLY vertex element of no properties divided by zero, a legacy VTK cell
-array with entries left after its cells crashed VTK (a segmentation fault), and a layered
-LAZ chunk declaring a 4 GB layer aborted lazrs (a failed allocation). Files that could end
-the process are read in a subprocess with limited memory (``helpers.read_in_child``)."""
+array with entries left after its cells crashed VTK (a segmentation fault), so did a dataset
+FIELD section VTK could not read, and a layered LAZ chunk declaring a 4 GB layer aborted
+lazrs (a failed allocation). Files that could end the process are read in a subprocess with
+limited memory (``helpers.read_in_child``)."""
 
 from __future__ import annotations
 
@@ -66,6 +67,52 @@ def test_legacy_vtk_cell_entries_left_over_refused(tmp_path, helpers):
 def test_legacy_vtk_cells_using_every_entry_still_read(tmp_path):
     path = _legacy_vtk(tmp_path, "ok.vtk", False, "VERTICES 3 7", [1, 0, 0, 3, 1, 2, 3])  # an empty cell
     assert len(read_cloud(path)) == 12
+
+
+@pytest.mark.parametrize("dataset", ["POLYDATA", "STRUCTURED_POINTS", "UNSTRUCTURED_GRID"])
+def test_legacy_vtk_dataset_field_data_vtk_cannot_read_refused(tmp_path, helpers, dataset):
+    """A dataset's FIELD section that VTK fails to read (fewer arrays than declared, a header
+    only, FIELDS for DIMENSIONS) was used all the same: a segmentation fault."""
+    head = f"# vtk DataFile Version 3.0\nField data\nASCII\nDATASET {dataset}\n"
+    bodies = {"short": "FIELD f 2\nA 1 3 float\n1 2 3\n", "header": "FIELD f 1\n", "fields": "FIELDS 3 2 2\n"}
+    paths = []
+    for name, body in bodies.items():
+        paths.append(tmp_path / f"{name}.vtk")
+        paths[-1].write_text(head + body + POINTS.join(["POINTS 12 float\n", ""]) * (dataset == "POLYDATA"))
+    answers = helpers.read_in_child(paths)
+    for path in paths:
+        assert path.name in answers[str(path)] and "section (the dataset's field data)" in answers[str(path)]
+
+
+def test_legacy_vtk_dataset_field_data_still_read(tmp_path):
+    """Field data arrays named like the keyword, and strings, in ASCII and binary, old and new versions."""
+    vtk = pytest.importorskip("vtkmodules.vtkIOLegacy")
+    from vtkmodules.util.numpy_support import numpy_to_vtk
+    from vtkmodules.vtkCommonCore import vtkPoints, vtkStringArray
+    from vtkmodules.vtkCommonDataModel import vtkPolyData
+
+    points = vtkPoints()
+    points.SetData(numpy_to_vtk(np.random.default_rng(3).normal(size=(20, 3))))
+    data = vtkPolyData()
+    data.SetPoints(points)
+    for name, values in (("field_x", np.arange(7.0)), ("FIELD", np.arange(6, dtype=np.int32))):
+        array = numpy_to_vtk(values)
+        array.SetName(name)
+        data.GetFieldData().AddArray(array)
+    words = vtkStringArray()
+    words.SetName("words")
+    words.InsertNextValue("field data")
+    data.GetFieldData().AddArray(words)
+    for binary in (False, True):
+        for version in (42, 51):
+            path = tmp_path / f"f{binary:d}{version}.vtk"
+            writer = vtk.vtkPolyDataWriter()
+            writer.SetInputData(data)
+            writer.SetFileName(str(path))
+            writer.SetFileVersion(version)
+            writer.SetFileTypeToBinary() if binary else writer.SetFileTypeToASCII()
+            writer.Write()
+            assert len(read_cloud(path)) == 20
 
 
 def _layered_laz(path, extra=False):
