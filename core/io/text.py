@@ -27,7 +27,7 @@ _MAX_HEADER_LINES = 1000
 _CHUNK_ROWS = 100_000
 #: a token shaped like a number in a style the parser does not take ("3.5e", C99 hex
 #: "0x1.8p+0", Fortran "1.5D+00"): a line made mostly of them is a data line, not a header
-_NUMBERISH = re.compile(r"[+-]?(0[xX][0-9a-fA-F]*\.?[0-9a-fA-F]*([pP][+-]?\d*)?|(\d+\.?\d*|\.\d+)([eEdD][+-]?\d*)?)")
+_NUMBERISH = re.compile(r"[+-]?(0[xX][0-9a-fA-F]*(\.[0-9a-fA-F]*)?([pP][+-]?\d*)?|(\d+(\.\d*)?|\.\d+)([eEdD][+-]?\d*)?)")
 #: headerless columns are normals where, of the finite non-zero rows, this share has a
 #: length within _UNIT_TOL of 1 (colours 0-255 or 0-1, intensities do not)
 _UNIT_SHARE = 0.99
