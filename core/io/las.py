@@ -181,6 +181,10 @@ def _check_laz_sizes(path, f, head: bytes, size: int, laszip) -> None:
     n_points = struct.unpack_from("<I", head, 107)[0]
     if head[24:26] >= bytes([1, 4]) and len(head) >= 255:
         n_points = max(n_points, struct.unpack_from("<Q", head, 247)[0])
+    item_bytes = sum(item_size for _, item_size in _laszip_items(laszip))
+    if item_bytes != record_length:  # lazrs divided by a point size of 0 (a panic, not an exception)
+        raise CloudFileError(path, f"corrupt LAZ header: its LASzip record describes points of {item_bytes} bytes "
+                                   f"but the point records are {record_length} bytes")
     chunk_size = struct.unpack_from("<I", laszip, 12)[0]
     if chunk_size != _VARIABLE_CHUNKS and chunk_size > n_points and chunk_size * record_length > _MAX_CHUNK_BYTES:
         raise CloudFileError(path, f"corrupt LAZ header: chunks of {chunk_size} points for a file of {n_points}")
@@ -221,12 +225,19 @@ def _check_laz_layers(path, f, laszip, offset: int, size: int) -> None:
         start += length
 
 
+def _laszip_items(laszip) -> list:
+    """(item type, bytes) of the items (point fields) a LASzip record lists."""
+    if len(laszip) < 34:
+        return []
+    n_items = struct.unpack_from("<H", laszip, 32)[0]
+    return [struct.unpack_from("<HH", laszip, 34 + 6 * i) for i in range(n_items) if 40 + 6 * i <= len(laszip)]
+
+
 def _layered_items(laszip) -> list:
     """(item type, bytes) of the items of a layered LASzip record, or [] for another one."""
     if laszip is None or len(laszip) < 34 or struct.unpack_from("<H", laszip, 0)[0] != _LAYERED:
         return []
-    n_items = struct.unpack_from("<H", laszip, 32)[0]
-    items = [struct.unpack_from("<HH", laszip, 34 + 6 * i) for i in range(n_items) if 40 + 6 * i <= len(laszip)]
+    items = _laszip_items(laszip)
     if any(kind not in _ITEM_LAYERS and kind != _EXTRA_BYTES_ITEM for kind, _ in items):
         return []  # not items of a layered chunk: laspy or lazrs says what is wrong
     return items

@@ -153,6 +153,17 @@ def test_layered_laz_of_several_chunks_with_extra_bytes_still_read(tmp_path):
     assert len(read_cloud(tmp_path / "c.laz")) == 120_001
 
 
+def test_laz_record_of_no_items_refused(tmp_path):
+    """A LASzip record listing no items (point fields) made lazrs divide by a point size of 0:
+    a Rust panic, which Python raises as a BaseException that no reader caught."""
+    data = bytearray(_layered_laz(tmp_path / "a.laz").read_bytes())
+    header_size = struct.unpack_from("<H", data, 94)[0]
+    struct.pack_into("<H", data, header_size + 54 + 32, 0)  # LASzip VLR: number of items
+    path = tmp_path / "items.laz"
+    path.write_bytes(bytes(data))
+    _error(path, "LASzip record describes points of 0 bytes", "36 bytes")
+
+
 def test_text_header_of_a_long_digit_run_read_at_once(tmp_path):
     """Telling a header from a data line of odd numbers tried every split of a run of digits
     between two parts of a pattern (\\d+\\.?\\d*): seconds for 20,000 digits, hours for a
