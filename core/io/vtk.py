@@ -149,9 +149,9 @@ def check_legacy_cells(path) -> None:
     VTK walks the counts without checking them against the array's size, and a corrupt
     count crashes the process (a segmentation fault). The runs are checked here first."""
     with open(path, "rb") as f, mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as data:
-        lines = data[:512].split(b"\n", 3)
+        lines, body = _legacy_header(data)
         version = re.match(rb"# vtk DataFile Version (\d{1,3})\b", lines[0])
-        if (version and 5 <= int(version.group(1)) <= 99) or len(lines) < 4:
+        if (version and 5 <= int(version.group(1)) <= 99) or body >= len(data):
             return  # offsets and connectivity, which VTK checks (a garbled version is read as legacy)
         binary = lines[2].strip().upper() == b"BINARY"
         for match in _CELLS.finditer(data):
@@ -169,6 +169,19 @@ def check_legacy_cells(path) -> None:
             problem = _cell_runs_problem(ids, int(match.group(2)), size)
             if problem:
                 raise CloudFileError(path, f"corrupt {match.group(1).decode()} section: {problem}")
+
+
+def _legacy_header(data) -> tuple[list, int]:
+    """The first 3 lines of a legacy file (version, title, ASCII or BINARY) as VTK reads them
+    (up to 255 bytes each, the rest of a line skipped), and where the line after them starts.
+    A line may be of any length: a header that did not fit in 512 bytes skipped the checks."""
+    lines, pos = [], 0
+    for _ in range(3):
+        end = data.find(b"\n", pos)
+        end = len(data) if end < 0 else end
+        lines.append(bytes(data[pos : min(end, pos + 255)]))
+        pos = end + 1
+    return lines, min(pos, len(data))
 
 
 def _cell_runs_problem(ids, n_cells: int, size: int) -> str | None:
@@ -202,12 +215,12 @@ def check_legacy_field_data(path) -> None:
     from vtkmodules.vtkIOLegacy import vtkDataReader
 
     with open(path, "rb") as f, mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as data:
-        header = b"\n".join(data[:1024].split(b"\n", 3)[:3]) + b"\n"  # version, title, ASCII or BINARY
-        attributes = _ATTRIBUTES.search(data, len(header))
-        match = _DATASET_FIELD.search(data, len(header), attributes.start() if attributes else len(data))
+        lines, body = _legacy_header(data)
+        attributes = _ATTRIBUTES.search(data, body)
+        match = _DATASET_FIELD.search(data, body, attributes.start() if attributes else len(data))
         if match is None:
             return
-        keyword, text = match.group(1).decode("latin-1"), header + data[match.end(1) :]
+        keyword, text = match.group(1).decode("latin-1"), b"\n".join([*lines, data[match.end(1) :]])
     reader = vtkDataReader()
     reader.ReadFromInputStringOn()
     reader.SetBinaryInputString(text, len(text))

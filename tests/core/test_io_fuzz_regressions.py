@@ -1,9 +1,10 @@
 """Reader defects found by a mutation fuzz of every format (byte flips, truncations, header
 edits): a binary PLY vertex element of no properties divided by zero, a legacy VTK cell
 array with entries left after its cells crashed VTK (a segmentation fault), so did a dataset
-FIELD section VTK could not read, and a layered LAZ chunk declaring a 4 GB layer aborted
-lazrs (a failed allocation). Files that could end the process are read in a subprocess with
-limited memory (``helpers.read_in_child``)."""
+FIELD section VTK could not read, and cells after a header line of over 512 bytes; a layered
+LAZ chunk declaring a 4 GB layer aborted lazrs (a failed allocation), a LASzip record of no
+items panicked it; a text header of a long run of digits took hours. Files that could end
+the process are read in a subprocess with limited memory (``helpers.read_in_child``)."""
 
 from __future__ import annotations
 
@@ -63,6 +64,15 @@ def test_legacy_vtk_cell_entries_left_over_refused(tmp_path, helpers):
     for path, taken, size in zip(paths, (4, 5), (5, 6)):
         assert path.name in answers[str(path)] and "corrupt VERTICES section" in answers[str(path)]
         assert f"take {taken} of the {size} entries" in answers[str(path)]
+
+
+def test_legacy_vtk_cells_checked_after_a_long_header_line(tmp_path, helpers):
+    """The checks took the header from the first 512 bytes: a longer version or title line
+    (VTK reads 255 bytes of it and skips the rest) skipped them, and VTK crashed."""
+    path = _legacy_vtk(tmp_path, "title.vtk", True, "VERTICES 3 6", [1, 0, 1, 1, 0, 100000000])
+    path.write_bytes(path.read_bytes().replace(b"\nt\n", b"\n" + b"t" * 600 + b"\n", 1))
+    answer = helpers.read_in_child([path])[str(path)]
+    assert "take 5 of the 6 entries" in answer, answer
 
 
 def test_legacy_vtk_cells_using_every_entry_still_read(tmp_path):
