@@ -141,7 +141,7 @@ def _check_implicit_points(data, path) -> None:
     check_memory(path, need, f"a {data.GetClassName()} of {n} points: building their coordinates needs")
 
 
-_CELLS = re.compile(rb"^(VERTICES|LINES|POLYGONS|TRIANGLE_STRIPS|CELLS)[ \t]+(\d+)[ \t]+(\d+)[ \t\r]*$", re.M)
+_CELLS = re.compile(rb"^(VERTICES|LINES|POLYGONS|TRIANGLE_STRIPS|CELLS)[ \t]+(-?\d+)[ \t]+(-?\d+)[ \t\r]*$", re.M)
 
 
 def check_legacy_cells(path) -> None:
@@ -149,8 +149,9 @@ def check_legacy_cells(path) -> None:
     VTK walks the counts without checking them against the array's size, and a corrupt
     count crashes the process (a segmentation fault). The runs are checked here first."""
     with open(path, "rb") as f, mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as data:
+        _check_cell_counts(path, data)
         lines, body = _legacy_header(data)
-        version = re.match(rb"# vtk DataFile Version (\d{1,3})\b", lines[0])
+        version = re.match(rb"# vtk DataFile Version (\d{1,3})\.\d", lines[0])  # VTK reads "5'1" as no version
         if (version and 5 <= int(version.group(1)) <= 99) or body >= len(data):
             return  # offsets and connectivity, which VTK checks (a garbled version is read as legacy)
         binary = lines[2].strip().upper() == b"BINARY"
@@ -169,6 +170,15 @@ def check_legacy_cells(path) -> None:
             problem = _cell_runs_problem(ids, int(match.group(2)), size)
             if problem:
                 raise CloudFileError(path, f"corrupt {match.group(1).decode()} section: {problem}")
+
+
+def _check_cell_counts(path, data) -> None:
+    """A negative count on a cell array's line: VTK read the binary offsets and connectivity
+    of a version 5 file (from a count of -1) past their array, a segmentation fault."""
+    for match in _CELLS.finditer(data):
+        if match.group(2).startswith(b"-") or match.group(3).startswith(b"-"):
+            raise CloudFileError(path, f"corrupt {match.group(1).decode()} section: "
+                                       f"{match.group(0).decode().strip()!r} declares a negative count")
 
 
 def _legacy_header(data) -> tuple[list, int]:

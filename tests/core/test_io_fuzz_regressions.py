@@ -1,10 +1,11 @@
 """Reader defects found by a mutation fuzz of every format (byte flips, truncations, header
-edits): a binary PLY vertex element of no properties divided by zero, a legacy VTK cell
+edits): a binary PLY vertex element of no properties divided by zero; a legacy VTK cell
 array with entries left after its cells crashed VTK (a segmentation fault), so did a dataset
-FIELD section VTK could not read, and cells after a header line of over 512 bytes; a layered
-LAZ chunk declaring a 4 GB layer aborted lazrs (a failed allocation), a LASzip record of no
-items panicked it; a text header of a long run of digits took hours. Files that could end
-the process are read in a subprocess with limited memory (``helpers.read_in_child``)."""
+FIELD section VTK could not read, cells after a header line of over 512 bytes, a negative
+cell count in a version 5 file and cells under a version "5'1"; a layered LAZ chunk
+declaring a 4 GB layer aborted lazrs (a failed allocation), a LASzip record of no items
+panicked it; a text header of a long run of digits took hours. Files that could end the
+process are read in a subprocess with limited memory (``helpers.read_in_child``)."""
 
 from __future__ import annotations
 
@@ -73,6 +74,22 @@ def test_legacy_vtk_cells_checked_after_a_long_header_line(tmp_path, helpers):
     path.write_bytes(path.read_bytes().replace(b"\nt\n", b"\n" + b"t" * 600 + b"\n", 1))
     answer = helpers.read_in_child([path])[str(path)]
     assert "take 5 of the 6 entries" in answer, answer
+
+
+def test_vtk_negative_cell_count_and_version_without_a_minor_refused(tmp_path, helpers):
+    """A version 5 binary file with a negative count on its VERTICES line, and a version
+    "5'1" (VTK reads no version: legacy cells, which the check skipped as version 5), both
+    crashed VTK."""
+    negative = tmp_path / "negative.vtk"
+    negative.write_bytes(b"# vtk DataFile Version 5.1\nt\nBINARY\nDATASET POLYDATA\nPOINTS 4 float\n"
+                         + np.arange(12, dtype=">f4").tobytes() + b"\nVERTICES 3 -1\nOFFSETS vtktypeint64\n"
+                         + np.arange(3, dtype=">i8").tobytes() + b"\nCONNECTIVITY vtktypeint64\n"
+                         + np.arange(2, dtype=">i8").tobytes() + b"\n")
+    version = _legacy_vtk(tmp_path, "version.vtk", True, "VERTICES 3 6", [1, 0, 1, 1, 0, 100000000])
+    version.write_bytes(version.read_bytes().replace(b"Version 3.0", b"Version 5'1", 1))
+    answers = helpers.read_in_child([negative, version])
+    assert "'VERTICES 3 -1' declares a negative count" in answers[str(negative)], answers
+    assert "take 5 of the 6 entries" in answers[str(version)], answers
 
 
 def test_legacy_vtk_cells_using_every_entry_still_read(tmp_path):
