@@ -212,8 +212,9 @@ def _cell_runs_problem(ids, n_cells: int, size: int) -> str | None:
     return None
 
 
-#: a dataset's own field data: a FIELD keyword (VTK compares 5 letters) before POINT_DATA and CELL_DATA
-_DATASET_FIELD = re.compile(rb"^[ \t]*(field\w*)[ \t\r\n]", re.I | re.M)
+#: a dataset's own field data: a FIELD keyword (VTK compares 5 letters; a word anywhere in a
+#: line, as VTK reads words) before POINT_DATA and CELL_DATA
+_DATASET_FIELD = re.compile(rb"(?:^|[ \t])(field\w*)[ \t\r\n]", re.I | re.M)
 _ATTRIBUTES = re.compile(rb"^[ \t]*(point_data|cell_data)\b", re.I | re.M)
 
 

@@ -102,7 +102,8 @@ def test_legacy_vtk_dataset_field_data_vtk_cannot_read_refused(tmp_path, helpers
     """A dataset's FIELD section that VTK fails to read (fewer arrays than declared, a header
     only, FIELDS for DIMENSIONS) was used all the same: a segmentation fault."""
     head = f"# vtk DataFile Version 3.0\nField data\nASCII\nDATASET {dataset}\n"
-    bodies = {"short": "FIELD f 2\nA 1 3 float\n1 2 3\n", "header": "FIELD f 1\n", "fields": "FIELDS 3 2 2\n"}
+    bodies = {"short": "FIELD f 2\nA 1 3 float\n1 2 3\n", "header": "FIELD f 1\n", "fields": "FIELDS 3 2 2\n",
+              "inline": "0 0 FIELD f 1\n"}  # VTK reads words: a keyword after data on its line counts
     paths = []
     for name, body in bodies.items():
         paths.append(tmp_path / f"{name}.vtk")
