@@ -172,6 +172,9 @@ def check_legacy_cells(path) -> None:
                 raise CloudFileError(path, f"corrupt {match.group(1).decode()} section: {problem}")
 
 
+_NEGATIVE_POINTS = re.compile(rb"^POINTS[ \t]+-\d+", re.M)
+
+
 def _check_cell_counts(path, data) -> None:
     """A negative count on a cell array's line: VTK read the binary offsets and connectivity
     of a version 5 file (from a count of -1) past their array, a segmentation fault."""
@@ -179,6 +182,10 @@ def _check_cell_counts(path, data) -> None:
         if match.group(2).startswith(b"-") or match.group(3).startswith(b"-"):
             raise CloudFileError(path, f"corrupt {match.group(1).decode()} section: "
                                        f"{match.group(0).decode().strip()!r} declares a negative count")
+    points = _NEGATIVE_POINTS.search(data)  # -2147483649 points in a binary file: the same crash
+    if points:
+        raise CloudFileError(path, f"corrupt POINTS section: {points.group(0).decode().strip()!r} declares a "
+                                   "negative count")
 
 
 def _legacy_header(data) -> tuple[list, int]:

@@ -77,7 +77,7 @@ def test_legacy_vtk_cells_checked_after_a_long_header_line(tmp_path, helpers):
 
 
 def test_vtk_negative_cell_count_and_version_without_a_minor_refused(tmp_path, helpers):
-    """A version 5 binary file with a negative count on its VERTICES line, and a version
+    """A version 5 binary file with a negative count on its VERTICES or POINTS line, and a version
     "5'1" (VTK reads no version: legacy cells, which the check skipped as version 5), both
     crashed VTK."""
     negative = tmp_path / "negative.vtk"
@@ -87,8 +87,11 @@ def test_vtk_negative_cell_count_and_version_without_a_minor_refused(tmp_path, h
                          + np.arange(2, dtype=">i8").tobytes() + b"\n")
     version = _legacy_vtk(tmp_path, "version.vtk", True, "VERTICES 3 6", [1, 0, 1, 1, 0, 100000000])
     version.write_bytes(version.read_bytes().replace(b"Version 3.0", b"Version 5'1", 1))
-    answers = helpers.read_in_child([negative, version])
+    points = tmp_path / "points.vtk"
+    points.write_bytes(negative.read_bytes().replace(b"POINTS 4", b"POINTS -2147483649").replace(b"3 -1", b"3 2"))
+    answers = helpers.read_in_child([negative, points, version])
     assert "'VERTICES 3 -1' declares a negative count" in answers[str(negative)], answers
+    assert "'POINTS -2147483649' declares a negative count" in answers[str(points)], answers
     assert "take 5 of the 6 entries" in answers[str(version)], answers
 
 
