@@ -141,7 +141,10 @@ def _check_implicit_points(data, path) -> None:
     check_memory(path, need, f"a {data.GetClassName()} of {n} points: building their coordinates needs")
 
 
-_CELLS = re.compile(rb"^(VERTICES|LINES|POLYGONS|TRIANGLE_STRIPS|CELLS)[ \t]+(-?\d+)[ \t]+(-?\d+)[ \t\r]*$", re.M)
+#: a cell array's line: VTK reads its two counts as words, whatever follows them on the line
+_CELLS = re.compile(rb"^(VERTICES|LINES|POLYGONS|TRIANGLE_STRIPS|CELLS)[ \t]+(-?\d+)[ \t]+(-?\d+)(?!\d)", re.M)
+#: VTK reads the rest of a binary cell array's line after its counts, up to its newline, into a buffer of 256 bytes
+_LINE_BUFFER = 256
 
 
 def check_legacy_cells(path) -> None:
@@ -156,8 +159,9 @@ def check_legacy_cells(path) -> None:
             return  # offsets and connectivity, which VTK checks (a garbled version is read as legacy)
         binary = lines[2].strip().upper() == b"BINARY"
         for match in _CELLS.finditer(data):
-            size, start = int(match.group(3)), match.end() + 1
+            size, start = int(match.group(3)), match.end()
             if binary:
+                start = _binary_start(path, data, match)
                 if start + 4 * size > len(data):
                     raise CloudFileError(path, f"truncated: {match.group(0).decode().strip()!r} declares {size} "
                                                "cell entries but the file ends first")
@@ -170,6 +174,19 @@ def check_legacy_cells(path) -> None:
             problem = _cell_runs_problem(ids, int(match.group(2)), size)
             if problem:
                 raise CloudFileError(path, f"corrupt {match.group(1).decode()} section: {problem}")
+
+
+def _binary_start(path, data, match) -> int:
+    """Where VTK starts reading the binary ids of the cell array on ``match``'s line: after the
+    line's newline. Bytes between the counts and the newline are skipped: a newline lost in
+    a damaged file moves the ids to the next line's end (text read as ids, a segmentation
+    fault), so the check reads them where VTK will; 256 bytes or more after the counts without a
+    newline are refused (VTK's read of the line fails and leaves the ids unread)."""
+    end = data.find(b"\n", match.end(), match.end() + _LINE_BUFFER)  # (getline stores up to 255 bytes)
+    if end < 0:
+        raise CloudFileError(path, f"corrupt {match.group(1).decode()} section: the line "
+                                   f"{match.group(0).decode().strip()!r} has no end before its binary data")
+    return end + 1
 
 
 _NEGATIVE_POINTS = re.compile(rb"^POINTS[ \t]+-\d+", re.M)

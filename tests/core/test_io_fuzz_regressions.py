@@ -2,7 +2,8 @@
 edits): a binary PLY vertex element of no properties divided by zero; a legacy VTK cell
 array with entries left after its cells crashed VTK (a segmentation fault), so did a dataset
 FIELD section VTK could not read, cells after a header line of over 512 bytes, a negative
-cell count in a version 5 file and cells under a version "5'1"; a layered LAZ chunk
+cell count in a version 5 file, cells under a version "5'1" and a binary cell array whose
+count line lost its newline; a layered LAZ chunk
 declaring a 4 GB layer aborted lazrs (a failed allocation), a LASzip record of no items
 panicked it; a text header of a long run of digits took hours. Files that could end the
 process are read in a subprocess with limited memory (``helpers.read_in_child``)."""
@@ -204,3 +205,25 @@ def test_text_header_of_a_long_digit_run_read_at_once(tmp_path):
     t0 = time.perf_counter()
     assert len(read_cloud(path)) == 12
     assert time.perf_counter() - t0 < 1.0
+
+
+@pytest.mark.parametrize("end, part", [
+    (b"\0", "cell 0 declares 1347373390"),  # the newline lost: VTK read the ids from after the next line's end
+    (b" \t junk", "cell 0 declares 1347373390"),
+    (b"\0" * 300, "has no end before its binary data"),  # VTK's read of the line failed, ids left unread
+])
+def test_legacy_vtk_binary_cells_read_from_where_vtk_reads_them(tmp_path, helpers, end, part):
+    """VTK reads a binary cell array's counts as words, then the rest of their line (up to 255
+    bytes), then the ids: a damaged end of that line moved the ids (a segmentation fault) where
+    the check, which wanted the counts alone on their line, did not look."""
+    path = _legacy_vtk(tmp_path, "cells.vtk", True, "VERTICES 3 6", [1, 0, 1, 1, 1, 2])
+    path.write_bytes(path.read_bytes().replace(b"VERTICES 3 6\n", b"VERTICES 3 6" + end, 1)
+                     + b"POINT_DATA 12\nNORMALS n float\n" + np.zeros(36, ">f4").tobytes())
+    answer = helpers.read_in_child([path])[str(path)]
+    assert "corrupt VERTICES section" in answer and part in answer, answer
+
+
+def test_legacy_vtk_binary_cells_after_trailing_blanks_still_read(tmp_path):
+    path = _legacy_vtk(tmp_path, "blanks.vtk", True, "VERTICES 3 6", [1, 0, 1, 1, 1, 2])
+    path.write_bytes(path.read_bytes().replace(b"VERTICES 3 6\n", b"VERTICES 3 6   \r\n", 1))
+    assert len(read_cloud(path)) == 12
