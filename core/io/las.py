@@ -7,6 +7,7 @@ nx/ny/nz or normal_x/... are the normals.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import struct
 
@@ -35,7 +36,7 @@ def _read_las_data(path):
 
     check_record_counts(path)
     try:
-        with laspy.open(path) as reader:
+        with rust_panics_refused(path), laspy.open(path) as reader:
             _check_header(reader.header, path, laspy)
             return reader.read()
     except CloudFileError:
@@ -46,6 +47,20 @@ def _read_las_data(path):
         if type(exc).__module__.split(".")[0] != "lazrs":
             raise
         raise CloudFileError(path, f"corrupt or truncated LAZ data: {exc}") from None
+
+
+@contextlib.contextmanager
+def rust_panics_refused(path):
+    """A panic of the LAZ decompressor (lazrs, in Rust) on a corrupt file as a
+    :class:`CloudFileError`: pyo3 raises it as a ``PanicException``, a ``BaseException``,
+    which no ``except Exception`` (the viewer's worker included) catches. The checks before
+    a read refuse the panics found (a LASzip record of no items); this catches any other."""
+    try:
+        yield
+    except BaseException as exc:
+        if type(exc).__name__ != "PanicException":
+            raise
+        raise CloudFileError(path, f"corrupt LAZ data: the decompressor failed ({exc})") from None
 
 
 def _check_header(header, path, laspy) -> None:

@@ -12,7 +12,7 @@ import warnings
 
 import numpy as np
 
-from .cloud import CloudFileError, RawCloud, find_normals, remaining_bytes, split_components
+from .cloud import CloudFileError, RawCloud, check_memory, find_normals, remaining_bytes, split_components
 from .text import diagnose_lines
 
 _MAX_HEADER_LINES = 100
@@ -150,6 +150,8 @@ def _read_compressed(f, path, fields, n):
     need = n * sum(np.dtype(dt).itemsize * count for _, dt, count in fields)
     if unpacked != need:
         raise CloudFileError(path, f"the compressed data expands to {unpacked} bytes but {n} points need {need}")
+    # the decoder's output grows to `unpacked` bytes, then is copied: a 48 MB file may ask for 4 GB
+    check_memory(path, 2 * unpacked, f"decompressing its {unpacked} bytes of points needs")
     data = f.read(packed)
     try:
         raw = lzf_decompress(data, unpacked)

@@ -227,3 +227,48 @@ def test_legacy_vtk_binary_cells_after_trailing_blanks_still_read(tmp_path):
     path = _legacy_vtk(tmp_path, "blanks.vtk", True, "VERTICES 3 6", [1, 0, 1, 1, 1, 2])
     path.write_bytes(path.read_bytes().replace(b"VERTICES 3 6\n", b"VERTICES 3 6   \r\n", 1))
     assert len(read_cloud(path)) == 12
+
+
+class PanicException(BaseException):
+    """What pyo3 raises for a Rust panic (its name, and no ``Exception`` base)."""
+
+
+@pytest.mark.parametrize("reader", ["read_cloud", "open_las", "iter_records", "sample_rows"])
+def test_a_laz_decompressor_panic_is_a_clear_error(tmp_path, monkeypatch, reader):
+    """A panic of lazrs on a file the checks let through is no ``Exception``: it passed every
+    ``except`` (the viewer's worker's too). Every reader that opens the file through laspy
+    turns it into a CloudFileError naming the file."""
+    laspy = pytest.importorskip("laspy")
+    from core.io import las_sample, las_stream
+
+    path = tmp_path / "panic.las"
+    las = laspy.LasData(laspy.LasHeader(point_format=3, version="1.2"))
+    las.x, las.y, las.z = np.arange(30.0), np.ones(30), np.zeros(30)
+    las.write(str(path))
+    info = las_stream.open_las(path)
+
+    def panics(*args, **kwargs):
+        raise PanicException("called `Result::unwrap()` on an `Err` value")
+
+    monkeypatch.setattr(laspy, "open", panics)
+    read = {"read_cloud": lambda: read_cloud(path), "open_las": lambda: las_stream.open_las(path),
+            "iter_records": lambda: list(las_stream.iter_records(path, info=info)),
+            "sample_rows": lambda: las_sample._fetch(path, info, np.arange(5), [], lambda *a: None)}[reader]
+    with pytest.raises(CloudFileError, match="panic.las: corrupt LAZ data: the decompressor failed"):
+        read()
+
+
+def test_compressed_pcd_beyond_memory_refused_before_decoding(tmp_path, monkeypatch):
+    """A binary_compressed PCD declares how many bytes its points expand to (up to 4 GB from a
+    48 MB file): more than the memory available is refused before the decoder grows to it."""
+    from core.io import cloud
+
+    n = 1000
+    soa = np.zeros(3 * n, "<f4").tobytes()
+    packed = b"".join(bytes([len(c) - 1]) + c for c in (soa[i:i + 32] for i in range(0, len(soa), 32)))
+    path = tmp_path / "big.pcd"
+    path.write_bytes(f"VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH {n}\nHEIGHT 1\n"
+                     f"POINTS {n}\nDATA binary_compressed\n".encode() + struct.pack("<II", len(packed), len(soa)) + packed)
+    assert len(read_cloud(path)) == n
+    monkeypatch.setattr(cloud, "available_memory", lambda: 10_000)
+    _error(path, "decompressing its 12000 bytes of points needs about")
