@@ -113,44 +113,42 @@ def _times(src, x, n, out):
         out[j] = src[j] * x[j]
 
 
+#: no sums yet (:func:`add_linear`)
+NO_LINEAR_SUMS = (0.0,) * 14
+
+
+@njit(**OPTS, inline="always")
+def add_linear(t, w, u, v, X, Y):
+    """The 14 sums ``t`` of the linear normal equations (sum w, w u, w v, w uu, w uv, w vv, w X,
+    w X u, w X v, w Y, w Y u, w Y v, w XX, w YY) with a neighbour of weight w at (u, v) whose
+    normal components are (X, Y) added."""
+    wu, wv = w * u, w * v
+    return (t[0] + w, t[1] + wu, t[2] + wv, t[3] + wu * u, t[4] + wu * v, t[5] + wv * v, t[6] + w * X,
+            t[7] + wu * X, t[8] + wv * X, t[9] + w * Y, t[10] + wu * Y, t[11] + wv * Y, t[12] + w * X * X,
+            t[13] + w * Y * Y)
+
+
+@njit(**OPTS, inline="always")
+def put_linear(t, vec, G, acc, add):
+    """The sums ``t`` of :func:`add_linear` into G, the right-hand sides and acc: added to
+    what they hold (``add``), else in place of it (no :func:`reset` needed)."""
+    for a, b, c in ((0, 0, 0), (1, 0, 1), (2, 0, 2), (1, 1, 3), (2, 1, 4), (2, 2, 5)):
+        G[a, b] = G[a, b] + t[c] if add else t[c]
+    for a in range(3):
+        vec[BX, a] = vec[BX, a] + t[6 + a] if add else t[6 + a]
+        vec[BY, a] = vec[BY, a] + t[9 + a] if add else t[9 + a]
+    for a, c in ((0, 0), (1, 12), (2, 13)):
+        acc[a] = acc[a] + t[c] if add else t[c]
+
+
 @njit(**OPTS, fastmath=True)
 def _accumulate_linear(R, X, Y, wt, j0, j1, vec, G, acc):
     """:func:`accumulate` for degree 1: all sums in one pass (short neighbourhoods
     gain nothing from vectors)."""
-    s1 = su = sv = suu = suv = svv = x0 = x1 = x2 = y0 = y1 = y2 = xx = yy = 0.0
+    t = NO_LINEAR_SUMS
     for j in range(j0, j1):
-        w = wt[j]
-        uj, vj, Xj, Yj = R[1, j], R[2, j], X[j], Y[j]
-        wu, wv = w * uj, w * vj
-        s1 += w
-        su += wu
-        sv += wv
-        suu += wu * uj
-        suv += wu * vj
-        svv += wv * vj
-        x0 += w * Xj
-        x1 += wu * Xj
-        x2 += wv * Xj
-        y0 += w * Yj
-        y1 += wu * Yj
-        y2 += wv * Yj
-        xx += w * Xj * Xj
-        yy += w * Yj * Yj
-    G[0, 0] += s1
-    G[1, 0] += su
-    G[2, 0] += sv
-    G[1, 1] += suu
-    G[2, 1] += suv
-    G[2, 2] += svv
-    vec[BX, 0] += x0
-    vec[BX, 1] += x1
-    vec[BX, 2] += x2
-    vec[BY, 0] += y0
-    vec[BY, 1] += y1
-    vec[BY, 2] += y2
-    acc[0] += s1
-    acc[1] += xx
-    acc[2] += yy
+        t = add_linear(t, wt[j], R[1, j], R[2, j], X[j], Y[j])
+    put_linear(t, vec, G, acc, True)
 
 
 @njit(**OPTS, inline="always")
