@@ -145,33 +145,21 @@ def normal_fit(f, opt, out, rows):
     n_blocks = (m + BLOCK - 1) // BLOCK
     linear = opt.degree == 1 and opt.robust == 0
     for blk in prange(n_blocks):
-        if linear:
-            _linear_block(f, opt, out, rows, blk * BLOCK, min(m, (blk + 1) * BLOCK), fit_scratch(kmax))
-        else:
-            _fit_block(f, opt, out, rows, blk * BLOCK, min(m, (blk + 1) * BLOCK), fit_scratch(kmax))
+        _fit_block(f, opt, out, rows, blk * BLOCK, min(m, (blk + 1) * BLOCK), fit_scratch(kmax), linear)
 
 
 @njit(**OPTS)
-def _fit_block(f, opt, out, rows, start, stop, s):
+def _fit_block(f, opt, out, rows, start, stop, s, linear):
     """NF at centres start..stop-1 with the scratch ``s`` (allocated once per block: a
-    per-point allocation would cost more than the fit)."""
+    per-point allocation would cost more than the fit); ``linear``: the paper's linear model
+    without reweighting (:func:`_fit_linear`)."""
     for r in range(start, stop):
         stride = thinned(f.kc[r], opt.rows)
         n = (f.kc[r] + stride - 1) // stride
-        degree = _fit_point(f, opt, r, rows[r], n, s, stride)
-        out.degree[r] = degree
-        if degree > 0:
-            _store(opt, degree, r, n, s, out)
-
-
-@njit(**OPTS)
-def _linear_block(f, opt, out, rows, start, stop, s):
-    """:func:`_fit_block` of the paper's linear model without reweighting (:func:`_fit_linear`): a
-    loop of its own (both fits inlined in one loop, chosen per centre, made this one 20 % slower)."""
-    for r in range(start, stop):
-        stride = thinned(f.kc[r], opt.rows)
-        n = (f.kc[r] + stride - 1) // stride
-        degree = _fit_linear(f, opt, r, rows[r], n, s, stride)
+        if linear:
+            degree = _fit_linear(f, opt, r, rows[r], n, s, stride)
+        else:
+            degree = _fit_point(f, opt, r, rows[r], n, s, stride)
         out.degree[r] = degree
         if degree > 0:
             _store(opt, degree, r, n, s, out)
