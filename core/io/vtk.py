@@ -20,6 +20,7 @@ import numpy as np
 
 from .._memory import available_memory
 from .cloud import CloudFileError, RawCloud, check_memory, split_components
+from .vtk_ascii import check_ascii_points
 from .vtp_blocks import Tags, check_binary_headers
 from .vtp_points import points_only
 from .xml_scan import scan_xml
@@ -29,8 +30,7 @@ def read_vtk(path) -> RawCloud:
     """A legacy ``.vtk`` file (ascii or binary)."""
     from vtkmodules.vtkIOLegacy import vtkGenericDataObjectReader
 
-    check_legacy_cells(path)
-    check_legacy_field_data(path)
+    check_legacy(path)
     reader = vtkGenericDataObjectReader()
     for option in ("ReadAllScalarsOn", "ReadAllVectorsOn", "ReadAllNormalsOn", "ReadAllFieldsOn"):
         getattr(reader, option)()
@@ -147,33 +147,47 @@ _CELLS = re.compile(rb"^(VERTICES|LINES|POLYGONS|TRIANGLE_STRIPS|CELLS)[ \t]+(-?
 _LINE_BUFFER = 256
 
 
-def check_legacy_cells(path) -> None:
+def check_legacy(path) -> None:
+    """What a legacy file declares that crashed VTK (a segmentation fault), checked before VTK
+    reads it, on one mapping of the file: its cell arrays (:func:`_check_cells`), its dataset's
+    field data (:func:`_check_field_data`) and, in ASCII, the numbers of its POINTS section
+    (:func:`core.io.vtk_ascii.check_ascii_points`: VTK returns garbage for the missing ones)."""
+    with open(path, "rb") as f, mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as data:
+        lines, body = _legacy_header(data)
+        _check_cell_counts(path, data)
+        _check_cells(path, data, lines, body)
+        if lines[2].strip().upper() == b"ASCII":
+            check_ascii_points(path, data, body)
+        field = _dataset_field(data, lines, body)
+    if field is not None:
+        _check_field_data(path, *field)
+
+
+def _check_cells(path, data, lines, body) -> None:
     """A legacy file before version 5.0 stores each cell array as runs of (count, ids...);
     VTK walks the counts without checking them against the array's size, and a corrupt
-    count crashes the process (a segmentation fault). The runs are checked here first."""
-    with open(path, "rb") as f, mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as data:
-        _check_cell_counts(path, data)
-        lines, body = _legacy_header(data)
-        version = re.match(rb"# vtk DataFile Version (\d{1,3})\.\d", lines[0])  # VTK reads "5'1" as no version
-        if (version and 5 <= int(version.group(1)) <= 99) or body >= len(data):
-            return  # offsets and connectivity, which VTK checks (a garbled version is read as legacy)
-        binary = lines[2].strip().upper() == b"BINARY"
-        for match in _CELLS.finditer(data):
-            size, start = int(match.group(3)), match.end()
-            if binary:
-                start = _binary_start(path, data, match)
-                if start + 4 * size > len(data):
-                    raise CloudFileError(path, f"truncated: {match.group(0).decode().strip()!r} declares {size} "
-                                               "cell entries but the file ends first")
-                ids = np.frombuffer(data, ">i4", count=size, offset=start).astype(np.int64)
-            else:
-                try:
-                    ids = np.array(bytes(data[start : start + 32 * size + 64]).split(maxsplit=size)[:size], np.int64)
-                except (ValueError, OverflowError):
-                    return  # VTK names the bad entry
-            problem = _cell_runs_problem(ids, int(match.group(2)), size)
-            if problem:
-                raise CloudFileError(path, f"corrupt {match.group(1).decode()} section: {problem}")
+    count crashes the process. The runs are checked here first (``lines``, ``body``: the
+    file's header lines and where its body starts, :func:`_legacy_header`)."""
+    version = re.match(rb"# vtk DataFile Version (\d{1,3})\.\d", lines[0])  # VTK reads "5'1" as no version
+    if (version and 5 <= int(version.group(1)) <= 99) or body >= len(data):
+        return  # offsets and connectivity, which VTK checks (a garbled version is read as legacy)
+    binary = lines[2].strip().upper() == b"BINARY"
+    for match in _CELLS.finditer(data):
+        size, start = int(match.group(3)), match.end()
+        if binary:
+            start = _binary_start(path, data, match)
+            if start + 4 * size > len(data):
+                raise CloudFileError(path, f"truncated: {match.group(0).decode().strip()!r} declares {size} "
+                                           "cell entries but the file ends first")
+            ids = np.frombuffer(data, ">i4", count=size, offset=start).astype(np.int64)
+        else:
+            try:
+                ids = np.array(bytes(data[start : start + 32 * size + 64]).split(maxsplit=size)[:size], np.int64)
+            except (ValueError, OverflowError):
+                return  # VTK names the bad entry
+        problem = _cell_runs_problem(ids, int(match.group(2)), size)
+        if problem:
+            raise CloudFileError(path, f"corrupt {match.group(1).decode()} section: {problem}")
 
 
 def _binary_start(path, data, match) -> int:
@@ -242,20 +256,23 @@ _DATASET_FIELD = re.compile(rb"(?:^|[ \t])(field\w*)[ \t\r\n]", re.I | re.M)
 _ATTRIBUTES = re.compile(rb"^[ \t]*(point_data|cell_data)\b", re.I | re.M)
 
 
-def check_legacy_field_data(path) -> None:
+def _dataset_field(data, lines, body):
+    """The first FIELD section of the dataset (before its point and cell data) as (its keyword,
+    the file's 3 header lines followed by the section and the rest of the file), or None."""
+    attributes = _ATTRIBUTES.search(data, body)
+    match = _DATASET_FIELD.search(data, body, attributes.start() if attributes else len(data))
+    if match is None:
+        return None
+    return match.group(1).decode("latin-1"), b"\n".join([*lines, data[match.end(1) :]])
+
+
+def _check_field_data(path, keyword, text) -> None:
     """VTK's legacy dataset readers use a dataset's FIELD section even when they failed to
     read it (fewer arrays than declared, a bad array header): a segmentation fault. The
-    first such section is read first on its own, after the file's 3 header lines, with
-    VTK's own field data parser."""
+    section (``text``, :func:`_dataset_field`) is read first on its own with VTK's own field
+    data parser."""
     from vtkmodules.vtkIOLegacy import vtkDataReader
 
-    with open(path, "rb") as f, mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as data:
-        lines, body = _legacy_header(data)
-        attributes = _ATTRIBUTES.search(data, body)
-        match = _DATASET_FIELD.search(data, body, attributes.start() if attributes else len(data))
-        if match is None:
-            return
-        keyword, text = match.group(1).decode("latin-1"), b"\n".join([*lines, data[match.end(1) :]])
     reader = vtkDataReader()
     reader.ReadFromInputStringOn()
     reader.SetBinaryInputString(text, len(text))

@@ -272,3 +272,29 @@ def test_compressed_pcd_beyond_memory_refused_before_decoding(tmp_path, monkeypa
     assert len(read_cloud(path)) == n
     monkeypatch.setattr(cloud, "available_memory", lambda: 10_000)
     _error(path, "decompressing its 12000 bytes of points needs about")
+
+
+@pytest.mark.parametrize("cut, part", [
+    (POINTS.index("4 2 1"), "declares 36 coordinates but 12 follow before the file ends"),  # the file cut short
+    (None, "declares 36 coordinates but 33 follow"),  # a point's row lost before the next section
+])
+def test_legacy_vtk_ascii_points_short_of_their_count_refused(tmp_path, cut, part):
+    """VTK read an ASCII POINTS section short of its declared count without a message and
+    returned the missing points as whatever memory held (1e+259, 2e-312)."""
+    path = _legacy_vtk(tmp_path, "short.vtk", False, "VERTICES 1 2", [1, 0])
+    text = path.read_bytes()
+    body = text.index(b"POINTS 12 float\n") + len(b"POINTS 12 float\n")
+    if cut is None:
+        text = text.replace(POINTS.splitlines(keepends=True)[5].encode(), b"", 1)
+    else:
+        text = text[: body + cut]
+    path.write_bytes(text)
+    _error(path, "truncated or corrupt POINTS section: 'POINTS 12 float'", part)
+
+
+def test_legacy_vtk_ascii_points_of_nan_and_inf_still_counted(tmp_path):
+    path = _legacy_vtk(tmp_path, "nan.vtk", False, "VERTICES 1 2", [1, 0])
+    path.write_bytes(path.read_bytes().replace(b"\n1 1 1\n", b"\nnan -inf inf\n", 1))
+    with pytest.warns(UserWarning, match="dropped 1 of 12 points with non-finite coordinates"):
+        cloud = read_cloud(path, drop_nonfinite=True)
+    assert len(cloud) == 11
