@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from ._base import OPTS as _OPTS
 from .union_find import join, root
@@ -25,20 +25,24 @@ def _same_face(points, normals, sign, i, j, min_cos, max_tilt):
     return ti <= reach and tj <= reach
 
 
-@njit(**_OPTS)
+@njit(**_OPTS, parallel=True)
 def _patches(points, normals, idx, ok, sign, min_cos, max_tilt):
     """Each point's patch (the lowest index in it): :func:`_same_face` pairs of the graph
     ``idx`` joined transitively (:func:`core.kernels.union_find.root`), and the number
-    of ``ok`` points in each."""
+    of ``ok`` points in each. The pairs are tested in parallel, then joined by one
+    union-find: its roots are each part's lowest index in any order of the joins."""
     n, k = idx.shape
+    face = np.zeros((n, k), dtype=np.bool_)
+    for i in prange(n):
+        if ok[i]:
+            for m in range(k):
+                j = idx[i, m]
+                face[i, m] = j != i and ok[j] and _same_face(points, normals, sign, i, j, min_cos, max_tilt)
     parent = np.arange(n)
     for i in range(n):
-        if not ok[i]:
-            continue
         for m in range(k):
-            j = idx[i, m]
-            if j != i and ok[j] and _same_face(points, normals, sign, i, j, min_cos, max_tilt):
-                join(parent, i, j)
+            if face[i, m]:
+                join(parent, i, idx[i, m])
     size = np.zeros(n, dtype=np.int64)
     for i in range(n):
         parent[i] = root(parent, i)

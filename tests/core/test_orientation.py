@@ -253,3 +253,38 @@ def test_strongest_first_is_a_stable_counting_sort_in_the_callers_order():
                 assert np.array_equal(g, w), nt
     finally:
         numba.set_num_threads(threads)
+
+
+def test_patches_are_the_connected_parts_of_the_same_face_pairs():
+    """core.kernels.patches._patches (pairs tested in parallel, joined serially) labels each
+    point with the lowest index of its part of the graph of same-face pairs, as scipy's
+    connected components of that graph do; the sizes count the usable points."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
+    from core.kernels.patches import _patches
+
+    rng = np.random.default_rng(3)
+    pts = noise.add_noise(shapes.torus(3000, seed=2).points, 0.3, seed=4)
+    idx = cKDTree(pts).query(pts, k=12)[1]
+    nrm = core.estimate(pts, k=15).normals
+    ok = rng.random(len(pts)) > 0.05
+    sign = np.where(rng.random(len(pts)) > 0.1, 1.0, -1.0)
+    min_cos, max_tilt = 0.95, 0.2
+    parent, size = _patches(pts, nrm, idx, ok, sign, min_cos, max_tilt)
+
+    i = np.repeat(np.arange(len(pts)), idx.shape[1])
+    j = idx.ravel()
+    chord = pts[j] - pts[i]
+    reach = max_tilt * np.linalg.norm(chord, axis=1)
+    face = (ok[i] & ok[j] & (i != j) & (sign[i] * sign[j] * np.einsum("ij,ij->i", nrm[i], nrm[j]) > min_cos)
+            & (np.abs(np.einsum("ij,ij->i", nrm[i], chord)) <= reach)
+            & (np.abs(np.einsum("ij,ij->i", nrm[j], chord)) <= reach))
+    graph = coo_matrix((np.ones(face.sum()), (i[face], j[face])), shape=(len(pts), len(pts)))
+    _, label = connected_components(graph, directed=False)
+    lowest = np.full(label.max() + 1, len(pts))
+    np.minimum.at(lowest, label, np.arange(len(pts)))
+    assert np.array_equal(parent, lowest[label])
+    assert 10 < len(np.unique(parent)) < len(pts) - 10  # the test has parts to find, and joins
+    assert np.array_equal(size[parent], np.bincount(parent, ok, len(pts))[parent].astype(int))
