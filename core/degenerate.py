@@ -18,13 +18,16 @@ from .normal_repair import split_normals
 from .result import CurvatureResult
 from .stages import find_neighbours
 
-#: largest |coordinate|: the fits sum squared distances over up to 226 neighbours and cubic
-#: terms in units of the neighbourhood radius. Measured: a unit sphere scaled by 1e150
-#: gives H to 3e-6 relative, by 1e160 the kd-tree distances overflow to inf.
-MAX_COORD = 1e150
-#: smallest extent (bounding-box diagonal): a sphere scaled by 1e-160 is still right, by
-#: 1e-200 squared distances underflow to 0 and every normal is undefined.
-MIN_EXTENT = 1e-150
+#: largest |coordinate|, and the smallest extent (bounding-box diagonal): inside them a cloud
+#: scaled by a power of two gives the same bits, its lengths and curvatures scaled exactly
+#: (``tests/core/test_degenerate.py``). Measured on a noisy 6000-point torus (extent ~6):
+#: the fits and the frames stay exact up to 2^260 (k = 15), but the outlier scores'
+#: eigenvalues of the neighbours' scatter go through its 4th power (offsets^8), which leaves
+#: float64 from 2^130 (1e39) and 2^-125 (2e-38; NaN from 2^-140), and k="auto" reads those
+#: scores (it chose other sizes there); at 1e160 the kd-tree's squared distances overflow.
+#: The bounds keep 8 orders of magnitude from the first of these.
+MAX_COORD = 1e30
+MIN_EXTENT = 1e-30
 #: smallest extent relative to |coordinates|: below it the cloud spans fewer than ~4500
 #: float64 steps and its shape is rounding noise.
 MIN_RELATIVE_EXTENT = 1e-12
