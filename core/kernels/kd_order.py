@@ -117,16 +117,17 @@ def kd_order(p, leaf):
     every range of more than ``leaf`` points at its middle index by the median of its
     widest coordinate (``order`` (N,) int64), and ``q = p[order]``. The same order whatever
     the number of threads: the top 6 levels are split in turn, then their 64 ranges each
-    by one thread."""
+    by one thread (each level's ranges split in parallel too: their slices are disjoint)."""
     n = p.shape[0]
     q = p.copy()
     perm = np.arange(n)
     los, his = np.zeros(_TOP, np.int64), np.zeros(_TOP, np.int64)
     his[0] = n
     count = 1
-    while count < _TOP:  # breadth first: range i splits into 2i and 2i + 1 (the higher first)
-        for i in range(count - 1, -1, -1):
-            a, b = los[i], his[i]
+    while count < _TOP:  # breadth first: range i splits into 2i and 2i + 1 of the next level
+        lo, hi = los.copy(), his.copy()  # read from the copies: range 0 writes the slot range 1 reads
+        for i in prange(count):  # disjoint slices of q and perm: in parallel, the same splits
+            a, b = lo[i], hi[i]
             mid = _halve(q, perm, a, b) if b - a > leaf else b
             los[2 * i], his[2 * i], los[2 * i + 1], his[2 * i + 1] = a, mid, mid, b
         count *= 2
