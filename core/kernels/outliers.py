@@ -10,7 +10,7 @@ from numba import njit, prange
 from ._base import OPTS
 from .algebra import row_scatter, smallest_eigvec_sym3
 from .kdtree import _distance
-from .union_find import join, root
+from .union_find import mask_roots
 
 
 @njit(**OPTS, parallel=True)
@@ -54,7 +54,7 @@ def isolated_groups(points, idx, out):
     connected group of fewer points than a row holds (and smaller than the largest group)
     has no neighbourhood of its own: the plane its neighbours span is a mix of itself
     and the surface below, and its distance from that plane says nothing. The joins are
-    tested in parallel, the groups found by one union-find over them.
+    tested and joined in parallel (:func:`core.kernels.union_find.mask_roots`).
     """
     n, k = idx.shape
     reach = np.empty(n)
@@ -67,14 +67,9 @@ def isolated_groups(points, idx, out):
             if j != i and j >= 0:
                 d = _distance(points, i, j)
                 joined[i, m] = d <= reach[i] and d <= reach[j]
-    parent = np.arange(n)
-    for i in range(n):
-        for m in range(1, k):
-            if joined[i, m]:
-                join(parent, i, idx[i, m])
+    parent = mask_roots(idx, joined)
     size = np.zeros(n, dtype=np.int64)
     for i in range(n):
-        parent[i] = root(parent, i)
         size[parent[i]] += 1
     least = min(k, size.max())
     for i in range(n):

@@ -6,7 +6,7 @@ import numpy as np
 from numba import njit, prange
 
 from ._base import OPTS as _OPTS
-from .union_find import join, root
+from .union_find import mask_roots
 
 
 @njit(**_OPTS)
@@ -29,8 +29,8 @@ def _same_face(points, normals, sign, i, j, min_cos, max_tilt):
 def _patches(points, normals, idx, ok, sign, min_cos, max_tilt):
     """Each point's patch (the lowest index in it): :func:`_same_face` pairs of the graph
     ``idx`` joined transitively (:func:`core.kernels.union_find.root`), and the number
-    of ``ok`` points in each. The pairs are tested in parallel, then joined by one
-    union-find: its roots are each part's lowest index in any order of the joins."""
+    of ``ok`` points in each. The pairs are tested and joined in parallel
+    (:func:`core.kernels.union_find.mask_roots`: the same parts and roots on any number of threads)."""
     n, k = idx.shape
     face = np.zeros((n, k), dtype=np.bool_)
     for i in prange(n):
@@ -38,14 +38,9 @@ def _patches(points, normals, idx, ok, sign, min_cos, max_tilt):
             for m in range(k):
                 j = idx[i, m]
                 face[i, m] = j != i and ok[j] and _same_face(points, normals, sign, i, j, min_cos, max_tilt)
-    parent = np.arange(n)
-    for i in range(n):
-        for m in range(k):
-            if face[i, m]:
-                join(parent, i, idx[i, m])
+    parent = mask_roots(idx, face)
     size = np.zeros(n, dtype=np.int64)
     for i in range(n):
-        parent[i] = root(parent, i)
         size[parent[i]] += ok[i]
     return parent, size
 

@@ -14,7 +14,7 @@ over the cloud), and 4 MiB stay in cache where 17 MiB did not (voted_signs' firs
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from ._base import OPTS as _OPTS
 
@@ -40,6 +40,37 @@ def join(parent, a, b):
     under the smaller, so each part's root stays its lowest index."""
     ra, rb = root(parent, a), root(parent, b)
     parent[max(ra, rb)] = min(ra, rb)
+
+
+@njit(**_OPTS, parallel=True)
+def mask_roots(idx, mask):
+    """(N,) each node's root, the lowest index of its part, in the graph that joins row i
+    to ``idx[i, m]`` wherever ``mask[i, m]``. The rows are split into two blocks whose
+    joins run in parallel, each on a forest of its own, and the second forest is merged
+    into the first (every node joined to its root there): the parts are those of one forest
+    of all the joins, and so are the roots, on any number of threads. Two blocks, not one
+    per thread: the merge is a serial pass over the nodes per extra block (and the thread
+    count read in here would keep numba from caching the function)."""
+    n, k = idx.shape
+    blocks = 2 if n >= 8192 else 1
+    forests = np.empty((blocks, n), dtype=np.int64)
+    for b in prange(blocks):
+        parent = forests[b]
+        for x in range(n):
+            parent[x] = x
+        for i in range(n * b // blocks, n * (b + 1) // blocks):
+            for m in range(k):
+                if mask[i, m]:
+                    join(parent, i, idx[i, m])
+    parent = forests[0]
+    for b in range(1, blocks):
+        other = forests[b]
+        for x in range(n):
+            if other[x] != x:
+                join(parent, x, root(other, x))
+    for x in range(n):
+        parent[x] = root(parent, x)
+    return parent
 
 
 @njit(**_OPTS)

@@ -256,7 +256,7 @@ def test_strongest_first_is_a_stable_counting_sort_in_the_callers_order():
 
 
 def test_patches_are_the_connected_parts_of_the_same_face_pairs():
-    """core.kernels.patches._patches (pairs tested in parallel, joined serially) labels each
+    """core.kernels.patches._patches (pairs tested and joined in parallel) labels each
     point with the lowest index of its part of the graph of same-face pairs, as scipy's
     connected components of that graph do; the sizes count the usable points."""
     from scipy.sparse import coo_matrix
@@ -288,3 +288,39 @@ def test_patches_are_the_connected_parts_of_the_same_face_pairs():
     assert np.array_equal(parent, lowest[label])
     assert 10 < len(np.unique(parent)) < len(pts) - 10  # the test has parts to find, and joins
     assert np.array_equal(size[parent], np.bincount(parent, ok, len(pts))[parent].astype(int))
+
+
+def _lowest_of_parts(n, i, j):
+    """Each node's lowest index of its connected part of the edges (i, j), by scipy."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    _, label = connected_components(coo_matrix((np.ones(len(i)), (i, j)), shape=(n, n)), directed=False)
+    lowest = np.full(label.max() + 1, n)
+    np.minimum.at(lowest, label, np.arange(n))
+    return lowest[label]
+
+
+def test_mask_roots_are_the_lowest_index_of_each_part_on_any_number_of_threads():
+    """kernels.union_find.mask_roots (a forest per block of rows, merged): each node's root
+    is the lowest index of its part of the masked graph, as scipy finds it, with one thread
+    as with two; parts that span the blocks (edges to far rows) are one part."""
+    import numba
+
+    from core.kernels.union_find import mask_roots
+
+    rng = np.random.default_rng(5)
+    n, k = 40_000, 5
+    idx = np.where(rng.random((n, k)) < 0.9, (np.arange(n)[:, None] + rng.integers(-3, 4, (n, k))) % n,
+                   rng.integers(0, n, (n, k)))  # mostly near rows, some across the blocks
+    mask = rng.random((n, k)) < 0.15
+    i, m = np.nonzero(mask)
+    want = _lowest_of_parts(n, i, idx[i, m])
+    assert 1000 < len(np.unique(want)) < n // 2
+    threads = numba.get_num_threads()
+    try:
+        for nt in sorted({1, threads}):
+            numba.set_num_threads(nt)
+            assert np.array_equal(mask_roots(idx, mask), want), nt
+    finally:
+        numba.set_num_threads(threads)
