@@ -20,7 +20,7 @@ import numpy as np
 
 from .._memory import available_memory
 from .cloud import CloudFileError, RawCloud, check_memory, split_components
-from .vtk_ascii import check_ascii_points
+from .vtk_ascii import check_ascii_arrays
 from .vtp_blocks import Tags, check_binary_headers
 from .vtp_points import points_only
 from .xml_scan import scan_xml
@@ -150,14 +150,15 @@ _LINE_BUFFER = 256
 def check_legacy(path) -> None:
     """What a legacy file declares that crashed VTK (a segmentation fault), checked before VTK
     reads it, on one mapping of the file: its cell arrays (:func:`_check_cells`), its dataset's
-    field data (:func:`_check_field_data`) and, in ASCII, the numbers of its POINTS section
-    (:func:`core.io.vtk_ascii.check_ascii_points`: VTK returns garbage for the missing ones)."""
+    field data (:func:`_check_field_data`) and, in ASCII, the numbers of its arrays (points,
+    point and cell data, field data: :func:`core.io.vtk_ascii.check_ascii_arrays`; VTK returns
+    garbage for the missing ones)."""
     with open(path, "rb") as f, mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as data:
         lines, body = _legacy_header(data)
         _check_cell_counts(path, data)
         _check_cells(path, data, lines, body)
         if lines[2].strip().upper() == b"ASCII":
-            check_ascii_points(path, data, body)
+            check_ascii_arrays(path, data, body)
         field = _dataset_field(data, lines, body)
     if field is not None:
         _check_field_data(path, *field)
