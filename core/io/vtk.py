@@ -63,7 +63,7 @@ def _read(reader, path) -> RawCloud:
     from vtkmodules.util.numpy_support import vtk_to_numpy
 
     points = vtk_to_numpy(data.GetPoints().GetData())
-    normals, fields = _point_data(data.GetPointData())
+    normals, fields = _point_data(data.GetPointData(), path, len(points))
     return RawCloud(np.array(points), None if normals is None else np.array(normals), fields)
 
 
@@ -100,9 +100,10 @@ def _output(window) -> str:
     return messages
 
 
-def _point_data(point_data):
+def _point_data(point_data, path, n: int):
     """``(normals or None, fields)``: the normals array (or a 3-component array called
-    normals) and every other numeric point-data array."""
+    normals) and every other numeric point-data array; each must hold a tuple per point (a
+    legacy file's FIELD inside its POINT_DATA may declare any number, which VTK keeps)."""
     from vtkmodules.util.numpy_support import vtk_to_numpy
 
     normals_array = point_data.GetNormals()
@@ -113,6 +114,9 @@ def _point_data(point_data):
         if array is None or array is normals_array:
             continue
         name = array.GetName() or f"array{i}"
+        if array.GetNumberOfTuples() != n:
+            raise CloudFileError(path, f"point data array {name!r} holds {array.GetNumberOfTuples()} tuples "
+                                       f"for {n} points")
         values = vtk_to_numpy(array)
         if normals is None and name.lower() in ("normals", "normal") and values.ndim == 2 and values.shape[1] == 3:
             normals = values

@@ -75,6 +75,12 @@ def test_arrays_of_nan_inf_strings_metadata_and_values_on_their_header_line_stil
     assert cloud.fields["s_0"].tolist() == [1, 3, 5, 7] and cloud.fields["c_1"].tolist() == [200, 4, 6, 8]
 
 
+def test_point_data_field_array_of_another_length_refused(tmp_path):
+    """A FIELD inside POINT_DATA may declare any number of tuples and VTK keeps the array: a ValueError."""
+    path = _file(tmp_path, "POINT_DATA 4\nFIELD f 1\nB 1 1 double\n5\n")
+    _error(path, "point data array 'B' holds 1 tuples for 4 points")
+
+
 def test_point_and_cell_data_field_sections_vtk_cannot_read_do_not_crash(tmp_path, helpers):
     """Unlike the dataset's own FIELD section, VTK drops one inside POINT_DATA or CELL_DATA that it
     fails to read (fewer arrays than declared, a bad header, huge or negative sizes): no crash."""
