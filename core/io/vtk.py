@@ -161,11 +161,15 @@ def check_legacy(path) -> None:
         lines, body = _legacy_header(data)
         _check_cell_counts(path, data)
         _check_cells(path, data, lines, body)
-        if lines[2].strip().upper() == b"ASCII":
-            check_ascii_arrays(path, data, body)
+        walked = check_ascii_arrays(path, data, body) if lines[2].strip().upper() == b"ASCII" else []
         field = _dataset_field(data, lines, body)
-    if field is not None:
-        _check_field_data(path, *field)
+        fields = [field[:2]] if field else []
+        for start, end in walked:  # a second one crashed VTK too (ASCII files: the walk finds them)
+            if field is None or start > field[2]:
+                keyword = bytes(data[start : start + 64]).split()[0]
+                fields.append((keyword.decode("latin-1"), b"\n".join([*lines, data[start + len(keyword) : end]])))
+    for keyword, text in fields:
+        _check_field_data(path, keyword, text)
 
 
 def _check_cells(path, data, lines, body) -> None:
@@ -263,19 +267,21 @@ _ATTRIBUTES = re.compile(rb"^[ \t]*(point_data|cell_data)\b", re.I | re.M)
 
 def _dataset_field(data, lines, body):
     """The first FIELD section of the dataset (before its point and cell data) as (its keyword,
-    the file's 3 header lines followed by the section and the rest of the file), or None."""
+    the file's 3 header lines followed by the section and the rest of the file, where its
+    keyword starts), or None."""
     attributes = _ATTRIBUTES.search(data, body)
     match = _DATASET_FIELD.search(data, body, attributes.start() if attributes else len(data))
     if match is None:
         return None
-    return match.group(1).decode("latin-1"), b"\n".join([*lines, data[match.end(1) :]])
+    return match.group(1).decode("latin-1"), b"\n".join([*lines, data[match.end(1) :]]), match.start(1)
 
 
 def _check_field_data(path, keyword, text) -> None:
     """VTK's legacy dataset readers use a dataset's FIELD section even when they failed to
-    read it (fewer arrays than declared, a bad array header): a segmentation fault. The
-    section (``text``, :func:`_dataset_field`) is read first on its own with VTK's own field
-    data parser."""
+    read it (fewer arrays than declared, a bad array header): a segmentation fault, the second
+    such section too. The section (``text``, :func:`_dataset_field`) is read first on its own
+    with VTK's own field data parser. (A FIELD inside POINT_DATA or CELL_DATA that VTK fails
+    to read is dropped: its reader checks.)"""
     from vtkmodules.vtkIOLegacy import vtkDataReader
 
     reader = vtkDataReader()

@@ -44,18 +44,20 @@ _ATTRIBUTES = ((b"vectors", 3, None, 2), (b"tensors6", 6, None, 2), (b"tensors",
 _STRINGS = (b"string", b"utf8_string")  # (type names VTK compares by their start) one value a line, any text
 
 
-def check_ascii_arrays(path, data, body: int) -> None:
+def check_ascii_arrays(path, data, body: int) -> list:
     """Each array of the ASCII legacy file ``data`` after ``body`` (where its header lines end)
     holds at least the numbers it declares before the next section: the dataset's POINTS (or
     X/Y/Z_COORDINATES), every array of its POINT_DATA and CELL_DATA (SCALARS, NORMALS, VECTORS,
     TENSORS, TEXTURE_COORDINATES, COLOR_SCALARS, ids, LOOKUP_TABLE) and of every FIELD section.
     Where the walk cannot follow the file (an array header it cannot parse) it stops, and the
-    first POINTS section after that is still checked."""
+    first POINTS section after that is still checked. Returns the dataset's FIELD sections (before
+    its point and cell data) as (where the line starts, where it ends or None if not followed)."""
     walk, pos, last = _Walk(path, data), body, body
     while pos is not None and (keyword := _next_keyword(data, pos)) is not None:
         last, pos = keyword, walk.section(keyword)
     if pos is None and not walk.points and (match := _POINTS.search(data, last + 1)):
         walk.section(match.start())
+    return walk.fields
 
 
 class _Walk:
@@ -65,6 +67,7 @@ class _Walk:
         self.path, self.data = path, data
         self.count, self.owner = None, ""  # the current POINT_DATA or CELL_DATA count and its line
         self.points = False  # a POINTS section was checked
+        self.fields = []  # the dataset's FIELD sections: (start, end or None)
 
     def section(self, start: int) -> int | None:
         """Check the section whose line starts at ``start``; where the walk goes on, or None."""
@@ -76,7 +79,10 @@ class _Walk:
         if key.startswith(b"metadata"):
             return self._after_metadata(start)
         if key.startswith(b"field"):
-            return self._field(words, end)
+            after = self._field(words, end)
+            if self.count is None:
+                self.fields.append((start, after))
+            return after
         if key.startswith(b"scalars"):
             return self._scalars(words, start, end)
         declared = _declared(key, words, self.count)

@@ -140,3 +140,17 @@ def test_files_vtk_writes_in_ascii_still_read_unchanged(tmp_path, version):
         values = np.column_stack([cloud.fields[key] for key in cloud.fields if key.rsplit("_", 1)[0] == name
                                   or key == name])
         assert np.allclose(values, arrays[name].reshape(n, -1), atol=1e-6), name
+
+
+@pytest.mark.parametrize("dataset", ["POLYDATA", "UNSTRUCTURED_GRID", "STRUCTURED_GRID"])
+def test_second_dataset_field_section_vtk_cannot_read_refused(tmp_path, helpers, dataset):
+    """A second FIELD section of the dataset (after POINTS, the first one sound) that VTK fails
+    to read was used all the same, as the first one was: a segmentation fault."""
+    head = f"# vtk DataFile Version 3.0\nt\nASCII\nDATASET {dataset}\n" + "DIMENSIONS 2 2 1\n" * (dataset[0] == "S")
+    bodies = ["FIELD g 2\nA 1 3 float\n1 2 3\n", "FIELD g 1\n", "FIELDS 3 2 2\n", "FIELD g 1\nA x 4 float\n1 2 3 4\n"]
+    paths = [tmp_path / f"f{i}.vtk" for i in range(len(bodies))]
+    for path, body in zip(paths, bodies):
+        path.write_text(head + "FIELD f 1\nB 1 1 float\n7\n" + HEAD[HEAD.index("POINTS"):] + body)
+    answers = helpers.read_in_child(paths)
+    for path in paths:
+        assert path.name in answers[str(path)] and "section (the dataset's field data)" in answers[str(path)]
