@@ -107,7 +107,17 @@ def _read_ascii(path, fields, n, n_header_lines):
 
 def _ascii_block(path, values, name, dtype):
     """ASCII values in the declared type; integers out of range or with a fraction are refused
-    (a cast would wrap 1000 to -24 in a 1-byte I)."""
+    (a cast would wrap 1000 to -24 in a 1-byte I), and so are finite numbers beyond a 4-byte
+    F's range (the cast made them inf with numpy's overflow warning)."""
+    if dtype.kind == "f":
+        with np.errstate(over="ignore"):
+            cast = values.astype(dtype)
+        bad = np.isfinite(values) & ~np.isfinite(cast)
+        if bad.any():
+            row = int(np.flatnonzero(bad.any(axis=1))[0])
+            raise CloudFileError(path, f"point {row}: field {name!r} (TYPE F SIZE {dtype.itemsize}) has the value "
+                                       f"{values[row][bad[row]][0]:g}, beyond the range of its type")
+        return cast
     if dtype.kind in "iu":
         info = np.iinfo(dtype)
         bad = (values < info.min) | (values > info.max) | (values != np.round(values))

@@ -7,6 +7,8 @@ from __future__ import annotations
 import struct
 import time
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -232,6 +234,19 @@ def test_ascii_pcd_integers_out_of_range_refused(tmp_path):
     _error(_pcd(tmp_path / "frac.pcd", "4 4 2", "F F U", b"0 0 0\n1 0 1.5\n0 1 0\n"), "point 1", "1.5", "[0, 65535]")
     cloud = core.io.read_cloud(_pcd(tmp_path / "ok.pcd", "4 4 1", "F F U", b"0 0 0\n1 0 255\n0 1 0\n"))
     assert cloud.points[1, 2] == 255
+
+
+def test_ascii_pcd_floats_beyond_their_type_refused(tmp_path):
+    """A 4-byte F field holding 1e39 became inf, with numpy's overflow warning leaking out;
+    inf and nan written as such are values, and an 8-byte F holds 1e300."""
+    _error(_pcd(tmp_path / "big.pcd", "4 4 4", "F F F", b"0 0 0\n1 0 0\n0 1e39 0\n"),
+           "point 2", "field 'y' (TYPE F SIZE 4)", "1e+39", "beyond the range")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        warnings.simplefilter("ignore", UserWarning)  # the drop is announced
+        cloud = core.io.read_cloud(_pcd(tmp_path / "inf.pcd", "4 4 8", "F F F", b"0 0 0\n1 0 inf\n0 1 1e300\n"),
+                                   drop_nonfinite=True)
+    assert len(cloud.points) == 2 and cloud.points[1, 2] == 1e300  # inf read as inf, dropped as asked
 
 
 def _las14(path):
