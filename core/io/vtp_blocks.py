@@ -27,6 +27,8 @@ from .cloud import CloudFileError
 _TAG = re.compile(rb"<(/?)([A-Za-z][\w.:-]*)((?:[^<>\"']|\"[^\"<]*\"|'[^'<]*')*)>")
 _ATTR = re.compile(rb"([\w.:-]+)\s*=\s*(?:\"([^\"]*)\"|'([^']*)')")
 _APPENDED = re.compile(rb"<AppendedData\b([^<>]*)>")
+#: the first character of the appended data after white space, which must be VTK's '_'
+_MARKER = re.compile(rb"[ \t\r\n]*([^ \t\r\n]?)")
 _COMPRESSORS = {"vtkZLibDataCompressor", "vtkLZ4DataCompressor", "vtkLZMADataCompressor"}
 _TYPE_SIZES = {"Int8": 1, "UInt8": 1, "Int16": 2, "UInt16": 2, "Int32": 4, "UInt32": 4, "Int64": 8,
                "UInt64": 8, "Float32": 4, "Float64": 8}
@@ -41,7 +43,7 @@ class _Layout:
     data: object  # the file, memory-mapped
     word: str  # struct format of one header word, with its byte order
     compressed: bool
-    appended: int | None  # where the appended data start (after the '_'), if any
+    appended: int | None  # where the appended data start (after the '_'), if any; -1: no '_' first
     appended_base64: bool
     available: int  # bytes of memory available
 
@@ -70,6 +72,10 @@ def check_binary_headers(data, tags: "Tags", available: int, path) -> None:
     if layout is None:
         return  # no VTKFile element, or a header type / byte order that VTK refuses itself
     for pos, attrs, where, counts in tags.arrays:
+        if layout.appended == -1 and attrs.get("format") == "appended":
+            raise CloudFileError(path, f"{_label(attrs, where)}: the AppendedData does not start with '_', VTK's "
+                                       "marker (VTK warns, then reads what follows as the arrays' headers: a 3.5 kB "
+                                       "file took 10 GB)")
         problem = _problem(layout, _array(data, pos, attrs, where, counts))
         if problem:
             raise CloudFileError(path, f"{_label(attrs, where)}: {problem}")
@@ -124,8 +130,8 @@ def _layout(data, end: int, available: int, attrs) -> _Layout | None:
     appended, base64_appended = None, False
     tag = _APPENDED.match(data, end) if end < len(data) else None
     if tag is not None:
-        underscore = data.find(b"_", tag.end())
-        appended = None if underscore < 0 else underscore + 1
+        first = _MARKER.match(data, tag.end())  # VTK skips white space, then expects its '_'
+        appended = first.end() if first and first.group(1) == b"_" else -1
         base64_appended = _attrs(tag.group(1)).get("encoding", "raw") == "base64"
     return _Layout(data, order + word, attrs.get("compressor") in _COMPRESSORS, appended, base64_appended,
                    available)

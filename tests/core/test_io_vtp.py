@@ -145,6 +145,12 @@ def test_vtp_damaged_block_headers_refused_before_vtk_reads_them(tmp_path, helpe
     start = _first_array(data)[0]
     garbled.write_bytes(data[:start] + b"!!!!" + data[start + 4 :])
     cases[garbled] = ["compression header (12 bytes) cannot be decoded"]
+    for mode in ("Appended", "AppendedRaw"):  # the appended data's '_' lost (and a header, encoded): VTK read on
+        path = _write(tmp_path / f"no_marker_{mode}.vtp", poly, "ZLib", mode)
+        data = path.read_bytes()
+        start = _first_array(data)[0]
+        path.write_bytes(data[: start - 1] + data[start + (8 if mode == "Appended" else 0) :])
+        cases[path] = ["the AppendedData does not start with '_'"]
     for name, respell in _SPELLINGS.items():  # the XML as VTK reads it, not one byte pattern
         path = tmp_path / f"{name}.vtp"
         path.write_bytes(respell((tmp_path / "h0.vtp").read_bytes()))
