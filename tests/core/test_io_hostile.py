@@ -14,15 +14,10 @@ import pytest
 
 import core
 from core.io import CloudFileError
+from io_testutils import refused as _error
 
 HEAD = "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
 
-
-def _error(path, *parts):
-    with pytest.raises(CloudFileError) as info:
-        core.io.read_cloud(path)
-    for part in (path.name, *parts):
-        assert part in str(info.value), str(info.value)
 
 
 @pytest.mark.parametrize("prop, rows, parts", [

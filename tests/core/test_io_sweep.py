@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 import core
-from core.io import CloudFileError, read_cloud, write_cloud
+from core.io import read_cloud, write_cloud
+from io_testutils import refused as _error
 
 RNG = np.random.default_rng(7)
 PTS = RNG.normal(size=(40, 3))
@@ -21,12 +22,6 @@ NRM = PTS / np.linalg.norm(PTS, axis=1, keepdims=True)
 RGB = RNG.integers(0, 256, size=(40, 3)).astype(float)
 XYZ_PROPS = "property float x\nproperty float y\nproperty float z\n"
 
-
-def _error(path, *parts):
-    with pytest.raises(CloudFileError) as info:
-        read_cloud(path)
-    for part in (path.name, *parts):
-        assert part in str(info.value), str(info.value)
 
 
 def _read_quietly(path):

@@ -10,7 +10,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from core.io import CloudFileError, read_cloud
+from core.io import read_cloud
+from io_testutils import refused as _error
 
 HEAD = "# vtk DataFile Version 3.0\nt\nASCII\nDATASET POLYDATA\nPOINTS 4 float\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
 NORMALS = "NORMALS n float\n1 0 0\n0 1 0\n0 0 1\n0.6 0.8 0\n"
@@ -21,12 +22,6 @@ def _file(tmp_path, body: str, name="f.vtk"):
     path.write_bytes((HEAD + body).encode())
     return path
 
-
-def _error(path, *parts):
-    with pytest.raises(CloudFileError) as info:
-        read_cloud(path)
-    for part in (path.name, *parts):
-        assert part in str(info.value), str(info.value)
 
 
 def test_file_cut_inside_its_normals_refused(tmp_path):
