@@ -20,7 +20,7 @@ import numpy as np
 
 from .._memory import available_memory
 from .cloud import CloudFileError, RawCloud, check_memory, split_components
-from .vtk_ascii import check_ascii_arrays
+from .vtk_binary import check_arrays, new_cells
 from .vtp_blocks import Tags, check_binary_headers
 from .vtp_points import points_only
 from .xml_scan import scan_xml
@@ -154,17 +154,18 @@ _LINE_BUFFER = 256
 def check_legacy(path) -> None:
     """What a legacy file declares that crashed VTK (a segmentation fault), checked before VTK
     reads it, on one mapping of the file: its cell arrays (:func:`_check_cells`), its dataset's
-    field data (:func:`_check_field_data`) and, in ASCII, the numbers of its arrays (points,
-    point and cell data, field data: :func:`core.io.vtk_ascii.check_ascii_arrays`; VTK returns
-    garbage for the missing ones)."""
+    field data (:func:`_check_field_data`) and the values of its arrays (points, point and cell
+    data, field data: :func:`core.io.vtk_ascii.check_ascii_arrays` counts an ASCII file's numbers,
+    :func:`core.io.vtk_binary.check_binary_arrays` a binary file's bytes; VTK returns garbage for
+    the missing ones)."""
     with open(path, "rb") as f, mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as data:
         lines, body = _legacy_header(data)
         _check_cell_counts(path, data)
         _check_cells(path, data, lines, body)
-        walked = check_ascii_arrays(path, data, body) if lines[2].strip().upper() == b"ASCII" else []
+        walked = check_arrays(path, data, lines, body)
         field = _dataset_field(data, lines, body)
         fields = [field[:2]] if field else []
-        for start, end in walked:  # a second one crashed VTK too (ASCII files: the walk finds them)
+        for start, end in walked:  # a second one crashed VTK too (the walk finds them)
             if field is None or start > field[2]:
                 keyword = bytes(data[start : start + 64]).split()[0]
                 fields.append((keyword.decode("latin-1"), b"\n".join([*lines, data[start + len(keyword) : end]])))
@@ -177,9 +178,8 @@ def _check_cells(path, data, lines, body) -> None:
     VTK walks the counts without checking them against the array's size, and a corrupt
     count crashes the process. The runs are checked here first (``lines``, ``body``: the
     file's header lines and where its body starts, :func:`_legacy_header`)."""
-    version = re.match(rb"# vtk DataFile Version (\d{1,3})\.\d", lines[0])  # VTK reads "5'1" as no version
-    if (version and 5 <= int(version.group(1)) <= 99) or body >= len(data):
-        return  # offsets and connectivity, which VTK checks (a garbled version is read as legacy)
+    if new_cells(lines) or body >= len(data):
+        return  # offsets and connectivity, which VTK checks
     binary = lines[2].strip().upper() == b"BINARY"
     for match in _CELLS.finditer(data):
         size, start = int(match.group(3)), match.end()

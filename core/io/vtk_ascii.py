@@ -52,22 +52,40 @@ def check_ascii_arrays(path, data, body: int) -> list:
     Where the walk cannot follow the file (an array header it cannot parse) it stops, and the
     first POINTS section after that is still checked. Returns the dataset's FIELD sections (before
     its point and cell data) as (where the line starts, where it ends or None if not followed)."""
-    walk, pos, last = _Walk(path, data), body, body
-    while pos is not None and (keyword := _next_keyword(data, pos)) is not None:
-        last, pos = keyword, walk.section(keyword)
+    walk = _Walk(path, data)
+    pos, last = walk.walk(body)
     if pos is None and not walk.points and (match := _POINTS.search(data, last + 1)):
         walk.section(match.start())
     return walk.fields
 
 
 class _Walk:
-    """The sections of one file read in turn (see check_ascii_arrays)."""
+    """The sections of one file read in turn (see check_ascii_arrays). What differs between
+    ASCII and binary files (:class:`core.io.vtk_binary._BinaryWalk`): where the next section
+    starts (:meth:`_next`), how an array is measured (:meth:`_array`) and what the walk does
+    with a section it does not check (:meth:`_other`)."""
 
     def __init__(self, path, data):
         self.path, self.data = path, data
         self.count, self.owner = None, ""  # the current POINT_DATA or CELL_DATA count and its line
         self.points = False  # a POINTS section was checked
         self.fields = []  # the dataset's FIELD sections: (start, end or None)
+
+    def walk(self, pos: int):
+        """Check the sections from ``pos``: (None if the walk stopped, where the last one starts)."""
+        last = pos
+        while pos is not None and (keyword := self._next(pos)) is not None:
+            last, pos = keyword, self.section(keyword)
+        return pos, last
+
+    def _next(self, pos: int) -> int | None:
+        """Where the next section starts: the first line from ``pos`` that starts with a word."""
+        return _next_keyword(self.data, pos)
+
+    def _other(self, key: bytes, end: int) -> int | None:
+        """Where the walk goes on after a section it does not check (cells, dimensions...): its
+        numbers are skipped to the next keyword."""
+        return end
 
     def section(self, start: int) -> int | None:
         """Check the section whose line starts at ``start``; where the walk goes on, or None."""
@@ -87,7 +105,7 @@ class _Walk:
             return self._scalars(words, start, end)
         declared = _declared(key, words, self.count)
         if declared is None:
-            return end  # not an array (cells, dimensions...): its numbers are skipped to the next keyword
+            return self._other(key, end)
         self.points = self.points or key.startswith(b"points")
         return self._array(words, start, *declared)[1]
 
@@ -98,13 +116,13 @@ class _Walk:
         components = _number(words, 3) if table > 3 else 1
         header = table + 2  # the values follow the table's name
         if table == len(words):
-            start, header = _next_keyword(self.data, end), 2
+            start, header = self._next(end), 2
             if start is None:
                 return None
             if not self._line(start)[1][0].lower().startswith(b"lookup_table"):
                 return start  # VTK refuses scalars without a lookup table
         if components is None or self.count is None or table < 3:
-            return self._line(start)[0]
+            return self._other(b"", self._line(start)[0])
         return self._array(words, start, header, self.count * components, words[2])[1]
 
     def _field(self, words, end: int) -> int | None:
@@ -141,13 +159,13 @@ class _Walk:
         stop = len(self.data) if after is None else after
         have = _words(self.data, start, stop) - header
         if have < need:
-            self._short(words, need, have, after, field)
+            where = "before the file ends" if after is None else f"before {_shown(self._line(after)[1])!r}"
+            self._short(words, need, f" but {have} follow {where}", field)
         return have, stop
 
-    def _short(self, words, need: int, have: int, after: int | None, field: str):
-        """Refuse the array of header ``words``: ``have`` numbers of ``need`` before ``after``."""
+    def _short(self, words, need: int, held: str, field: str):
+        """Refuse the array of header ``words`` that declares ``need`` values: ``held`` says what follows."""
         key = words[0].lower()
-        where = "before the file ends" if after is None else f"before {_shown(self._line(after)[1])!r}"
         if field:
             title, per = f"FIELD array {_shown(words)!r} of {field!r}", "values"
         elif key.startswith(b"points") or key[1:].startswith(b"_coordinates"):
@@ -155,7 +173,7 @@ class _Walk:
         else:
             title = f"{_shown(words[:1])} section: {_shown(words)!r}"
             per = "values" if key.startswith(b"lookup_table") else f"values ({self.owner})"
-        raise CloudFileError(self.path, f"truncated or corrupt {title} declares {need} {per} but {have} follow {where}")
+        raise CloudFileError(self.path, f"truncated or corrupt {title} declares {need} {per}{held}")
 
     def _after_metadata(self, start: int) -> int | None:
         """Where the METADATA block (after an array) starting at ``start`` ends: component names,
