@@ -121,7 +121,7 @@ class _Walk:
                 return None
             if not self._line(start)[1][0].lower().startswith(b"lookup_table"):
                 return start  # VTK refuses scalars without a lookup table
-        if components is None or self.count is None or table < 3:
+        if not 0 < (components or 0) < 2**31 or self.count is None or table < 3:  # VTK reads an int, or stops
             return self._other(b"", self._line(start)[0])
         return self._array(words, start, header, self.count * components, words[2])[1]
 
@@ -172,7 +172,7 @@ class _Walk:
             title, per = f"{_shown(words[:1])} section: {_shown(words)!r}", "coordinates"
         else:
             title = f"{_shown(words[:1])} section: {_shown(words)!r}"
-            per = "values" if key.startswith(b"lookup_table") else f"values ({self.owner})"
+            per = "values" if key.startswith(b"lookup_table") or not self.owner else f"values ({self.owner})"
         raise CloudFileError(self.path, f"truncated or corrupt {title} declares {need} {per}{held}")
 
     def _after_metadata(self, start: int) -> int | None:

@@ -183,3 +183,10 @@ def test_files_vtk_writes_walked_to_their_end_and_read_unchanged(tmp_path, kind,
         found = [cloud.fields[key] for key in sorted(cloud.fields) if key == name or key.startswith(name + "_")]
         assert np.array_equal(np.column_stack(found), values), name
     assert cloud.fields["bits"].tolist() == [i % 3 == 0 for i in range(12)]
+
+
+def test_scalars_of_more_components_than_an_int_still_read_without_them(tmp_path):
+    """VTK reads a SCALARS component count as an int: 4294967295 ends its point data, no error."""
+    path = tmp_path / "comps.vtk"
+    path.write_bytes(HEAD + POINTS + b"POINT_DATA 4\nSCALARS s float 4294967295\nLOOKUP_TABLE default\n" + _values(4))
+    assert len(read_cloud(path)) == 4 and not read_cloud(path).fields
