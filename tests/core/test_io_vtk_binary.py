@@ -14,9 +14,10 @@ import mmap
 import numpy as np
 import pytest
 
-from core.io import CloudFileError, read_cloud
+from core.io import read_cloud
 from core.io.vtk import _legacy_header
 from core.io.vtk_binary import _BinaryWalk, new_cells
+from io_testutils import refused as _error
 
 HEAD = b"# vtk DataFile Version 3.0\nt\nBINARY\nDATASET POLYDATA\n"
 POINTS = b"POINTS 4 float\n" + np.arange(12, dtype=">f4").tobytes() + b"\n"
@@ -24,13 +25,6 @@ POINTS = b"POINTS 4 float\n" + np.arange(12, dtype=">f4").tobytes() + b"\n"
 
 def _values(n, kind=">f4"):
     return np.arange(n, dtype=kind).tobytes()
-
-
-def _error(path, *parts):
-    with pytest.raises(CloudFileError) as info:
-        read_cloud(path)
-    for part in (path.name, *parts):
-        assert part in str(info.value), str(info.value)
 
 
 @pytest.mark.parametrize("body, part", [
