@@ -146,7 +146,11 @@ def _check_implicit_points(data, path) -> None:
 
 
 #: a cell array's line: VTK reads its two counts as words, whatever follows them on the line
-_CELLS = re.compile(rb"^(VERTICES|LINES|POLYGONS|TRIANGLE_STRIPS|CELLS)[ \t]+(-?\d+)[ \t]+(-?\d+)(?!\d)", re.M)
+#: the patterns that find a keyword at a line's start begin with the newline before it, not ``^`` in
+#: MULTILINE mode: re then scans for that byte, where ``^`` was tried at every byte of the binary
+#: data (checks of a 224 MB binary file 4.9 -> 1.1 s, of a 127 MB ASCII one 3.0 -> 1.3 s); the first
+#: lines are the header
+_CELLS = re.compile(rb"\n(VERTICES|LINES|POLYGONS|TRIANGLE_STRIPS|CELLS)[ \t]+(-?\d+)[ \t]+(-?\d+)(?!\d)")
 #: VTK reads the rest of a binary cell array's line after its counts, up to its newline, into a buffer of 256 bytes
 _LINE_BUFFER = 256
 
@@ -212,7 +216,7 @@ def _binary_start(path, data, match) -> int:
     return end + 1
 
 
-_NEGATIVE_POINTS = re.compile(rb"^POINTS[ \t]+-\d+", re.M)
+_NEGATIVE_POINTS = re.compile(rb"\nPOINTS[ \t]+-\d+")
 
 
 def _check_cell_counts(path, data) -> None:
@@ -261,16 +265,16 @@ def _cell_runs_problem(ids, n_cells: int, size: int) -> str | None:
 
 #: a dataset's own field data: a FIELD keyword (VTK compares 5 letters; a word anywhere in a
 #: line, as VTK reads words) before POINT_DATA and CELL_DATA
-_DATASET_FIELD = re.compile(rb"(?:^|[ \t])(field\w*)[ \t\r\n]", re.I | re.M)
-_ATTRIBUTES = re.compile(rb"^[ \t]*(point_data|cell_data)\b", re.I | re.M)
+_DATASET_FIELD = re.compile(rb"[\n \t](field\w*)[ \t\r\n]", re.I)
+_ATTRIBUTES = re.compile(rb"\n[ \t]*(point_data|cell_data)\b", re.I)
 
 
 def _dataset_field(data, lines, body):
     """The first FIELD section of the dataset (before its point and cell data) as (its keyword,
     the file's 3 header lines followed by the section and the rest of the file, where its
     keyword starts), or None."""
-    attributes = _ATTRIBUTES.search(data, body)
-    match = _DATASET_FIELD.search(data, body, attributes.start() if attributes else len(data))
+    attributes = _ATTRIBUTES.search(data, body - 1)  # from the newline that ends the header
+    match = _DATASET_FIELD.search(data, body - 1, attributes.start() + 1 if attributes else len(data))
     if match is None:
         return None
     return match.group(1).decode("latin-1"), b"\n".join([*lines, data[match.end(1) :]]), match.start(1)
