@@ -20,7 +20,7 @@ import numpy as np
 
 from .._memory import available_memory
 from .cloud import CloudFileError, RawCloud, check_memory, split_components
-from .vtk_binary import check_arrays, new_cells
+from .vtk_binary import LINE_BUFFER, WORDS, check_arrays, new_cells
 from .vtp_blocks import Tags, check_binary_headers
 from .vtp_points import points_only
 from .xml_scan import scan_xml
@@ -151,8 +151,6 @@ def _check_implicit_points(data, path) -> None:
 #: data (checks of a 224 MB binary file 4.9 -> 1.1 s, of a 127 MB ASCII one 3.0 -> 1.3 s); the first
 #: lines are the header
 _CELLS = re.compile(rb"\n(VERTICES|LINES|POLYGONS|TRIANGLE_STRIPS|CELLS)[ \t]+(-?\d+)[ \t]+(-?\d+)(?!\d)")
-#: VTK reads the rest of a binary cell array's line after its counts, up to its newline, into a buffer of 256 bytes
-_LINE_BUFFER = 256
 
 
 def check_legacy(path) -> None:
@@ -206,7 +204,7 @@ def _binary_start(path, data, match) -> int:
     a damaged file moves the ids to the next line's end (text read as ids, a segmentation
     fault), so the check reads them where VTK will; 256 bytes or more after the counts without a
     newline are refused (VTK's read of the line fails and leaves the ids unread)."""
-    end = data.find(b"\n", match.end(), match.end() + _LINE_BUFFER)  # (getline stores up to 255 bytes)
+    end = data.find(b"\n", match.end(), match.end() + LINE_BUFFER)  # (getline stores up to 255 bytes)
     if end < 0:
         raise CloudFileError(path, f"corrupt {match.group(1).decode()} section: the line "
                                    f"{match.group(0).decode().strip()!r} has no end before its binary data")
@@ -264,7 +262,6 @@ def _cell_runs_problem(ids, n_cells: int, size: int) -> str | None:
 #: line, as VTK reads words) before POINT_DATA and CELL_DATA
 _DATASET_FIELD = re.compile(rb"[\n \t](field\w*)[ \t\r\n]", re.I)
 _ATTRIBUTES = re.compile(rb"\n[ \t]*(point_data|cell_data)\b", re.I)
-_WORD = re.compile(rb"[^ \t\r\n\v\f]+")
 
 
 def _dataset_field(data, body: int) -> int | None:
@@ -279,7 +276,7 @@ def _field_section(data, lines, start: int, end: int | None) -> tuple[str, bytes
     lines, then the section up to ``end`` (where the array walk found it ends; None: the rest of
     the file), what :func:`_check_field_data` hands VTK's field parser. Bounded, a 192 MB binary
     file's check peaked at 905 MB: the rest of the file copied twice, then by VTK."""
-    keyword = _WORD.match(data, start).group(0)
+    keyword = WORDS.match(data, start).group(0)
     return keyword.decode("latin-1"), b"\n".join([*lines, data[start + len(keyword) : end]])
 
 

@@ -30,9 +30,10 @@ _TEXT = (b"dataset", b"dimensions", b"origin", b"spacing", b"aspect_ratio")
 #: cell arrays: before version 5.0 a count line then 4-byte ids, since then OFFSETS and CONNECTIVITY arrays
 _CELLS = (b"vertices", b"lines", b"polygons", b"triangle_strips", b"cells")
 _SPACE = re.compile(rb"[ \t\r\n\v\f]*")
-_WORDS = re.compile(rb"[^ \t\r\n\v\f]+")
-#: VTK reads the rest of an array header's line into a buffer of 256 bytes (getline stores 255)
-_LINE_BUFFER = 256
+WORDS = re.compile(rb"[^ \t\r\n\v\f]+")
+#: VTK reads the rest of an array's or a cell array's header line into a buffer of 256 bytes (getline
+#: stores 255; :func:`core.io.vtk._binary_start` too)
+LINE_BUFFER = 256
 
 
 def check_arrays(path, data, lines, body) -> list:
@@ -121,7 +122,7 @@ class _BinaryWalk(_Walk):
             return None, None
         if need == 0:
             return None, last  # VTK reads no line and no data
-        newline = self.data.find(b"\n", last, last + _LINE_BUFFER)
+        newline = self.data.find(b"\n", last, last + LINE_BUFFER)
         if newline < 0:
             return None, None  # VTK's read of the line fails
         nbytes = (need + 7) // 8 if size == 0 else need * size
@@ -133,7 +134,7 @@ class _BinaryWalk(_Walk):
     def _header_end(self, start: int, header: int) -> int | None:
         """Where the ``header``-th word of the line at ``start`` ends, or None if the line has fewer."""
         end = self._line(start)[0]
-        for i, match in enumerate(_WORDS.finditer(self.data, start, end), 1):
+        for i, match in enumerate(WORDS.finditer(self.data, start, end), 1):
             if i == header:
                 return match.end()
         return None

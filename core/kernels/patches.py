@@ -28,9 +28,9 @@ def _same_face(points, normals, sign, i, j, min_cos, max_tilt):
 @njit(**_OPTS, parallel=True)
 def _patches(points, normals, idx, ok, sign, min_cos, max_tilt):
     """Each point's patch (the lowest index in it): :func:`_same_face` pairs of the graph
-    ``idx`` joined transitively (:func:`core.kernels.union_find.root`), and the number
-    of ``ok`` points in each. The pairs are tested and joined in parallel
-    (:func:`core.kernels.union_find.mask_roots`: the same parts and roots on any number of threads)."""
+    ``idx`` joined transitively, and the number of ``ok`` points in each. The pairs are tested
+    and joined in parallel (:func:`core.kernels.union_find.mask_roots`: the same parts and roots
+    on any number of threads)."""
     n, k = idx.shape
     face = np.zeros((n, k), dtype=np.bool_)
     for i in prange(n):
