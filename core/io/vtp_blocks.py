@@ -75,10 +75,6 @@ def check_binary_headers(data, tags: "Tags", available: int, path) -> None:
     if layout is None:
         return  # no VTKFile element, or a header type / byte order that VTK refuses itself
     for pos, attrs, where, counts in tags.arrays:
-        if layout.appended == -1 and attrs.get("format") == "appended":
-            raise CloudFileError(path, f"{_label(attrs, where)}: the AppendedData does not start with '_', VTK's "
-                                       "marker (VTK warns, then reads what follows as the arrays' headers: a 3.5 kB "
-                                       "file took 10 GB)")
         problem = _problem(layout, _array(data, pos, attrs, where, counts))
         if problem:
             raise CloudFileError(path, f"{_label(attrs, where)}: {problem}")
@@ -175,6 +171,9 @@ def _problem(layout: _Layout, array: _Array) -> str | None:
     """What is wrong with the array's header, or None (also when it is not binary)."""
     if array.format == "binary":
         (start, stop), encoded = array.text, True
+    elif array.format == "appended" and layout.appended == -1:
+        return ("the AppendedData does not start with '_', VTK's marker (VTK warns, then reads what follows as "
+                "the arrays' headers: a 3.5 kB file took 10 GB)")
     elif array.format == "appended" and layout.appended is not None and array.offset is not None:
         start, stop, encoded = layout.appended + array.offset, len(layout.data), layout.appended_base64
     else:
