@@ -86,8 +86,8 @@ def blended_reference(kept, pts, nrm, points, picked, constraint):
         ok = kept.ok[r] & frame.ok
         good[rows] &= ok
         if j == 0:
-            r0, first = r, frame.normal
-        side = np.where(np.einsum("ij,ij->i", frame.normal, first[rows]) < 0.0, -1.0, 1.0)  # the first's side
+            r0 = r
+        side = np.where(np.einsum("ij,ij->i", frame.normal, nrm[points[rows]]) < 0.0, -1.0, 1.0)  # the point's side
         wj = np.where(ok, w[rows, j] * side, 0.0)
         e1, e2 = np.nan_to_num(frame.e1), np.nan_to_num(frame.e2)
         k1, k2 = np.nan_to_num(frame.k1), np.nan_to_num(frame.k2)

@@ -113,12 +113,13 @@ def _weights(pts, p, nrm, picked, w, floor, xyd):
 
 
 @njit(**OPTS)
-def _accumulate(pts, p, picked, w, fits, project, max_tilt2, N, S, vecs):
+def _accumulate(pts, nrm, p, picked, w, fits, project, max_tilt2, N, S, vecs):
     """N += w_b n_b, S += w_b (the shape operator in world coordinates) over the anchors
-    ``picked`` of point p, each turned to the first one's side; False if a fit read is not
+    ``picked`` of point p, each turned to the side of p's own normal ``nrm[p]`` (the result
+    keeps the sign p came with, as a fit of its own does); False if a fit read is not
     usable there. ``vecs`` (5, 6) scratch."""
-    val, n, u1, u2, first = vecs[0], vecs[1, :3], vecs[2, :3], vecs[3, :3], vecs[4, :3]
-    first[:] = 0.0
+    val, n, u1, u2 = vecs[0], vecs[1, :3], vecs[2, :3], vecs[3, :3]
+    own0, own1, own2 = nrm[p, 0], nrm[p, 1], nrm[p, 2]
     for b in range(len(picked)):
         a = picked[b]
         if a < 0:
@@ -136,9 +137,7 @@ def _accumulate(pts, p, picked, w, fits, project, max_tilt2, N, S, vecs):
             n[i] = X * f[0, i] + Y * f[1, i] + Z0 * f[2, i]
             u1[i] = b1[0] * f[0, i] + b1[1] * f[1, i] + b1[2] * f[2, i]
             u2[i] = b2[0] * f[0, i] + b2[1] * f[1, i] + b2[2] * f[2, i]
-        if b == 0:
-            first[:] = n
-        wb = w[b] if n[0] * first[0] + n[1] * first[1] + n[2] * first[2] >= 0.0 else -w[b]
+        wb = w[b] if n[0] * own0 + n[1] * own1 + n[2] * own2 >= 0.0 else -w[b]
         for i in range(3):
             N[i] += wb * n[i]
             for j in range(3):
@@ -201,7 +200,7 @@ def blend(pts, nrm, points, picked, fits, project, max_tilt2, floor, out, good):
             N[:] = 0.0
             S[:, :] = 0.0
             _weights(pts, p, nrm, picked[m], w, floor, xyd)
-            fine = _accumulate(pts, p, picked[m], w, fits, project, max_tilt2, N, S, vecs)
+            fine = _accumulate(pts, nrm, p, picked[m], w, fits, project, max_tilt2, N, S, vecs)
             if fine:
                 fine = _principal(N, S, out, m)
             good[m] = fine

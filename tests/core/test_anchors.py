@@ -125,6 +125,23 @@ def test_a_follower_reads_a_spheres_curvature_exactly(monkeypatch):
     assert np.abs(out.normals - s.normals).max() < 1e-9
 
 
+def test_a_follower_keeps_its_own_sign_among_anchors_of_either(monkeypatch):
+    """Normals whose signs are mixed (a file's, kept; or each point facing its own scanner):
+    a follower's result faces its own normal, as a fit of its own does, whatever the signs
+    of its anchors (the first anchor's sign had decided it), with the curvatures of that
+    side: +1/R facing out, -1/R facing in."""
+    s = shapes.sphere(3000, radius=2.0, seed=1)
+    sign = np.where(np.random.default_rng(3).random(len(s.points)) < 0.5, -1.0, 1.0)
+    anchor = _anchor(s.points, 40, 10, monkeypatch)
+    out = _fit(s.points, s.normals * sign[:, None], 40, anchor)
+    follows = anchors.followers(anchor)
+    mixed = follows & (np.ptp(sign[np.where(anchor >= 0, anchor, np.arange(len(sign))[:, None])], axis=1) > 0)
+    assert mixed.sum() > 300 and out.valid.all()
+    np.testing.assert_allclose(out.normals, s.normals * sign[:, None], atol=1e-9)
+    np.testing.assert_allclose(out.k1, 0.5 * sign, atol=1e-9)
+    np.testing.assert_allclose(out.k2, 0.5 * sign, atol=1e-9)
+
+
 def test_a_follower_is_nearly_as_accurate_as_its_own_fit(monkeypatch):
     """On a torus (a normal field no polynomial holds), k = 80: the curvatures and normals
     read at the followers' offsets are nearly as close to the truth as fits at the followers
