@@ -16,7 +16,7 @@ from .plain_rows import PlainNeighbours
 from ._progress import Progress
 from ._validate import MIN_POINTS, as_normals, as_points, masked_as_nan, word
 from .duplicates import CopiesNeighbours, Merged, NearCopies, expand, find_duplicates, near_copies
-from .planning import EstimatePlan
+from .planning import PER_POINT, EstimatePlan, per_point_views
 from .result import CurvatureResult
 from .spatial_order import SpatialOrder
 from .refinement import refine, settle_signs
@@ -78,10 +78,13 @@ def estimate(
         measured from the residuals of 2-jets on 15 neighbours (``params["noise"]``, in
         units of their radius; ``params["initial_k"]``; see :data:`core.scale.INITIAL_K0`),
         and in robust mode leaves out the points flagged as outliers.
-    orientation : "auto" (keep given normals; orient estimated ones outward), "propagate"
-        (each component's highest point faces +z), "outward", "keep", or a (3,) viewpoint;
+    orientation : "auto" (keep given normals; orient estimated ones outward, or toward
+        the scanners of a cloud read from an E57 file), "propagate" (each component's
+        highest point faces +z), "outward", "keep", a (3,) viewpoint, or an (N, 3) array
+        of viewpoints, one per point (each scanner's position for the points it saw);
         signs follow the chord-aware spanning forest of :mod:`core.orientation`, which
-        holds across thin parts (the result's ``orientation_confidence``).
+        holds across thin parts (the result's ``orientation_confidence``), except toward
+        viewpoints, where each normal faces its own.
     neighbours : :class:`core.Neighbours`, optional, from :func:`build_neighbours` on the
         same points with ``k_max >= k``; reused instead of a new search.
     options : dict, optional, method options (see ``core.METHODS[name].options``).
@@ -111,7 +114,9 @@ def estimate(
     >>> bool(abs(np.median(r.mean) - 0.5) < 0.01)
     True
     """
+    carried = interop.viewpoints(points)  # a cloud read from an E57 file: its scanners' positions
     points, normals = interop.unwrap(points, normals)  # harden: pyvista/Open3D/trimesh/laspy objects
+    orientation, views = _per_point(orientation, carried, normals)
     pts, kept = as_points(points, drop_nonfinite=drop_nonfinite)
     if len(pts) < MIN_POINTS:
         raise ValueError(f"points must hold at least {MIN_POINTS} points, got {len(pts)}")
@@ -122,18 +127,19 @@ def estimate(
     checked = degenerate.checked_plan(len(pts), asked, lambda n, ask: _plan(plan, n, ask, normals is not None),
                                       planned=plan is not None)
     given = None if normals is None else as_normals(_given_rows(normals, kept), len(pts), repair=True)
+    views = _views(checked, views, kept)
     report, cache = Progress(progress), stage_cache.checked(cache)
     invalid = degenerate.invalid_if_degenerate(pts, kept, given, asked, checked, neighbours=neighbours)
     if invalid is not None:  # harden: valid=False, no crash
         return invalid
     merged = find_duplicates(pts, cache=cache)  # harden: copies of a point are estimated once, at their position
-    args = dict(plan=plan, neighbours=neighbours, progress=progress, cache=cache)
+    args = dict(plan=plan, neighbours=neighbours, progress=progress, cache=cache, views=views)
     if merged is not None:
         return _on_distinct(merged, pts, kept, normals, asked, **args)
     plan = checked
 
     try:
-        front = prepare(pts, given, plan, neighbours, report, cache=cache, near=True, sort_given=True)
+        front = prepare(pts, given, plan, neighbours, report, cache=cache, near=True, sort_given=True, views=views)
     except NearCopies as found:  # points on top of others (float rounding of one point written twice)
         if cache is not None:
             cache.remember(pts, found.merged)
@@ -153,6 +159,32 @@ def estimate(
     return _result(pts, kept, plan, stages=stages, neighbours=nb, repaired=front.repaired)
 
 
+def _per_point(orientation, carried, normals):
+    """``(orientation, views)``: an (N, 3) array of viewpoints is :data:`PER_POINT` with the
+    array as ``views``; so is "auto" on a cloud that carries its scanners' positions
+    (``carried``, :func:`core.interop.viewpoints`) and no normals; else as given, no views."""
+    try:
+        per_point = not isinstance(orientation, str) and np.ndim(orientation) == 2
+    except ValueError:  # a ragged sequence: planning names it
+        per_point = False
+    if per_point:
+        return PER_POINT, orientation
+    if carried is not None and normals is None and word(orientation) == "auto":
+        return PER_POINT, carried
+    return orientation, None
+
+
+def _views(plan, views, kept):
+    """The viewpoints of the points kept, checked against the caller's points, where the
+    plan faces viewpoints of their own; None otherwise."""
+    if plan.orientation != PER_POINT:
+        return None
+    if views is None:
+        raise ValueError(f"orientation {PER_POINT!r} needs the viewpoints themselves: pass orientation=an "
+                         f"({len(kept)}, 3) array, one viewpoint per point")
+    return per_point_views(views, len(kept))[kept]
+
+
 def _given_rows(normals, kept) -> np.ndarray:
     """The given normals' rows of the points kept (their shape checked against the caller's points)."""
     shape = np.shape(normals)
@@ -161,7 +193,8 @@ def _given_rows(normals, kept) -> np.ndarray:
     return masked_as_nan(normals)[kept]
 
 
-def _on_distinct(merged: Merged, pts, kept, normals, asked, *, plan, neighbours, progress, cache) -> CurvatureResult:
+def _on_distinct(merged: Merged, pts, kept, normals, asked, *, plan, neighbours, progress, cache,
+                 views) -> CurvatureResult:
     """:func:`estimate` of a cloud with duplicate points: its distinct positions estimated,
     every copy given its position's answer (:mod:`core.duplicates`), planned for the caller's
     count of points as the tiles of :mod:`core.tiled` are (the candidates with k="auto"),
@@ -182,7 +215,7 @@ def _on_distinct(merged: Merged, pts, kept, normals, asked, *, plan, neighbours,
                          f"({merged.copies} of its {len(pts)} points are copies); make a plan for {m} points")
     reuse = neighbours._nb if isinstance(neighbours, CopiesNeighbours) and neighbours.matches(pts) else None
     res = estimate(merged.points, given, plan=replace(plan, n_points=m), neighbours=reuse, progress=progress,
-                   cache=cache)
+                   cache=cache, orientation="auto" if views is None else views[merged.first])
     return expand(res, merged, pts, extra)
 
 
@@ -208,18 +241,20 @@ class Prepared(NamedTuple):
     fit_nb: object
 
 
-def prepare(pts, normals, plan, neighbours, report, *, cache=None, near=False, sort_given=False) -> Prepared:
+def prepare(pts, normals, plan, neighbours, report, *, cache=None, near=False, sort_given=False,
+            views=None) -> Prepared:
     """The stages before the fits: neighbours -> outlier scores -> initial normals ->
     orientation -> scale choice (shared by :func:`estimate` and the tiles of
     :mod:`core.tiled`, which run the fits' passes themselves). They run on the points in
     spatial order (:mod:`core.spatial_order`; given ``neighbours``: in the caller's unless
-    ``sort_given``), each one run or re-used through ``cache`` (:mod:`core.stage_cache`)."""
-    run = stage_cache.memo(cache, pts, normals, plan)  # each stage: run, or re-used from the cache
+    ``sort_given``), each one run or re-used through ``cache`` (:mod:`core.stage_cache`);
+    ``views``: each point's viewpoint where the plan faces them (:data:`core.planning.PER_POINT`)."""
+    run = stage_cache.memo(cache, pts, normals, plan, views)  # each stage: run, or re-used from the cache
     nb, order = run.neighbours(lambda k: spatial_neighbours(pts, plan, neighbours, report.sub(0.0, 0.3), k=k,
                                                             sort_given=sort_given), neighbours)
     if near:  # places of points on top of others, for estimate() to merge (core.duplicates.near_copies)
         _near_copies(pts, nb, order, plan)
-    pts, normals = nb.points, order.to_sorted(normals)  # the stages run in spatial order
+    pts, normals, views = nb.points, order.to_sorted(normals), order.to_sorted(views)  # the stages run in spatial order
     # the initial graph is taken afresh at each use: a view held across the stages would keep
     # the narrow search alive after a noisy cloud widens it (+480 MB at 1M points)
     scores = run("scores", lambda: outlier_scores(pts, nb.take(plan.k_initial)[0]))
@@ -230,11 +265,11 @@ def prepare(pts, normals, plan, neighbours, report, *, cache=None, near=False, s
         if sheets is not None:  # the plain nearest are then served from the fits' graph (core.plain_rows)
             fit_nb, nb = sheets
     if normals is None:
-        init, repaired = run("initial", lambda: initial_normals(pts, fit_nb, plan, outlier, report)), None
+        init, repaired = run("initial", lambda: initial_normals(pts, fit_nb, plan, outlier, report, views)), None
     else:
         init, repaired = run("initial", lambda: given_normals(pts, normals, nb, plan))
     init, confidence = run("orientation", lambda: orient_signs(pts, init, nb.take_indices(plan.k_initial), plan,
-                                                                rank=order.order))
+                                                                rank=order.order, views=views))
     report(0.45, "orientation")
 
     reference = None
@@ -271,7 +306,8 @@ def _plan(plan, n, asked, normals_given) -> EstimatePlan:
     if plan.orientation_label == "auto" and (plan.orientation == "keep") != normals_given:
         raise ValueError(f"plan was made with normals_given={not normals_given} (orientation 'auto' resolved to "
                          f"{plan.orientation!r}); make it with normals_given={normals_given}")
-    changed = sorted(name for name, value in asked.items() if value is not _PLANNED[name] and value != _PLANNED[name])
+    changed = sorted(name for name, value in asked.items() if value is not _PLANNED[name] and value != _PLANNED[name]
+                     and not (name == "orientation" and value == plan.orientation == PER_POINT))
     if changed:
         raise ValueError(f"pass either plan or {', '.join(changed)}, not both")
     return plan

@@ -25,19 +25,20 @@ class Initial(NamedTuple):
     fold_typical: float | None = None
 
 
-def initial_normals(pts, nb, plan, outlier, report) -> Initial:
+def initial_normals(pts, nb, plan, outlier, report, views=None) -> Initial:
     """PCA normals (eqs. 13-14), refined by a 2-jet if ``plan.initial == "jet"``, on the
     ``plan.k_initial`` nearest; with k="auto" on a neighbourhood that grows with the noise
     the 2-jets measure (:func:`core.scale.initial_k`, or ``plan.noise`` when given),
     without the known outliers in robust mode, and wider where it lies along one scan line
     (:func:`core.plane_spread.spanning_normals`; or where, with the scanner's viewpoint
     given, its plane holds the view ray: :func:`core.plane_spread.ray_sheets`) or two (where
-    the 2-jet was refused: :func:`core.plane_spread.determined_normals`)."""
+    the 2-jet was refused: :func:`core.plane_spread.determined_normals`); ``views``: each
+    point's viewpoint where the plan faces them (:data:`core.planning.PER_POINT`)."""
     init, refused = _initial_normals(pts, nb, plan, outlier, report)
     if not plan.auto:
         return init
     nrm, ok = plane_spread.spanning_normals(pts, init.normals, init.has_normal, nb, init.k, plan.candidates,
-                                            plane_spread.ray_sheets(pts, init.normals, plan.orientation))
+                                            plane_spread.ray_sheets(pts, init.normals, plan.orientation, views))
     left = refused & ok & (nrm == init.normals).all(axis=1)  # not widened as a line already
     nrm = plane_spread.determined_normals(pts, nrm, left, nb, init.k, plan.candidates)
     return init._replace(normals=nrm, has_normal=ok)

@@ -73,6 +73,14 @@ def unwrap(points: Any, normals: Any = None) -> tuple[Any, Any]:
     return kind.points(points), (None if own is None else np.asarray(own))
 
 
+def viewpoints(obj) -> np.ndarray | None:
+    """The viewpoint of each point a :class:`core.io.Cloud` carries (the scanner positions
+    of an E57 file's scans), or None for any other object."""
+    if kind_of(obj) != "core.io.Cloud":
+        return None
+    return getattr(obj, "viewpoints", None)
+
+
 def point_fields(result, scalars: dict) -> dict:
     """Every per-point array of a :class:`core.CurvatureResult`, by name; ``scalars`` maps
     the scalar fields' names to attributes (:data:`core.result.SCALAR_FIELDS`)."""

@@ -92,8 +92,8 @@ def orient(points, normals, idx, mode="outward", *, ok=None, rank=None, trust=Fa
         :data:`ORIENT_K` columns form the graph.
     mode : "outward" (each connected component made to face away from the cloud's centre
         at its far points), "propagate" (Hoppe's convention: each component's highest
-        point faces +z), "keep" (signs untouched, only the confidence), or a (3,)
-        viewpoint that every normal is made to face.
+        point faces +z), "keep" (signs untouched, only the confidence), a (3,)
+        viewpoint that every normal is made to face, or (N, 3) viewpoints, one per point.
     ok : (N,) bool, rows that have a normal (default: finite rows).
     rank : (N,) int, optional, each point's index in the caller's order when the points
         are passed in another (:mod:`core.spatial_order`): equally strong edges are taken
@@ -136,7 +136,7 @@ def orient(points, normals, idx, mode="outward", *, ok=None, rank=None, trust=Fa
         labels = np.append(group, -1)[labels]  # -1 (no normal) stays -1
     confidence = np.empty(n)
     kern.agreement(ev, graph, (sign < 0).astype(np.int8), ok, confidence)
-    if mode != "keep" and isinstance(mode, str):
+    if isinstance(mode, str) and mode != "keep":
         _settle(ev, graph, ok, sign, confidence)
     return Orientation(nrm * sign[:, None], confidence, labels)
 

@@ -21,6 +21,10 @@ from .methods import METHODS, Method, check_options, get_method
 from .tuning import AUTO_PASSES, MAX_PASSES, PCA_K
 
 _ORIENTATIONS = ("auto", "propagate", "outward", "keep")
+#: the plan's ``orientation`` when each point faces a viewpoint of its own (an (N, 3) array
+#: passed as :func:`core.estimate`'s ``orientation``, or the scanner positions a cloud
+#: read from an E57 file carries): the array travels beside the points, not in the plan
+PER_POINT = "viewpoints"
 _INITIAL = ("auto", "pca", "jet")
 
 
@@ -60,7 +64,8 @@ class EstimatePlan:
     adaptive : undo, and stop at, a pass that smooths the shape (k="auto").
     tol : stop refining once a pass turns the normals by less (degrees), or None.
     initial : "pca" or "jet", how normals are estimated when none are given.
-    orientation : "propagate", "outward", "keep" or a viewpoint (x, y, z).
+    orientation : "propagate", "outward", "keep", a viewpoint (x, y, z) or :data:`PER_POINT`
+        (each point its own viewpoint).
     orientation_label : what the result reports ("viewpoint" for a viewpoint).
     noise : float or None. The noise ratio the initial scale grows with (k="auto"); None
         measures it on this cloud (``result.params["noise"]``).
@@ -115,7 +120,7 @@ class EstimatePlan:
             k = check_int(k, name="k", low=m.min_k_for(opts), high=n)
             ks, k_initial = (k,), k
         passes = m.default_passes if passes is None else check_int(passes, name="passes", low=0, high=MAX_PASSES)
-        view, label = orientation_mode(orientation, normals_given)
+        view, label = orientation_mode(orientation, normals_given, n_points=n)
         return cls(
             n_points=n, method=m, options=_Options(opts), auto=auto, k="auto" if auto else k,
             candidates=ks, k_search=ks[-1], k_initial=k_initial, passes=passes, adaptive=auto,
@@ -166,15 +171,16 @@ def _initial(initial, auto):
     return initial
 
 
-def orientation_mode(orientation, normals_given):
+def orientation_mode(orientation, normals_given, *, n_points=None):
     """(mode, label) of a valid ``orientation``: "auto" keeps given normals and orients
-    estimated ones outward; a viewpoint is (x, y, z), "viewpoint". Else a ValueError."""
+    estimated ones outward; a viewpoint is (x, y, z), "viewpoint"; an (``n_points``, 3)
+    array of viewpoints, one per point, or :data:`PER_POINT` is :data:`PER_POINT`. Else a
+    ValueError."""
     orientation = word(orientation)
     if isinstance(orientation, str):
-        if orientation not in _ORIENTATIONS:
-            raise ValueError(
-                f"orientation {orientation!r} is invalid; must be one of {list(_ORIENTATIONS)} or a (3,) viewpoint"
-            )
+        if orientation not in _ORIENTATIONS + (PER_POINT,):
+            raise ValueError(f"orientation {orientation!r} is invalid; must be one of {list(_ORIENTATIONS)}, a (3,) "
+                             f"viewpoint or an (N, 3) array of one viewpoint per point")
         if orientation == "auto":
             return ("keep" if normals_given else "outward"), orientation
         return orientation, orientation
@@ -182,9 +188,30 @@ def orientation_mode(orientation, normals_given):
         view = np.asarray(orientation, dtype=float)
     except (TypeError, ValueError):
         view = np.empty(0)
+    if view.ndim == 2:
+        per_point_views(view, n_points or len(view))
+        return PER_POINT, PER_POINT
     if view.shape != (3,) or not np.isfinite(view).all():
         raise ValueError(f"orientation as a viewpoint must be 3 finite numbers, got {orientation!r}")
     return tuple(float(v) for v in view), "viewpoint"
+
+
+def per_point_views(views, n_points) -> np.ndarray:
+    """``views`` as an (``n_points``, 3) float64 array of finite viewpoints, one per point;
+    else a ValueError naming the argument, what it got and what is allowed."""
+    try:
+        arr = np.asarray(views, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"orientation as viewpoints must be an ({n_points}, 3) array of numbers, got "
+                         f"{type(views).__name__}") from None
+    if arr.shape != (n_points, 3):
+        raise ValueError(f"orientation as viewpoints must have shape ({n_points}, 3), one per point, got shape "
+                         f"{arr.shape}")
+    bad = ~np.isfinite(arr).all(axis=1)
+    if bad.any():
+        raise ValueError(f"orientation as viewpoints must be finite: {int(bad.sum())} row(s) hold NaN or inf (first "
+                         f"at row {int(np.flatnonzero(bad)[0])})")
+    return arr
 
 
 def _measure(name, value):

@@ -32,6 +32,7 @@ from collections import Counter
 
 import numpy as np
 
+from .planning import PER_POINT
 from .wide_neighbours import LazyNeighbours
 
 __all__ = ["StageCache", "STAGE_FIELDS"]
@@ -45,7 +46,7 @@ STAGE_FIELDS = {
     "neighbours": ("k_search",),  # served by any kept search of at least k_search (StageCache._search)
     "scores": ("k_initial",),
     "sheets": ("k_initial", "auto"),
-    "initial": _BASE,
+    "initial": _BASE + ("viewpoint",),  # the scanner's rays widen some (core.plane_spread.ray_sheets)
     "orientation": _BASE + ("orientation",),
     "reference": _BASE + ("orientation", "method", "options"),
     "scale": _BASE + ("orientation", "k", "candidates"),
@@ -107,10 +108,11 @@ class StageCache:
         self._merged = (_digest(points), merged)
         self.computed["merged"] += 1
 
-    def bind(self, points: np.ndarray, normals: np.ndarray | None, plan) -> "_Memo":
-        """The memo of one :func:`core.estimate` call on ``points`` (validated) with ``plan``."""
+    def bind(self, points: np.ndarray, normals: np.ndarray | None, plan, views=None) -> "_Memo":
+        """The memo of one :func:`core.estimate` call on ``points`` (validated) with ``plan``
+        (and one viewpoint per point, ``views``, where the plan faces them)."""
         inputs = (_digest(points), None if normals is None else _digest(normals))
-        return _Memo(self, inputs, plan)
+        return _Memo(self, inputs, plan, None if views is None else _digest(views))
 
     def _token(self, nb) -> int:
         """A number naming the neighbour graph ``nb`` while it is the one in use."""
@@ -164,8 +166,9 @@ class StageCache:
 class _Memo:
     """Runs a stage or returns its kept output; ``None`` cache: always runs."""
 
-    def __init__(self, cache: StageCache | None, inputs: tuple, plan):
+    def __init__(self, cache: StageCache | None, inputs: tuple, plan, views=None):
         self.cache, self.inputs, self.plan = cache, inputs, plan
+        self.views = views  # the viewpoints' digest: a key of the stages that read the orientation
         self.graph = None
 
     def neighbours(self, compute, given):
@@ -186,14 +189,16 @@ class _Memo:
 
     def _run(self, stage: str, compute):
         fields = tuple(_field(self.plan, name) for name in STAGE_FIELDS[stage])
+        if {"orientation", "viewpoint"} & set(STAGE_FIELDS[stage]):
+            fields += (self.views,)
         return self.cache._get(stage, (self.inputs, self.graph, fields), compute)
 
 
-def memo(cache: StageCache | None, points, normals, plan) -> _Memo:
+def memo(cache: StageCache | None, points, normals, plan, views=None) -> _Memo:
     """The memo :func:`core.estimate` runs its stages through (a pass-through without a cache)."""
     if cache is None:
         return _Memo(None, (), plan)
-    return checked(cache).bind(points, normals, plan)
+    return checked(cache).bind(points, normals, plan, views)
 
 
 def checked(cache):
@@ -224,6 +229,9 @@ def _to_caller(order, nb, points, *, in_place):
 
 
 def _field(plan, name: str):
+    if name == "viewpoint":  # the orientation where it is a viewpoint (or each point's), else None
+        value = plan.orientation
+        return repr(value) if not isinstance(value, str) or value == PER_POINT else None
     value = getattr(plan, name)
     if name == "method":
         return value.name

@@ -18,6 +18,7 @@ from .neighbours import Neighbours, search_neighbours
 from .normal_repair import repair_normals
 from .initial_normals import Initial
 from .orientation import orient
+from .planning import PER_POINT
 from .patch import Chunk
 from .spatial_order import SpatialOrder, given_in_spatial_order
 from .wide_neighbours import search_in_spatial_order
@@ -121,10 +122,13 @@ def given_normals(pts, normals, nb, plan) -> tuple[Initial, dict]:
     return Initial(fixed, np.isfinite(fixed).all(axis=1)), counts
 
 
-def orient_signs(pts, init: Initial, idx, plan, *, rank=None) -> tuple[Initial, np.ndarray]:
+def orient_signs(pts, init: Initial, idx, plan, *, rank=None, views=None) -> tuple[Initial, np.ndarray]:
     """Signs made consistent (:func:`core.orientation.orient`) and their confidence;
-    ``rank``: the points' indices in the caller's order if they are in another."""
-    out = orient(pts, init.normals, idx, plan.orientation, ok=init.has_normal, rank=rank, trust=plan.auto)
+    ``rank``: the points' indices in the caller's order if they are in another; ``views``:
+    each point's viewpoint, in the points' order, where the plan asks for them
+    (:data:`core.planning.PER_POINT`)."""
+    mode = views if plan.orientation == PER_POINT else plan.orientation
+    out = orient(pts, init.normals, idx, mode, ok=init.has_normal, rank=rank, trust=plan.auto)
     return init._replace(normals=out.normals), out.confidence
 
 

@@ -15,7 +15,7 @@ import numpy as np
 from .._progress import Progress
 from .._validate import check_int, word
 from ..methods import check_options, get_method
-from ..planning import orientation_mode
+from ..planning import PER_POINT, orientation_mode
 from ..io.atomic import refuse_input_as_output
 from ..tuning import DRIFT_POOL, DRIFT_SHARE, MAX_PASSES
 from . import assemble, binning, creases, engine, signs
@@ -343,6 +343,9 @@ def _orientation(orientation, normals_given, views):
     """(how each tile orients, how the tiles' signs are then fixed: none/outward/propagate),
     from the orientation as :func:`core.planning.orientation_mode` checks and reads it."""
     mode, label = orientation_mode(orientation, normals_given)
+    if mode == PER_POINT:
+        raise ValueError("orientation as one viewpoint per point is not taken by tiles; an E57 source's points face "
+                         "their scanners with orientation='auto'")
     if mode == "keep" or label == "viewpoint":
         return mode, "none"
     if label == "auto" and views:  # each normal faces the scanner that saw its point

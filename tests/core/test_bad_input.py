@@ -109,8 +109,8 @@ BAD_ARGUMENTS = [
     (dict(passes=1.5), r"passes must be an integer, got 1.5"),
     (dict(passes=21), r"passes=21 is out of range"),
     (dict(orientation="inward"),
-     r"orientation 'inward' is invalid; must be one of \['auto', 'propagate', 'outward', 'keep'\] "
-     r"or a \(3,\) viewpoint"),
+     r"orientation 'inward' is invalid; must be one of \['auto', 'propagate', 'outward', 'keep'\], a \(3,\) "
+     r"viewpoint or an \(N, 3\) array of one viewpoint per point"),
     (dict(orientation=[0, 0]), r"orientation as a viewpoint must be 3 finite numbers, got \[0, 0\]"),
     (dict(orientation=[0, 0, 0, 1]),
      r"orientation as a viewpoint must be 3 finite numbers, got \[0, 0, 0, 1\]"),

@@ -108,6 +108,86 @@ def test_viewpoint_inside_sphere_gives_inward_normals(given):
     assert np.all(r.mean < 0)  # k = -1/R with inward normals
 
 
+# ----------------------------------------------------------------------------- a viewpoint per point
+
+def _two_scans(torus):
+    """The torus seen by two scanners, above and beside it: each point's viewpoint is the
+    scanner of the half it belongs to (halves by the sign of x: the points of one scan are
+    near one another, as a scanner's are)."""
+    views = np.array([[0.0, 0.0, 6.0], [9.0, 0.0, 1.0]])
+    scan = (torus.points[:, 0] > 0).astype(int)
+    return views, scan
+
+
+@pytest.mark.parametrize("k", [15, "auto"])
+def test_each_point_faces_its_own_viewpoint_as_one_viewpoint_would(k, torus):
+    """(N, 3) viewpoints: every point's result is the one its scanner alone gives
+    (``orientation=(x, y, z)``), bit for bit at k = 15 (the fits do not read the signs)
+    and to rounding with k="auto" (its scale rule reads neighbouring signs, which differ
+    only where the two halves meet)."""
+    views, scan = _two_scans(torus)
+    r = core.estimate(torus.points, k=k, orientation=views[scan])
+    assert r.params["orientation"] == "viewpoints"
+    for s in (0, 1):
+        one = core.estimate(torus.points, k=k, orientation=tuple(views[s]))
+        rows = scan == s
+        if k == 15:
+            for name in ("normals", "k1", "k2", "e1", "e2", "valid"):
+                np.testing.assert_array_equal(getattr(r, name)[rows], getattr(one, name)[rows])
+        else:
+            assert np.mean(np.einsum("ij,ij->i", r.normals[rows], one.normals[rows]) > 0) > 0.995
+            assert np.median(np.abs(r.mean[rows] - one.mean[rows])) < 1e-3
+
+
+def test_viewpoints_follow_the_points_through_dropped_rows_and_copies(torus):
+    """Rows dropped (drop_nonfinite) and copies of points (estimated once) keep each point's
+    own viewpoint: the answer is that of the clean, distinct cloud."""
+    views, scan = _two_scans(torus)
+    clean = core.estimate(torus.points, k=15, orientation=views[scan])
+    pts = np.vstack([torus.points, [[np.nan, 0.0, 0.0]], torus.points[:50]])
+    vp = np.vstack([views[scan], [[0.0, 0.0, 0.0]], views[scan][:50]])
+    r = core.estimate(pts, k=15, orientation=vp, drop_nonfinite=True)
+    n = len(torus.points)
+    np.testing.assert_array_equal(r.normals[:n], clean.normals)
+    np.testing.assert_array_equal(r.normals[n:], clean.normals[:50])
+
+
+def test_a_cache_tells_viewpoints_apart(torus):
+    """The stage cache keys the orientation by the viewpoints themselves: other viewpoints
+    (every scanner swapped) give the other signs, not the kept ones."""
+    from core.stage_cache import StageCache
+
+    views, scan = _two_scans(torus)
+    cache = StageCache()
+    a = core.estimate(torus.points, k=15, orientation=views[scan], cache=cache)
+    b = core.estimate(torus.points, k=15, orientation=views[1 - scan], cache=cache)
+    np.testing.assert_array_equal(b.normals, core.estimate(torus.points, k=15, orientation=views[1 - scan]).normals)
+    assert (np.einsum("ij,ij->i", a.normals, b.normals) < 0).any()
+
+
+@pytest.mark.parametrize("orientation, match", [
+    (np.zeros((10, 3)), r"orientation as viewpoints must have shape \(\d+, 3\), one per point, got shape \(10, 3\)"),
+    ("NaN row", r"orientation as viewpoints must be finite: 1 row\(s\) hold NaN or inf \(first at row 7\)"),
+    ("viewpoints", r"orientation 'viewpoints' needs the viewpoints themselves: pass orientation=an \(\d+, 3\) array"),
+])
+def test_bad_viewpoints_are_refused_by_name(orientation, match, torus):
+    if isinstance(orientation, str) and orientation == "NaN row":
+        orientation = np.zeros_like(torus.points)
+        orientation[7, 1] = np.nan
+    with pytest.raises(ValueError, match=match):
+        core.estimate(torus.points, k=15, orientation=orientation)
+
+
+def test_a_plan_for_viewpoints_takes_them_with_the_points(torus):
+    views, scan = _two_scans(torus)
+    plan = core.plan(len(torus.points), k=15, orientation=views[scan])
+    assert plan.orientation == "viewpoints"
+    r = core.estimate(torus.points, plan=plan, orientation=views[scan])
+    np.testing.assert_array_equal(r.normals, core.estimate(torus.points, k=15, orientation=views[scan]).normals)
+    with pytest.raises(ValueError, match="needs the viewpoints themselves"):
+        core.estimate(torus.points, plan=plan)
+
+
 # ----------------------------------------------------------------------------- thin parts (issue 12)
 
 def _seam_graph(part):

@@ -308,6 +308,34 @@ def test_a_rotating_scanner_s_ground_takes_the_normal_across_its_rings():
         assert np.mean(res.normals[ring, 2] > 0) > 0.95
 
 
+def _near_ground(h=1.8):
+    """A rotating LiDAR's ground within 10 m (the rings of the test above): its normals
+    widen where their plane holds the scanner's rays (core.plane_spread.ray_sheets)."""
+    el, az = np.meshgrid(np.radians(np.linspace(-30, -10, 12)), np.radians(np.arange(0, 360, 0.4)), indexing="ij")
+    rays = np.stack([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)], -1).reshape(-1, 3)
+    reach = -h / rays[:, 2] + np.random.default_rng(0).normal(scale=0.02, size=len(rays))
+    return np.array([0.0, 0.0, h]) + reach[:, None] * rays
+
+
+def test_one_viewpoint_per_point_reads_the_rays_as_one_viewpoint_does():
+    """The same viewpoint given once or at every point: the same answer to the bit, ray
+    sheets included; and a stage cache that held an estimate without a viewpoint does not
+    serve its initial normals to one with it (the ray sheets widen them)."""
+    from core.plane_spread import ray_sheets
+    from core.stage_cache import StageCache
+
+    pts, view = _near_ground(), (0.0, 0.0, 1.8)
+    one = core.estimate(pts, orientation=view)
+    assert ray_sheets(pts, core.estimate(pts, k=15).normals, view).sum() > 100
+    each = core.estimate(pts, orientation=np.tile(view, (len(pts), 1)))
+    for name in ("normals", "k1", "k2", "valid", "k_point"):
+        np.testing.assert_array_equal(getattr(each, name), getattr(one, name))
+    cache = StageCache()
+    core.estimate(pts, orientation="propagate", cache=cache)
+    again = core.estimate(pts, orientation=view, cache=cache)
+    np.testing.assert_array_equal(again.normals, one.normals)
+
+
 def test_a_long_arc_of_one_noisy_scan_line_is_not_taken_for_the_surface():
     """A torus (R = 2, r = 1) scanned along 16 parallels of 400 points with noise 0.02 of the
     outer spacing: on the inner equator the parallels are 25x farther apart than the points
