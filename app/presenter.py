@@ -240,7 +240,15 @@ def orientation_text(orientation) -> str:
     """How the normals were oriented, for captions ("oriented toward (1, 2, 3)"); "" for the default."""
     if isinstance(orientation, tuple):
         return "oriented toward (" + ", ".join(f"{v:.3g}" for v in orientation) + ")"
-    return {"propagate": "oriented up (+z)", "keep": "file's normals kept"}.get(orientation, "")
+    return {"propagate": "oriented up (+z)", "keep": "file's normals kept",
+            "viewpoints": "oriented toward the scanners"}.get(orientation, "")
+
+
+def _oriented(out) -> str:
+    """:func:`orientation_text` of how a result was oriented: the request's mode, or its
+    scanners' positions where "auto" faced them (an E57 file's, ``params["orientation"]``)."""
+    params = getattr(out.result, "params", None) or {}
+    return orientation_text("viewpoints" if params.get("orientation") == "viewpoints" else out.request.orientation)
 
 
 def _title(out, method: str, result, summary: dict | None) -> str:
@@ -253,8 +261,8 @@ def _title(out, method: str, result, summary: dict | None) -> str:
         text += f",  passes = {_passes_text(result)}"
     if req.noise > 0:
         text += f"{chr(10) if why else ',  '}noise {req.noise:g}%"
-    if orientation_text(req.orientation):
-        text += f"\n{orientation_text(req.orientation)}"
+    if _oriented(out):
+        text += f"\n{_oriented(out)}"
     text += f"\n{req.source.name}"
     if summary:
         text += "\n" + summary_line(summary, None, short=True)
@@ -278,7 +286,7 @@ def result_parameters(out) -> str:
     if not why and getattr(res, "passes", None) is not None and uses_passes(req.method):
         text += f" passes={_passes_text(res)}"
     text += f"  ·  noise {req.noise:g}%" if req.noise > 0 else ""
-    return text + (f"  ·  {orientation_text(req.orientation)}" if orientation_text(req.orientation) else "")
+    return text + (f"  ·  {_oriented(out)}" if _oriented(out) else "")
 
 
 def status_line(out) -> str:
@@ -318,7 +326,7 @@ def preview_line(out) -> str:
     """The status bar while a preview is shown."""
     req = out.request
     k = req.k if not req.k_auto else f"{out.result.k} (paper's pipeline)"
-    oriented = f", {orientation_text(req.orientation)}" if orientation_text(req.orientation) else ""
+    oriented = f", {_oriented(out)}" if _oriented(out) else ""
     return (f"{req.source.name}: PREVIEW ({req.method.upper()} k={k}{oriented} on {out.preview:,} of "
             f"{len(out.points):,} points, {out.elapsed:.2f} s) — computing the full result…")
 

@@ -46,6 +46,9 @@ class CloudSource:
     notes : tuple of str
         What the reader warned about (columns it did not take for normals, ...), for the
         window to show once the cloud is loaded.
+    viewpoints : (N, 3) float array or None
+        Where each point was seen from (an E57 file's scanner positions): the default
+        orientation faces them (:attr:`core.io.Cloud.viewpoints`).
     """
 
     name: str
@@ -55,9 +58,10 @@ class CloudSource:
     sample: object | None = None
     uid: int = field(default_factory=lambda: next(_uids))
     notes: tuple = ()
+    viewpoints: np.ndarray | None = None
 
     def __post_init__(self):
-        for arr in (self.points, self.normals):
+        for arr in (self.points, self.normals, self.viewpoints):
             if arr is not None:
                 arr.flags.writeable = False
 
@@ -103,7 +107,10 @@ def load_file(path) -> CloudSource:
     _refuse_undrawable(path, cloud.points)
     points = np.array(cloud.points, dtype=float, copy=True)
     normals = None if cloud.normals is None else np.array(cloud.normals, dtype=float, copy=True)
-    return CloudSource(name=display_name(path), points=points, normals=normals, path=path, notes=notes)
+    views = getattr(cloud, "viewpoints", None)
+    views = None if views is None else np.array(views, dtype=float, copy=True)
+    return CloudSource(name=display_name(path), points=points, normals=normals, path=path, notes=notes,
+                       viewpoints=views)
 
 
 def _refuse_undrawable(path, points) -> None:

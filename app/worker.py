@@ -159,7 +159,8 @@ class EstimateWorker(QObject):
         k = min(PREVIEW_K if req.k_auto else int(req.k), len(pts) - 1)
         normals = req.source.normals[sub.index] if (req.use_input_normals and req.source.normals is not None) else None
         passes = None if req.k_auto else (req.passes if core.METHODS[req.method].uses_passes else None)
-        res = core.estimate(pts, normals, k=max(k, 3), method=req.method, passes=passes, orientation=req.orientation,
+        res = core.estimate(pts, normals, k=max(k, 3), method=req.method, passes=passes,
+                            orientation=orientation_of(req, normals, sub.index),
                             progress=_sub(callback, 0.0, 0.05, "preview"), cache=self._sub_cache)
         fields = spread(_fields_of(res, req.source, sub.index), sub)
         return EstimateOutput(gen=req.gen, request=req, points=points, result=res, fields=fields,
@@ -196,13 +197,24 @@ class EstimateWorker(QObject):
             t, before = time.perf_counter(), dict(self._cache.reused)
             passes = req.passes if core.METHODS[method].uses_passes else None
             results.append(core.estimate(
-                points, normals, k=req.k_for(method), method=method, passes=passes, orientation=req.orientation,
+                points, normals, k=req.k_for(method), method=method, passes=passes,
+                orientation=orientation_of(req, normals),
                 progress=_sub(callback, i / len(runs), (i + 1) / len(runs), method), cache=self._cache,
             ))
             timings[method] = time.perf_counter() - t
             if i == 0:
                 kept = tuple(stage for stage, n in self._cache.reused.items() if n > before.get(stage, 0))
         return results, kept
+
+
+def orientation_of(req: EstimateRequest, normals, rows=None):
+    """What core.estimate gets as ``orientation``: the request's, except that "auto" on a
+    cloud that came with its scanners' positions (an E57 file), with no normals in use,
+    faces each point's scanner (its ``rows`` of them), as core does for the file's cloud."""
+    views = req.source.viewpoints
+    if req.orientation != "auto" or views is None or normals is not None:
+        return req.orientation
+    return views if rows is None else views[rows]
 
 
 def _flags_drawn(result) -> None:

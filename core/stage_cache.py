@@ -188,8 +188,9 @@ class _Memo:
         return compute() if self.cache is None else self._run(stage, compute)
 
     def _run(self, stage: str, compute):
-        fields = tuple(_field(self.plan, name) for name in STAGE_FIELDS[stage])
-        if {"orientation", "viewpoint"} & set(STAGE_FIELDS[stage]):
+        names = STAGE_FIELDS[stage]
+        fields = tuple(_field(self.plan, name) for name in names)
+        if "orientation" in names or ("viewpoint" in names and fields[names.index("viewpoint")] is not None):
             fields += (self.views,)
         return self.cache._get(stage, (self.inputs, self.graph, fields), compute)
 
@@ -229,9 +230,9 @@ def _to_caller(order, nb, points, *, in_place):
 
 
 def _field(plan, name: str):
-    if name == "viewpoint":  # the orientation where it is a viewpoint (or each point's), else None
+    if name == "viewpoint":  # a viewpoint (or each point's) where k="auto" reads it, else None
         value = plan.orientation
-        return repr(value) if not isinstance(value, str) or value == PER_POINT else None
+        return repr(value) if plan.auto and (not isinstance(value, str) or value == PER_POINT) else None
     value = getattr(plan, name)
     if name == "method":
         return value.name

@@ -153,3 +153,23 @@ def test_state_checks_the_orientation():
     for bad in ("outward-ish", (1, 2), (0, 0, float("nan"))):
         with pytest.raises(ValueError):
             state.set(orientation=bad)
+
+
+def test_a_cloud_with_its_scanners_positions_faces_them_by_default(make_window):
+    """A cloud that came with each point's scanner position (an E57 file's poses): the
+    default orientation faces every point toward its own scanner, as core.estimate of the
+    file's cloud does, and the status line and caption say so."""
+    import core
+
+    pts = core.shapes.torus(3000, seed=2).points
+    views = np.where((pts[:, 0] > 0)[:, None], [9.0, 0.0, 1.0], [0.0, 0.0, 6.0])
+    source = CloudSource(name="two scans", points=pts, viewpoints=views)
+    window = make_window(source, use_input_normals=False, k_auto=False)
+    res = window.output.result
+    assert res.params["orientation"] == "viewpoints"
+    req = window.output.request
+    alone = core.estimate(pts, k=req.k, method=req.method, passes=req.passes, orientation=views)
+    np.testing.assert_array_equal(res.normals, alone.normals)
+    assert (np.einsum("ij,ij->i", res.normals, views - pts) > 0).mean() > 0.95
+    assert "oriented toward the scanners" in window.status_label.text()
+    assert "oriented toward the scanners" in window.scene._title_actor.GetInput()
