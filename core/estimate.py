@@ -19,7 +19,7 @@ from .duplicates import CopiesNeighbours, Merged, NearCopies, expand, find_dupli
 from .planning import PER_POINT, EstimatePlan, per_point_views
 from .result import CurvatureResult
 from .spatial_order import SpatialOrder
-from .refinement import refine, settle_signs
+from .refinement import refine, settle_signs, turned
 from .initial_normals import initial_normals
 from .stages import (choose_scale, crease_reference, flags, given_normals, orient_signs, outlier_scores,
                      spatial_neighbours)
@@ -114,9 +114,8 @@ def estimate(
     >>> bool(abs(np.median(r.mean) - 0.5) < 0.01)
     True
     """
-    carried = interop.viewpoints(points)  # a cloud read from an E57 file: its scanners' positions
+    orientation, views = _per_point(orientation, points, normals)  # an E57 cloud's own: its scanners'
     points, normals = interop.unwrap(points, normals)  # harden: pyvista/Open3D/trimesh/laspy objects
-    orientation, views = _per_point(orientation, carried, normals)
     pts, kept = as_points(points, drop_nonfinite=drop_nonfinite)
     if len(pts) < MIN_POINTS:
         raise ValueError(f"points must hold at least {MIN_POINTS} points, got {len(pts)}")
@@ -127,8 +126,7 @@ def estimate(
     checked = degenerate.checked_plan(len(pts), asked, lambda n, ask: _plan(plan, n, ask, normals is not None),
                                       planned=plan is not None)
     given = None if normals is None else as_normals(_given_rows(normals, kept), len(pts), repair=True)
-    views = _views(checked, views, kept)
-    report, cache = Progress(progress), stage_cache.checked(cache)
+    report, cache, views = Progress(progress), stage_cache.checked(cache), _views(checked, views, kept)
     invalid = degenerate.invalid_if_degenerate(pts, kept, given, asked, checked, neighbours=neighbours)
     if invalid is not None:  # harden: valid=False, no crash
         return invalid
@@ -139,7 +137,8 @@ def estimate(
     plan = checked
 
     try:
-        front = prepare(pts, given, plan, neighbours, report, cache=cache, near=True, sort_given=True, views=views)
+        front = prepare(pts, given, plan, neighbours, report, cache=cache, near=True, sort_given=True, views=views,
+                        consistent=True)
     except NearCopies as found:  # points on top of others (float rounding of one point written twice)
         if cache is not None:
             cache.remember(pts, found.merged)
@@ -151,6 +150,7 @@ def estimate(
     front = front._replace(scale=front.scale._replace(jets=None))  # merged into best: 86 MiB less at 1M points
     if cache is None and isinstance(front.nb, PlainNeighbours):  # the fits are done: their graph made plain, read
         front = front._replace(nb=front.nb.release(), fit_nb=None)  # without copies (-141 MiB at 1M, two sheets)
+    best = turned(best, front.turn)  # the caller's signs, where the fits read others (orient_signs)
     best, confidence = settle_signs(front.pts, best, front.nb, plan, front.confidence)
     marks = flags(best.fit, front.scores, plan, front.reference, nb=front.nb, confidence=confidence)
     stages = front.order.to_caller(_reported((front.init, best, front.scale, marks)))
@@ -159,17 +159,18 @@ def estimate(
     return _result(pts, kept, plan, stages=stages, neighbours=nb, repaired=front.repaired)
 
 
-def _per_point(orientation, carried, normals):
+def _per_point(orientation, points, normals):
     """``(orientation, views)``: an (N, 3) array of viewpoints is :data:`PER_POINT` with the
-    array as ``views``; so is "auto" on a cloud that carries its scanners' positions
-    (``carried``, :func:`core.interop.viewpoints`) and no normals; else as given, no views."""
+    array as ``views``; so is "auto" on a cloud ``points`` that carries its scanners'
+    positions (:func:`core.interop.viewpoints`) and no normals; else as given, no views."""
     try:
         per_point = not isinstance(orientation, str) and np.ndim(orientation) == 2
     except ValueError:  # a ragged sequence: planning names it
         per_point = False
     if per_point:
         return PER_POINT, orientation
-    if carried is not None and normals is None and word(orientation) == "auto":
+    carried = interop.viewpoints(points)
+    if carried is not None and word(orientation) == "auto" and interop.unwrap(points, normals)[1] is None:
         return PER_POINT, carried
     return orientation, None
 
@@ -226,7 +227,8 @@ class Prepared(NamedTuple):
     rows when given, the orientation ``confidence``), the linear ``reference`` fit creases
     are judged by (k="auto") and the ``scale`` per point; ``fit_nb`` is ``nb`` as the
     normals are fitted on it (each point's own sheet first, :mod:`core.one_sheet`), the
-    orientation and the result read ``nb``."""
+    orientation and the result read ``nb``; ``turn``: where the fits read the other sign
+    than the caller decided (:func:`core.stages.orient_signs`), None: nowhere."""
 
     pts: np.ndarray
     nb: object
@@ -239,16 +241,19 @@ class Prepared(NamedTuple):
     scale: object
     order: SpatialOrder
     fit_nb: object
+    turn: np.ndarray | None = None
 
 
 def prepare(pts, normals, plan, neighbours, report, *, cache=None, near=False, sort_given=False,
-            views=None) -> Prepared:
+            views=None, consistent=False) -> Prepared:
     """The stages before the fits: neighbours -> outlier scores -> initial normals ->
     orientation -> scale choice (shared by :func:`estimate` and the tiles of
     :mod:`core.tiled`, which run the fits' passes themselves). They run on the points in
     spatial order (:mod:`core.spatial_order`; given ``neighbours``: in the caller's unless
     ``sort_given``), each one run or re-used through ``cache`` (:mod:`core.stage_cache`);
-    ``views``: each point's viewpoint where the plan faces them (:data:`core.planning.PER_POINT`)."""
+    ``views``: each point's viewpoint where the plan faces them (:data:`core.planning.PER_POINT`);
+    ``consistent``: the scale rule and fits may read consistent signs where the caller's are
+    mixed (``Prepared.turn``; the tiles, which face their viewpoints afterwards, do not)."""
     run = stage_cache.memo(cache, pts, normals, plan, views)  # each stage: run, or re-used from the cache
     nb, order = run.neighbours(lambda k: spatial_neighbours(pts, plan, neighbours, report.sub(0.0, 0.3), k=k,
                                                             sort_given=sort_given), neighbours)
@@ -268,8 +273,8 @@ def prepare(pts, normals, plan, neighbours, report, *, cache=None, near=False, s
         init, repaired = run("initial", lambda: initial_normals(pts, fit_nb, plan, outlier, report, views)), None
     else:
         init, repaired = run("initial", lambda: given_normals(pts, normals, nb, plan))
-    init, confidence = run("orientation", lambda: orient_signs(pts, init, nb.take_indices(plan.k_initial), plan,
-                                                                rank=order.order, views=views))
+    init, confidence, turn = run("orientation", lambda: orient_signs(pts, init, nb.take_indices(plan.k_initial), plan,
+                                                                      rank=order.order, views=views, consistent=consistent))
     report(0.45, "orientation")
 
     reference = None
@@ -279,7 +284,7 @@ def prepare(pts, normals, plan, neighbours, report, *, cache=None, near=False, s
     inliers = init.has_normal & ~outlier if plan.robust else init.has_normal  # outliers sit out the choice of k
     kc = run("scale", lambda: choose_scale(pts, init.normals, fit_nb, inliers, plan, report.sub(0.47, 0.7),
                                            scores=scores, k_initial=init.k))
-    return Prepared(pts, nb, scores, outlier, init, repaired, confidence, reference, kc, order, fit_nb)
+    return Prepared(pts, nb, scores, outlier, init, repaired, confidence, reference, kc, order, fit_nb, turn)
 
 
 def _near_copies(pts, nb, order: SpatialOrder, plan) -> None:

@@ -207,11 +207,18 @@ def settle_signs(pts, best: Refined, nb, plan, confidence):
     fit = best.fit
     final = np.where(fit.valid[:, None], fit.normals, best.input_normals)
     sign, confidence = resettle(pts, final, wider_ring(nb, plan), plan.orientation, trust=plan.auto)
-    flip = sign < 0
-    if not flip.any():
-        return best, confidence
+    return turned(best, sign < 0), confidence
+
+
+def turned(best: Refined, flip) -> Refined:
+    """``best`` turned over where ``flip`` (N,) bool (None: nowhere): normals negated, k1, k2
+    negated and swapped, e1, e2 swapped (:func:`core.frame.turned_over`), its input normals
+    negated; ``best`` itself where nothing turns."""
+    if flip is None or not flip.any():
+        return best
+    fit = best.fit
     fit = fit._replace(**dict(zip(Fit._fields[:5], turned_over(*fit[:5], flip))))
-    return best._replace(fit=fit, input_normals=np.where(flip[:, None], -best.input_normals, best.input_normals)), confidence
+    return best._replace(fit=fit, input_normals=np.where(flip[:, None], -best.input_normals, best.input_normals))
 
 
 def wider_ring(nb, plan):

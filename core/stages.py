@@ -122,14 +122,31 @@ def given_normals(pts, normals, nb, plan) -> tuple[Initial, dict]:
     return Initial(fixed, np.isfinite(fixed).all(axis=1)), counts
 
 
-def orient_signs(pts, init: Initial, idx, plan, *, rank=None, views=None) -> tuple[Initial, np.ndarray]:
-    """Signs made consistent (:func:`core.orientation.orient`) and their confidence;
-    ``rank``: the points' indices in the caller's order if they are in another; ``views``:
-    each point's viewpoint, in the points' order, where the plan asks for them
-    (:data:`core.planning.PER_POINT`)."""
+#: k="auto" with the caller's signs (kept, or facing viewpoints): beyond this share of points whose
+#: sign most neighbours lack (orientation confidence < 0.5), the scale rule, which compares signed
+#: normals, and the fits read consistent signs (:func:`orient_signs`; README, "mixed signs")
+MIXED_SIGNS = 0.001
+
+
+def orient_signs(pts, init: Initial, idx, plan, *, rank=None, views=None,
+                 consistent=False) -> tuple[Initial, np.ndarray, np.ndarray | None]:
+    """Signs made consistent (:func:`core.orientation.orient`), their confidence, and where
+    the normals returned carry the other sign than asked (None: nowhere); ``rank``: the
+    points' indices in the caller's order if they are in another; ``views``: each point's
+    viewpoint, in the points' order, where the plan asks for them
+    (:data:`core.planning.PER_POINT`). With ``consistent`` and k="auto", signs the caller
+    decides (kept, or facing viewpoints) that disagree among neighbours at more than
+    :data:`MIXED_SIGNS` of the points are returned as the spanning forest makes
+    them consistent ("outward"): the scale rule reads signed normals."""
     mode = views if plan.orientation == PER_POINT else plan.orientation
     out = orient(pts, init.normals, idx, mode, ok=init.has_normal, rank=rank, trust=plan.auto)
-    return init._replace(normals=out.normals), out.confidence
+    caller = plan.orientation not in ("outward", "propagate")
+    mixed = np.count_nonzero(out.confidence[init.has_normal] < 0.5) > MIXED_SIGNS * max(len(pts), 1)
+    if not (consistent and plan.auto and caller and mixed):
+        return init._replace(normals=out.normals), out.confidence, None
+    inner = orient(pts, out.normals, idx, "outward", ok=init.has_normal, rank=rank, trust=plan.auto)
+    flip = np.einsum("ij,ij->i", np.nan_to_num(inner.normals), np.nan_to_num(out.normals)) < 0
+    return init._replace(normals=inner.normals), out.confidence, flip
 
 
 class Residuals(NamedTuple):
