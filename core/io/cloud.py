@@ -74,6 +74,8 @@ class Cloud:
     format : short format name, e.g. ``"ply"``, ``"xyz"``, ``"las"``.
     fields : other per-point properties, name -> (N,) array in the file's dtype
         (text formats give float64). May be empty.
+    viewpoints : (N, 3) float64 array, or None: where each point was seen from (E57: the
+        scanner position of its scan), in the points' coordinates.
     """
 
     points: np.ndarray
@@ -81,6 +83,7 @@ class Cloud:
     path: pathlib.Path | None = None
     format: str = ""
     fields: dict = field(default_factory=dict)
+    viewpoints: np.ndarray | None = None
 
     def __post_init__(self):
         pts = np.ascontiguousarray(self.points, dtype=np.float64)
@@ -92,6 +95,11 @@ class Cloud:
             if nrm.shape != pts.shape:
                 raise ValueError(f"normals must have shape {pts.shape} to match points, got shape {nrm.shape}")
             object.__setattr__(self, "normals", nrm)
+        if self.viewpoints is not None:
+            views = np.ascontiguousarray(self.viewpoints, dtype=np.float64)
+            if views.shape != pts.shape:
+                raise ValueError(f"viewpoints must have shape {pts.shape} to match points, got shape {views.shape}")
+            object.__setattr__(self, "viewpoints", views)
         for name, values in self.fields.items():
             if np.shape(values)[:1] != (len(pts),):
                 raise ValueError(f"field {name!r} must have {len(pts)} rows, got shape {np.shape(values)}")
@@ -118,6 +126,7 @@ class RawCloud(NamedTuple):
     points: np.ndarray
     normals: np.ndarray | None
     fields: dict
+    viewpoints: np.ndarray | None = None
 
 
 # Property names meaning a normal component, lower-cased, in x, y, z order.
@@ -160,6 +169,7 @@ def finalize(raw: RawCloud, path: pathlib.Path, fmt: str, *, drop_nonfinite: boo
         raise CloudFileError(path, "contains no points")
     normals = None if raw.normals is None else np.array(raw.normals, dtype=np.float64, order="C")
     fields = {name: np.array(values) for name, values in raw.fields.items()}
+    views = None if raw.viewpoints is None else np.array(raw.viewpoints, dtype=np.float64, order="C")
     finite = np.isfinite(points).all(axis=1)
     if not finite.all():
         bad = n - int(finite.sum())
@@ -174,8 +184,9 @@ def finalize(raw: RawCloud, path: pathlib.Path, fmt: str, *, drop_nonfinite: boo
         warnings.warn(f"{path}: dropped {bad} of {n} points with non-finite coordinates", UserWarning, stacklevel=3)
         points = points[finite]
         normals = None if normals is None else normals[finite]
+        views = None if views is None else views[finite]
         fields = {name: values[finite] for name, values in fields.items()}
-    return Cloud(points=points, normals=normals, path=path, format=fmt, fields=fields)
+    return Cloud(points=points, normals=normals, path=path, format=fmt, fields=fields, viewpoints=views)
 
 
 def remaining_bytes(f) -> int:
