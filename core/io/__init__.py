@@ -1,6 +1,6 @@
 """Point-cloud file input/output.
 
-Read PLY, XYZ/PTS/TXT/CSV, PCD, OBJ, STL, VTK/VTP and LAS/LAZ files into a :class:`Cloud`;
+Read PLY, XYZ/PTS/TXT/CSV, PCD, OBJ, STL, VTK/VTP, LAS/LAZ and E57 files into a :class:`Cloud`;
 write points, normals and per-point fields (or a curvature result) to PLY or text,
 atomically. Every problem with a file raises :class:`CloudFileError` (a ``ValueError``)
 whose message names the file.

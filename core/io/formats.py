@@ -18,6 +18,7 @@ READ_FORMATS = {
     ".vtp": "VTK XML PolyData",
     ".las": "LAS lidar",
     ".laz": "LAZ compressed lidar",
+    ".e57": "ASTM E57 laser scans (all scans, in world coordinates)",
 }
 
 #: extension -> description, for the formats :func:`core.io.write_cloud` writes

@@ -8,7 +8,7 @@ import struct
 
 import numpy as np
 
-from . import las, mesh, pcd, ply, text, vtk
+from . import e57, las, mesh, pcd, ply, text, vtk
 from .._validate import check_bool
 from .cloud import Cloud, CloudFileError, RawCloud, file_path, finalize
 from .formats import READ_FORMATS, resolve_format
@@ -26,6 +26,7 @@ _READERS = {
     "vtp": vtk.read_vtp,
     "las": las.read_las,
     "laz": las.read_las,
+    "e57": e57.read_e57,
 }
 assert set(_READERS) == {ext[1:] for ext in READ_FORMATS}
 
@@ -106,7 +107,7 @@ def _path_and_format(path, format):
 
 
 #: the extra that installs the optional package a format needs
-_EXTRAS = {"las": "las", "laz": "las", "vtk": "viewer", "vtp": "viewer"}
+_EXTRAS = {"las": "las", "laz": "las", "vtk": "viewer", "vtp": "viewer", "e57": "big"}
 
 
 def _read_raw(path, fmt) -> RawCloud:
