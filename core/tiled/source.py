@@ -13,7 +13,7 @@ import numpy as np
 
 from .._validate import as_normals, as_points
 from ..io import read_cloud
-from ..io.cloud import CloudFileError
+from ..io.e57 import E57Scans
 from ..io.las_stream import CHUNK, iter_las, iter_records, open_las
 
 _STREAMED = (".las", ".laz")
@@ -105,39 +105,20 @@ def _from_arrays(name, points, normals, identity) -> Source:
                   _normals=None if normals is None else np.asarray(normals, dtype=np.float64))
 
 
-def _e57(path):
-    try:
-        import pye57
-    except ImportError:
-        raise CloudFileError(path, "is E57, which needs pye57: run `pip install pye57`") from None
-    try:
-        return pye57.E57(str(path))
-    except Exception as exc:  # libE57 raises its own exception types  # noqa: BLE001
-        raise CloudFileError(path, f"not a readable E57 file: {exc}") from None
-
-
 def _e57_count(path) -> int:
     """Points declared by the scans' headers (invalid points, if any, are left out later)."""
-    e57 = _e57(path)
-    return sum(int(e57.get_header(i).point_count) for i in range(e57.scan_count))
+    with E57Scans(path) as scans:
+        return sum(scans.layout(i).count for i in range(len(scans)))
 
 
 def _iter_e57(path, chunk):
     """Each scan in world coordinates, its valid points in chunks, the scanner position
     (the pose's translation) as their viewpoint."""
-    e57 = _e57(path)
-    start = 0
-    for scan in range(e57.scan_count):
-        try:
-            data = e57.read_scan(scan, ignore_missing_fields=True, transform=True)
-            header = e57.get_header(scan)
-        except Exception as exc:  # noqa: BLE001
-            raise CloudFileError(path, f"scan {scan} is unreadable: {exc}") from None
-        pts = np.column_stack([data["cartesianX"], data["cartesianY"], data["cartesianZ"]]).astype(np.float64)
-        if "cartesianInvalidState" in data:
-            pts = pts[np.asarray(data["cartesianInvalidState"]) == 0]
-        view = np.asarray(header.translation, dtype=np.float64)
-        for first in range(0, len(pts), chunk):
-            part = pts[first:first + chunk]
-            yield start, part, None, np.broadcast_to(view, part.shape)
-            start += len(part)
+    with E57Scans(path) as scans:
+        start = 0
+        for index in range(len(scans)):
+            pts, _, view = scans.read(index)
+            for first in range(0, len(pts), chunk):
+                part = pts[first:first + chunk]
+                yield start, part, None, np.broadcast_to(view, part.shape)
+                start += len(part)
