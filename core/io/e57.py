@@ -86,12 +86,15 @@ class E57Scans:
                 raise CloudFileError(path, "is not an E57 file (it does not start with 'ASTM-E57')")
         with _errors(self, "is not a readable E57 file"):
             self._file = self._libe57.ImageFile(str(path), "r")
-        with _errors(self, "is not a readable E57 file"):
-            root = self._file.root()
-            self._scans = root["data3D"] if root.isDefined("data3D") else []
-        if not isinstance(self._scans, (list, self._libe57.VectorNode)):
+        try:
+            with _errors(self, "is not a readable E57 file"):
+                root = self._file.root()
+                self._scans = root["data3D"] if root.isDefined("data3D") else []
+            if not isinstance(self._scans, (list, self._libe57.VectorNode)):
+                raise CloudFileError(path, "is not a readable E57 file: its data3D (the scans) is not a Vector")
+        except CloudFileError:
             self.close()
-            raise CloudFileError(path, "is not a readable E57 file: its data3D (the scans) is not a Vector")
+            raise
 
     def __enter__(self):
         return self
@@ -124,8 +127,11 @@ class E57Scans:
                                                 f"{', '.join(names) or 'none'}")
             dtypes = {name: "f8" if name in coords else _dtype(proto[name], self._libe57)
                       for name in names if name in _WANTED or name in coords}
+            count = int(node.childCount())
+            if count < 0:  # libE57 reads recordCount as a signed integer
+                raise CloudFileError(self.path, f"scan {index} declares a negative number of points ({count})")
             rotation, translation = _pose(scan, self, index)
-            return Layout(int(node.childCount()), coords, dtypes, rotation, translation)
+            return Layout(count, coords, dtypes, rotation, translation)
 
     def read(self, index: int, extras=()) -> Scan:
         """The scan's valid points in world coordinates, with the ``extras`` it has of
@@ -138,19 +144,18 @@ class E57Scans:
         points = np.empty((layout.count, 3))
         fields = {name: np.empty(layout.count, layout.dtypes[name]) for name in names[3:] if name not in _INVALID}
         filled = 0
-        with _errors(self, f"scan {index} is unreadable"):
-            for block in self._blocks(index, layout, names):
-                valid = np.ones(len(block[names[0]]), dtype=bool)
-                for name in _INVALID:
-                    if name in block:
-                        valid &= block[name] == 0
-                stop = filled + int(valid.sum())
-                with np.errstate(invalid="ignore", over="ignore"):  # NaN/inf stay non-finite: finalize's to refuse
-                    points[filled:stop] = _world(_cartesian([block[name][valid] for name in layout.coords],
-                                                            layout.coords), layout)
-                for name, values in fields.items():
-                    values[filled:stop] = block[name][valid]
-                filled = stop
+        for block in self._blocks(index, layout, names):
+            valid = np.ones(len(block[names[0]]), dtype=bool)
+            for name in _INVALID:
+                if name in block:
+                    valid &= block[name] == 0
+            stop = filled + int(valid.sum())
+            with np.errstate(invalid="ignore", over="ignore"):  # NaN/inf stay non-finite: finalize's to refuse
+                points[filled:stop] = _world(_cartesian([block[name][valid] for name in layout.coords],
+                                                        layout.coords), layout)
+            for name, values in fields.items():
+                values[filled:stop] = block[name][valid]
+            filled = stop
         fields = {_COLOURS.get(name, name): values[:filled] for name, values in fields.items()}
         return Scan(points[:filled], fields, layout.translation)
 
@@ -158,21 +163,25 @@ class E57Scans:
         """The scan's records, ``BLOCK`` at a time: name -> array, valid until the next block."""
         size = max(1, min(BLOCK, layout.count))
         buffers = {name: np.empty(size, layout.dtypes[name]) for name in names}
-        dest = self._libe57.VectorSourceDestBuffer()
-        for name, values in buffers.items():
-            dest.append(self._libe57.SourceDestBuffer(self._file, name, values, size, True, True))
-        reader = self._scans[index]["points"].reader(dest)
+        unreadable = _errors(self, f"scan {index} is unreadable")
+        with unreadable:
+            dest = self._libe57.VectorSourceDestBuffer()
+            for name, values in buffers.items():
+                dest.append(self._libe57.SourceDestBuffer(self._file, name, values, size, True, True))
+            reader = self._scans[index]["points"].reader(dest)
         try:
             done = 0
             while done < layout.count:
-                got = min(int(reader.read()), layout.count - done)
+                with unreadable:
+                    got = min(int(reader.read()), layout.count - done)
                 if got <= 0:
                     raise CloudFileError(self.path, f"scan {index} declares {layout.count} points but its data ends "
                                                     f"after {done}")
                 yield {name: values[:got] for name, values in buffers.items()}
                 done += got
         finally:
-            reader.close()
+            with unreadable:
+                reader.close()
 
 
 #: the optional fields read when asked for, and the invalid states, beside the coordinates
@@ -266,6 +275,8 @@ class _errors:
             return False
         if issubclass(kind, (self.owner._libe57.E57Exception, RuntimeError, ValueError, IndexError, OverflowError)):
             reason = (str(exc).strip().splitlines() or [kind.__name__])[0]
+            if issubclass(kind, UnicodeDecodeError):  # pybind11 decoding a name or message libE57 read
+                reason = f"damaged data ({reason})"
             raise CloudFileError(self.owner.path, f"{self.what}: {reason}") from None
         return False
 

@@ -3,12 +3,15 @@ scanner position of each point's scan as its viewpoint, and hostile files refuse
 
 from __future__ import annotations
 
+import random
 import struct
+import sys
 
 import numpy as np
 import pytest
 
 from core.io import describe, read_cloud
+from core.io.e57 import _dtype
 from core.tiled.source import open_source
 from io_testutils import refused
 
@@ -17,7 +20,8 @@ pye57 = pytest.importorskip("pye57")
 C45 = np.cos(np.pi / 4)
 TURN_Z = np.array([C45, 0.0, 0.0, C45])  # 90 degrees about z: (x, y, z) -> (-y, x, z)
 IDENTITY = np.array([1.0, 0.0, 0.0, 0.0])
-GRID = np.stack(np.meshgrid(np.arange(4.0), np.arange(3.0), np.arange(2.0) / 2), axis=-1).reshape(-1, 3)  # float32-exact
+#: 24 points whose coordinates float32 (pye57 writes them so) holds exactly
+GRID = np.stack(np.meshgrid(np.arange(4.0), np.arange(3.0), np.arange(2.0) / 2), axis=-1).reshape(-1, 3)
 
 
 def _columns(points, **extra):
@@ -42,21 +46,30 @@ def _crc32c(data: bytes) -> int:
     return crc ^ 0xFFFFFFFF
 
 
+def _logical(raw: bytes) -> bytearray:
+    """The file's bytes without the CRC-32C ending each 1024-byte page."""
+    return bytearray(b"".join(raw[i:i + 1020] for i in range(0, len(raw), 1024)))
+
+
+def _paged(data: bytearray) -> bytes:
+    """Logical bytes (their header's file length set) in pages, each with its checksum, as libE57 writes them."""
+    data = data + bytes(-len(data) % 1020)
+    struct.pack_into("<Q", data, 16, len(data) // 1020 * 1024)
+    pages = [bytes(data[i:i + 1020]) for i in range(0, len(data), 1020)]
+    return b"".join(page + struct.pack(">I", _crc32c(page)) for page in pages)
+
+
 def _edit(path, old: bytes, new: bytes):
-    """Replace ``old`` by ``new`` in the file's logical bytes (its 1024-byte pages without their
-    CRC-32C): in the XML, at the end, by any length, or in the binary data by as many bytes;
-    then write the header's lengths and the pages' checksums as libE57 does."""
+    """Replace ``old`` by ``new`` in the file's logical bytes: in the XML, at the end, by any
+    length, or in the binary data by as many bytes; the checksums and lengths rewritten."""
     raw = path.read_bytes()
     xml_at, xml_length = struct.unpack_from("<QQ", raw, 24)
     xml_start = xml_at // 1024 * 1020 + xml_at % 1024
-    data = b"".join(raw[i:i + 1020] for i in range(0, len(raw), 1024))[:xml_start + xml_length]
+    data = _logical(raw)[:xml_start + xml_length]
     assert old in data
     data = bytearray(data.replace(old, new))
-    xml_length = len(data) - xml_start
-    data += bytes(-len(data) % 1020)
-    struct.pack_into("<QQQ", data, 16, len(data) // 1020 * 1024, xml_at, xml_length)
-    pages = [bytes(data[i:i + 1020]) for i in range(0, len(data), 1020)]
-    path.write_bytes(b"".join(page + struct.pack(">I", _crc32c(page)) for page in pages))
+    struct.pack_into("<Q", data, 32, len(data) - xml_start)
+    path.write_bytes(_paged(data))
     return path
 
 
@@ -97,6 +110,17 @@ def test_intensity_and_colours_kept_when_every_scan_has_them(tmp_path):
     one = _write(tmp_path / "one.e57", (_columns(GRID, intensity=intensity, **colours), [0, 0, 0], IDENTITY),
                  (_columns(GRID, intensity=intensity), [1, 0, 0], IDENTITY))
     assert set(read_cloud(one).fields) == {"intensity", "scan"}  # the second scan has no colours
+
+
+def test_integer_fields_kept_in_the_smallest_type_of_their_declared_range(tmp_path):
+    libe57 = pye57.libe57  # the writer stores colours as 0..255; scanners also store 16-bit ones
+    image = libe57.ImageFile(str(tmp_path / "w.e57"), "w")
+    try:
+        for (low, high), dtype in {(0, 255): "u1", (0, 65535): "u2", (-1, 1): "i1", (0, 70000): "i8"}.items():
+            assert _dtype(libe57.IntegerNode(image, low, low, high), libe57) == dtype
+        assert _dtype(libe57.FloatNode(image, 0.5), libe57) == "f8"
+    finally:
+        image.cancel()
 
 
 def test_invalid_points_dropped_with_their_viewpoints_and_scan_index(tmp_path):
@@ -185,11 +209,12 @@ HOSTILE = {
     "inf": (lambda p: _patched_coordinate(p, -np.inf), "1 of 24 points have non-finite coordinates"),
     "count beyond memory": (lambda p: _edit(_scan(p), b'recordCount="24"', b'recordCount="100000000000000"'),
                             "declares 100000000000000 points in 1 scan:", "memory available"),
-    "count beyond the data": (lambda p: _edit(_scan(p), b'recordCount="24"', b'recordCount="240"'),
-                              "scan 0 declares 240 points but its data ends after 24"),
     "no coordinates": (lambda p: _edit(_scan(p), b"cartesianX", b"cartesianQ"),
                        "scan 0 has neither cartesian (cartesianX/Y/Z) nor spherical", "cartesianQ, cartesianY"),
-    "zero quaternion": (lambda p: _scan(p, rotation=np.zeros(4)), "scan 0's pose has the rotation quaternion (0, 0, 0, 0)"),
+    "zero quaternion": (lambda p: _scan(p, rotation=np.zeros(4)),
+                        "scan 0's pose has the rotation quaternion (0, 0, 0, 0)"),
+    "negative count": (lambda p: _edit(_scan(p), b'recordCount="24"', b'recordCount="-24"'),
+                       "scan 0 declares a negative number of points (-24)"),
     "text translation": (lambda p: _edit(_scan(p), b'<x type="Float">1</x>', b'<x type="String">one</x>'),
                          "scan 0's pose translation is not 3 finite numbers"),
 }
@@ -199,6 +224,14 @@ HOSTILE = {
 def test_hostile_file_refused_naming_it_and_the_problem(tmp_path, case):
     make, *parts = HOSTILE[case]
     refused(make(tmp_path / "hostile.e57"), *parts)
+
+
+def test_count_beyond_the_data_refused_not_waited_for(tmp_path, helpers):
+    """libE57 then returns no more records: read in a child process, which a loop waiting for
+    them would keep past the helper's timeout."""
+    path = _edit(_scan(tmp_path / "more.e57"), b'recordCount="24"', b'recordCount="240"')
+    answer = helpers.read_in_child([path])[str(path)]
+    assert "more.e57: scan 0 declares 240 points but its data ends after 24" in answer, answer
 
 
 def test_non_finite_points_dropped_on_request_with_their_viewpoints(tmp_path):
@@ -211,5 +244,25 @@ def test_non_finite_points_dropped_on_request_with_their_viewpoints(tmp_path):
 
 def test_without_pye57_the_message_names_the_extra(tmp_path, monkeypatch):
     path = _scan(tmp_path / "a.e57")
-    monkeypatch.setitem(__import__("sys").modules, "pye57", None)
+    monkeypatch.setitem(sys.modules, "pye57", None)
     refused(path, "needs the Python package 'pye57'", "pip install 'darboux[big]'")
+
+
+def test_damaged_files_read_or_refused_naming_them_never_crash(tmp_path, helpers):
+    """One byte of 80 copies changed, the checksums rewritten (libE57 refuses a page whose
+    checksum fails before parsing it), for its XML parser and decoders to meet the damage;
+    read in a child process, where a crash fails this test, not the run."""
+    points = np.random.default_rng(0).normal(size=(800, 3))
+    raw = _scan(tmp_path / "base.e57", points, TURN_Z, intensity=np.arange(800, dtype=np.float32),
+                cartesianInvalidState=(np.arange(800) % 5 == 0).astype(np.int8)).read_bytes()
+    rng, paths = random.Random(0), []
+    for i in range(80):
+        data = _logical(raw)
+        data[rng.randrange(48, len(data))] ^= rng.randrange(1, 256)  # past the file header
+        paths.append(tmp_path / f"damaged{i}.e57")
+        paths[-1].write_bytes(_paged(data))
+    answers = helpers.read_in_child(paths)
+    answers = [answers[str(path)] for path in paths]
+    messages = [answer for answer in answers if isinstance(answer, str)]
+    assert all(path.name in answer for path, answer in zip(paths, answers) if isinstance(answer, str)), messages
+    assert len(messages) >= 5 and len(answers) - len(messages) >= 5, messages
