@@ -106,6 +106,7 @@ def test_intensity_and_colours_kept_when_every_scan_has_them(tmp_path):
     for name, stored in (("red", "colorRed"), ("green", "colorGreen"), ("blue", "colorBlue")):
         assert cloud.fields[name].dtype == np.uint8  # the names and type of PLY's colours
         np.testing.assert_array_equal(cloud.fields[name], np.tile(colours[stored], 2))
+    assert cloud.fields["intensity"].dtype == np.float32
     np.testing.assert_array_equal(cloud.fields["intensity"], np.concatenate([intensity, intensity[::-1]]))
     one = _write(tmp_path / "one.e57", (_columns(GRID, intensity=intensity, **colours), [0, 0, 0], IDENTITY),
                  (_columns(GRID, intensity=intensity), [1, 0, 0], IDENTITY))
@@ -119,6 +120,9 @@ def test_integer_fields_kept_in_the_smallest_type_of_their_declared_range(tmp_pa
         for (low, high), dtype in {(0, 255): "u1", (0, 65535): "u2", (-1, 1): "i1", (0, 70000): "i8"}.items():
             assert _dtype(libe57.IntegerNode(image, low, low, high), libe57) == dtype
         assert _dtype(libe57.FloatNode(image, 0.5), libe57) == "f8"
+        scan = libe57.StructureNode(image)
+        scan.set("intensity", libe57.IntegerNode(image, 0, 0, 4095))  # a 12-bit intensity: a float as elsewhere
+        assert _dtype(scan["intensity"], libe57) == "f4"
     finally:
         image.cancel()
 
