@@ -211,10 +211,8 @@ def orientation_of(req: EstimateRequest, normals, rows=None):
     """What core.estimate gets as ``orientation``: the request's, except that "auto" on a
     cloud that came with its scanners' positions (an E57 file), with no normals in use,
     faces each point's scanner (its ``rows`` of them), as core does for the file's cloud."""
-    views = req.source.viewpoints
-    if req.orientation != "auto" or views is None or normals is not None:
-        return req.orientation
-    return views if rows is None else views[rows]
+    faced = core.interop.facing(req.source, normals, req.orientation)
+    return faced[rows] if rows is not None and faced is req.source.viewpoints else faced
 
 
 def _flags_drawn(result) -> None:

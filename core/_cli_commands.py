@@ -213,7 +213,7 @@ def _estimate_one(args, src, dst, fmt, options) -> None:
     t0 = time.perf_counter()
     try:
         res = core.estimate(cloud.points, normals, k=args.k, method=args.method, passes=args.passes,
-                            orientation=orientation, options=options, progress=bar)
+                            orientation=core.interop.facing(cloud, normals, orientation), options=options, progress=bar)
     finally:
         bar.close()
     elapsed = time.perf_counter() - t0

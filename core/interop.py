@@ -81,6 +81,16 @@ def viewpoints(obj) -> np.ndarray | None:
     return getattr(obj, "viewpoints", None)
 
 
+def facing(obj, normals, orientation):
+    """``orientation`` for :func:`core.estimate` of ``obj``'s points with ``normals`` in use:
+    "auto" on a cloud that carries each point's viewpoint (an E57 file's scanners) with no
+    normals in use is those viewpoints (what ``core.estimate(obj)`` does itself); else as given."""
+    views = viewpoints(obj)
+    if views is None or normals is not None or not isinstance(orientation, str) or orientation.strip().lower() != "auto":
+        return orientation
+    return views
+
+
 def point_fields(result, scalars: dict) -> dict:
     """Every per-point array of a :class:`core.CurvatureResult`, by name; ``scalars`` maps
     the scalar fields' names to attributes (:data:`core.result.SCALAR_FIELDS`)."""

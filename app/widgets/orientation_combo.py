@@ -25,6 +25,8 @@ CHOICES = (
     ("keep the file's normals", "keep", "Keep the signs of the cloud's normals (only when they are used)"),
 )
 VIEW = "view"
+#: the default's label and tooltip on a cloud that came with each point's scanner (an E57 file's)
+SCANNERS = ("toward the scanners (default)", "Each point faces the scanner that saw it (the file's scanner positions)")
 _TIP = Qt.ItemDataRole.ToolTipRole
 
 
@@ -54,6 +56,13 @@ class OrientationCombo(QComboBox):
         source = self._state.source
         return source is not None and source.normals is not None and bool(self._state.use_input_normals)
 
+    def scanners_default(self) -> bool:
+        """Whether the default faces the scanners: the cloud carries their positions and no
+        normals are used (what core.interop.facing decides for the estimate)."""
+        source = self._state.source
+        return (source is not None and getattr(source, "viewpoints", None) is not None
+                and (source.normals is None or not self._state.use_input_normals))
+
     def _on_activated(self, index: int) -> None:
         value = self.itemData(index)
         if value == VIEW:
@@ -73,8 +82,12 @@ class OrientationCombo(QComboBox):
         value = self._state.orientation
         index = self.findData(VIEW if isinstance(value, tuple) else value)
         keep = self.findData("keep")
+        auto = self.findData("auto")
+        label, tip = SCANNERS if self.scanners_default() else CHOICES[auto][::2]
         with blocked(self):
             self._items.item(keep).setEnabled(self.keep_allowed() or value == "keep")
+            self.setItemText(auto, label)
+            self.setItemData(auto, tip, _TIP)
             self.setCurrentIndex(max(index, 0))
         view = self.findData(VIEW)
         tip = CHOICES[view][2] + (f"\nNow: {orientation_text(value)}" if isinstance(value, tuple) else "")

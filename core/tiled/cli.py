@@ -100,7 +100,7 @@ def _whole_to_las(args, orientation) -> int:
     require_points(_label(args), len(cloud))
     normals = None if args.ignore_normals else cloud.normals
     res = core.estimate(cloud.points, normals, k=args.k, method=args.method, passes=args.passes,
-                        orientation=orientation, options=dict(args.option or []))
+                        orientation=core.interop.facing(cloud, normals, orientation), options=dict(args.option or []))
     like = records = None
     if str(args.input).lower().endswith(_LAS):  # keep the input's quantisation and fields: the same points
         info = open_las(args.input)

@@ -173,3 +173,4 @@ def test_a_cloud_with_its_scanners_positions_faces_them_by_default(make_window):
     assert (np.einsum("ij,ij->i", res.normals, views - pts) > 0).mean() > 0.95
     assert "oriented toward the scanners" in window.status_label.text()
     assert "oriented toward the scanners" in window.scene._title_actor.GetInput()
+    assert window.orientation_combo.currentText() == "toward the scanners (default)"

@@ -270,3 +270,28 @@ def test_damaged_files_read_or_refused_naming_them_never_crash(tmp_path, helpers
     messages = [answer for answer in answers if isinstance(answer, str)]
     assert all(path.name in answer for path, answer in zip(paths, answers) if isinstance(answer, str)), messages
     assert len(messages) >= 5 and len(answers) - len(messages) >= 5, messages
+
+
+def test_an_e57_cloud_faces_its_scanners_in_estimate_and_the_cli(tmp_path):
+    """Two scans of a sphere, one from outside over its top, one from its centre of its
+    bottom, each stored in its scanner's frame: core.estimate of the read cloud, and
+    darboux-cli on the file, face each point toward the scanner that saw it (what
+    orientation=views does): out on the top, in on the bottom, not all outward."""
+    import core
+    from core.cli import main
+
+    s = core.shapes.sphere(4000, radius=1.0, seed=2)
+    views = np.array([[0.0, 0.0, 5.0], [0.0, 0.0, 0.0]])
+    seen = (s.points[:, 2] > 0.25, s.points[:, 2] < -0.25)  # the outer scanner's horizon is at z = 0.2
+    path = _write(tmp_path / "sphere.e57", *((_columns(s.points[seen[i]] - views[i]), views[i], IDENTITY)
+                                              for i in (0, 1)))
+    cloud = read_cloud(path)
+    res = core.estimate(cloud, k=15)
+    assert res.params["orientation"] == "viewpoints"
+    np.testing.assert_array_equal(res.normals, core.estimate(cloud.points, k=15, orientation=cloud.viewpoints).normals)
+    assert (np.einsum("ij,ij->i", res.normals, cloud.viewpoints - cloud.points) > 0).mean() > 0.99
+    assert (res.mean[cloud.fields["scan"] == 1] < 0).mean() > 0.99  # the inside: H = -1/R
+    out = tmp_path / "out.csv"
+    assert main(["estimate", str(path), "-o", str(out), "--k", "15", "--quiet"]) == 0
+    written = core.io.read_cloud(out)
+    np.testing.assert_allclose(written.normals, res.normals, atol=1e-6)
