@@ -169,10 +169,10 @@ def _per_point(orientation, points, normals):
         per_point = False
     if per_point:
         return PER_POINT, orientation
-    carried = interop.viewpoints(points)
-    if carried is not None and word(orientation) == "auto" and interop.unwrap(points, normals)[1] is None:
-        return PER_POINT, carried
-    return orientation, None
+    if interop.viewpoints(points) is None:  # (unwrap copies a laspy object's coordinates: not twice)
+        return orientation, None
+    faced = interop.facing(points, interop.unwrap(points, normals)[1], orientation)
+    return (orientation, None) if faced is orientation else (PER_POINT, faced)
 
 
 def _views(plan, views, kept):

@@ -423,3 +423,18 @@ def test_mask_roots_are_the_lowest_index_of_each_part_on_any_number_of_threads()
             assert np.array_equal(mask_roots(idx, mask), want), nt
     finally:
         numba.set_num_threads(threads)
+
+
+def test_a_clouds_viewpoints_are_its_default_not_an_override(torus):
+    """A cloud that carries viewpoints (an E57 file's) faces them under "auto" without
+    normals; an orientation asked for, or normals in use (the cloud's or given), win."""
+    from core.io import Cloud
+
+    views, scan = _two_scans(torus)
+    cloud = Cloud(points=torus.points, viewpoints=views[scan])
+    assert core.estimate(cloud, k=15).params["orientation"] == "viewpoints"
+    assert core.estimate(cloud, k=15, orientation="outward").params["orientation"] == "outward"
+    given = core.estimate(cloud, -torus.normals, k=15)
+    assert given.params["orientation"] == "auto" and np.all(np.einsum("ij,ij->i", given.normals, torus.normals) < 0)
+    with_normals = Cloud(points=torus.points, normals=-torus.normals, viewpoints=views[scan])
+    np.testing.assert_array_equal(core.estimate(with_normals, k=15).normals, given.normals)
