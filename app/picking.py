@@ -1,19 +1,23 @@
-"""Clicking a point of the 3D view (a mixin of :class:`app.scene.CloudScene`, GUI thread)."""
+"""Clicking a point of the 3D view and highlighting it (a mixin of :class:`app.scene.CloudScene`, GUI thread)."""
 
 from __future__ import annotations
 
 import numpy as np
+import pyvista as pv
 
 from . import framing
+from .glyphs import FRAME_COLOURS
 
-__all__ = ["Picking"]
+__all__ = ["Picking", "HIGHLIGHT_COLOUR"]
+
+HIGHLIGHT_COLOUR = "#ffd92f"
 
 
 class Picking:
     """Display coordinates, the point under a click, and the click observers.
 
-    Expects ``plotter``, ``points``, ``drawn``, ``sprite_size``, ``_pick_callback``,
-    ``_press`` and ``_observers`` on the scene.
+    Expects ``plotter``, ``points``, ``drawn``, ``sprite_size``, ``spacing``, ``radius()``,
+    ``_pick_callback``, ``_press`` and ``_observers`` on the scene.
     """
 
     # -- picking ---------------------------------------------------------------------
@@ -67,3 +71,32 @@ class Picking:
             iren.add_observer("LeftButtonPressEvent", on_press),
             iren.add_observer("LeftButtonReleaseEvent", on_release),
         ]
+
+    # -- picked point ---------------------------------------------------------------
+    def set_highlight(self, index: int | None, neighbours: np.ndarray | None = None, frame: dict | None = None):
+        """Highlight a point's neighbourhood and draw its frame (``frame``: name -> unit vector)."""
+        for name in ("pick-neighbours", "pick-point", *(f"pick-frame-{k}" for k in FRAME_COLOURS)):
+            self.plotter.remove_actor(name, render=False)
+        if index is None or self.points is None or index >= len(self.points):
+            return
+        if neighbours is not None and len(neighbours):
+            nb = pv.PolyData(self.points[np.asarray(neighbours)])
+            self.plotter.add_mesh(
+                nb, color=HIGHLIGHT_COLOUR, point_size=self.sprite_size * 1.6, render_points_as_spheres=True,
+                name="pick-neighbours", pickable=False, reset_camera=False, render=False,
+            )
+        centre = self.points[index]
+        self.plotter.add_mesh(
+            pv.PolyData(centre[None, :]), color="#e7298a", point_size=max(self.sprite_size * 1.8, 10.0),
+            render_points_as_spheres=True, name="pick-point", pickable=False, reset_camera=False, render=False,
+        )
+        length = max(8.0 * self.spacing, 0.1 * self.radius())
+        for key, vec in (frame or {}).items():
+            vec = np.asarray(vec, dtype=float)
+            if not np.isfinite(vec).all():
+                continue
+            seg = pv.Line(centre - 0.5 * length * vec, centre + 0.5 * length * vec)
+            self.plotter.add_mesh(
+                seg, color=FRAME_COLOURS.get(key, "black"), line_width=5, name=f"pick-frame-{key}",
+                pickable=False, reset_camera=False, render=False, lighting=False,
+            )

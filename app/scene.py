@@ -24,7 +24,6 @@ __all__ = ["CloudScene", "GLYPH_COLOURS", "FRAME_COLOURS", "MULTI_SAMPLES", "mak
 FRAME_COLOURS = glyphs.FRAME_COLOURS
 GLYPH_COLOURS = {"e1": FRAME_COLOURS["e1"], "e2": FRAME_COLOURS["e2"], "normals": FRAME_COLOURS["n"]}
 NAN_COLOUR = "#b0b0b0"
-HIGHLIGHT_COLOUR = "#ffd92f"
 TEXT_COLOUR = "#222222"
 #: Samples per pixel of the 3D views' frame buffer: one. pyvista's default of 8 made every
 #: llvmpipe frame cost 1.7-1.9x (bunny and a 100k-sphere still frame of 1M, 760x850 and
@@ -273,35 +272,6 @@ class CloudScene(Picking):
         """A legend of the glyphs shown, in the lower-left corner (app/legend.py)."""
         shown = [kind for kind in legend.KINDS if f"glyph-{kind}" in self._glyph_names]
         self._legend_size = legend.update_legend(self.plotter, shown, GLYPH_COLOURS)
-
-    # -- picked point ---------------------------------------------------------------
-    def set_highlight(self, index: int | None, neighbours: np.ndarray | None = None, frame: dict | None = None):
-        """Highlight a point's neighbourhood and draw its frame (``frame``: name -> unit vector)."""
-        for name in ("pick-neighbours", "pick-point", *(f"pick-frame-{k}" for k in FRAME_COLOURS)):
-            self.plotter.remove_actor(name, render=False)
-        if index is None or self.points is None or index >= len(self.points):
-            return
-        if neighbours is not None and len(neighbours):
-            nb = pv.PolyData(self.points[np.asarray(neighbours)])
-            self.plotter.add_mesh(
-                nb, color=HIGHLIGHT_COLOUR, point_size=self.sprite_size * 1.6, render_points_as_spheres=True,
-                name="pick-neighbours", pickable=False, reset_camera=False, render=False,
-            )
-        centre = self.points[index]
-        self.plotter.add_mesh(
-            pv.PolyData(centre[None, :]), color="#e7298a", point_size=max(self.sprite_size * 1.8, 10.0),
-            render_points_as_spheres=True, name="pick-point", pickable=False, reset_camera=False, render=False,
-        )
-        length = max(8.0 * self.spacing, 0.1 * self.radius())
-        for key, vec in (frame or {}).items():
-            vec = np.asarray(vec, dtype=float)
-            if not np.isfinite(vec).all():
-                continue
-            seg = pv.Line(centre - 0.5 * length * vec, centre + 0.5 * length * vec)
-            self.plotter.add_mesh(
-                seg, color=FRAME_COLOURS.get(key, "black"), line_width=5, name=f"pick-frame-{key}",
-                pickable=False, reset_camera=False, render=False, lighting=False,
-            )
 
     def radius(self) -> float:
         """Half the diagonal of the cloud's bounding box."""
