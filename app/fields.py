@@ -15,7 +15,7 @@ from core.anisotropy import STRIPED
 from core.tuning import JET_DEGREES
 
 __all__ = ["FieldSpec", "FIELDS", "ALIASES", "resolve_field", "compute_fields", "robust_limits", "curvature_floor",
-           "is_signed", "colormap_for", "Colouring", "colouring"]
+           "is_signed", "colormap_for", "Colouring", "colouring", "RGB", "FILE_PREFIX", "is_file_field"]
 
 #: Colormaps: diverging centred on 0 for signed fields, sequential otherwise.
 DIVERGING = "RdBu_r"
@@ -25,6 +25,13 @@ ERROR = "magma"
 #: values lie on the minority side of 0: k1 on a convex shape (an ellipsoid: all > 0) gets
 #: a sequential map over its own range, k1 on a torus (29 % < 0... of k2) a diverging one.
 MINORITY_SIGN = 0.05
+#: Qualitative maps of the categorical fields (a file's small integers: scan index, class),
+#: one colour a value: the first up to 10 values, the second up to 20.
+CATEGORICAL = ("tab10", "tab20")
+#: The field that draws a file's own colours, and the prefix of its other fields
+#: ("file:intensity"); these come with the cloud (:mod:`app.file_fields`), not the estimate.
+RGB = "rgb"
+FILE_PREFIX = "file:"
 
 
 @dataclass(frozen=True)
@@ -38,6 +45,10 @@ class FieldSpec:
     or "threshold": a diverging map centred on ``threshold`` over [0, 2 x threshold] (the
     outlier score: inliers blue, the threshold white, outliers red). ``span``, where set,
     is the fixed range of a bounded field (the sampling anisotropy, [0, 1]).
+
+    A file's own per-point data (:mod:`app.file_fields`) have ``needs`` "file" and are never
+    drawn diverging; ``scale`` "categorical" draws small integers (a scan index) one colour a
+    value over ``span`` (lowest - 0.5, highest + 0.5), "rgb" the file's colours as they are.
     """
 
     name: str
@@ -83,7 +94,9 @@ ALIASES = {"h": "mean", "k": "gaussian", "si": "shape_index", "c": "curvedness"}
 
 
 def resolve_field(name: str) -> str:
-    """Canonical field name for ``name`` (case-insensitive, aliases allowed)."""
+    """Canonical field name for ``name`` (case-insensitive, aliases allowed). A file's
+    fields are known once it is read: "rgb" (its colours) and "file:NAME" (NAME as given)
+    are taken here and checked against the file then (:func:`app.file_fields.find`)."""
     key = str(name).strip()
     low = key.lower()
     if key in FIELDS:
@@ -92,8 +105,16 @@ def resolve_field(name: str) -> str:
         return low
     if low in ALIASES:
         return ALIASES[low]
+    if low == RGB or (low.startswith(FILE_PREFIX) and key[len(FILE_PREFIX):].strip()):
+        return RGB if low == RGB else FILE_PREFIX + key[len(FILE_PREFIX):].strip()
     valid = ", ".join(list(FIELDS) + [a.upper() if len(a) == 1 else a for a in ALIASES])
-    raise ValueError(f"field {name!r} is unknown; valid fields: {valid}")
+    raise ValueError(f"field {name!r} is unknown; valid fields: {valid}, and a file's own {RGB} (its colours) "
+                     f"and {FILE_PREFIX}NAME (its field NAME: intensity, scan, ...)")
+
+
+def is_file_field(name) -> bool:
+    """Whether ``name`` is a field of the file rather than of the estimate ("rgb", "file:...")."""
+    return isinstance(name, str) and (name == RGB or name.startswith(FILE_PREFIX))
 
 
 def _angle_deg(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -216,6 +237,8 @@ def is_signed(spec: FieldSpec, values: np.ndarray, floor: float = 0.0) -> bool:
     the data turn out to have negative values."""
     if spec.signed:
         return True
+    if spec.needs == "file":  # a file's intensity or height: its own range, whatever its sign
+        return False
     finite = np.asarray(values, dtype=float)
     finite = finite[np.isfinite(finite)]
     if not finite.size:
@@ -227,18 +250,27 @@ def is_signed(spec: FieldSpec, values: np.ndarray, floor: float = 0.0) -> bool:
 
 
 def colormap_for(spec: FieldSpec, signed: bool) -> str:
+    if spec.scale == "categorical":
+        return CATEGORICAL[bands(spec) > 10]
     if signed or spec.scale == "threshold":
         return DIVERGING
     return ERROR if spec.needs == "truth" else SEQUENTIAL
 
 
+def bands(spec: FieldSpec) -> int:
+    """Colours of a categorical field (one a value of its span), 0 for a continuous one."""
+    return int(round(spec.span[1] - spec.span[0])) if spec.scale == "categorical" else 0
+
+
 @dataclass(frozen=True)
 class Colouring:
-    """How a field is drawn: colour limits, colour map, logarithmic scale."""
+    """How a field is drawn: colour limits, colour map, logarithmic scale, and ``bands``
+    colours (a categorical field's, one a value) or 0 (a continuous map)."""
 
     clim: tuple
     cmap: str
     log: bool = False
+    bands: int = 0
 
 
 def colouring(spec: FieldSpec, values: np.ndarray, *, clip: float = 2.0, floor: float = 0.0,
@@ -258,7 +290,7 @@ def colouring(spec: FieldSpec, values: np.ndarray, *, clip: float = 2.0, floor: 
     if spec.scale == "threshold":
         return Colouring((0.0, 2.0 * spec.threshold), cmap)
     if spec.span is not None:
-        return Colouring(spec.span, cmap)
+        return Colouring(spec.span, cmap, bands=bands(spec))
     if log:
         positive = values[np.isfinite(values) & (values > 0)]
         if positive.size:

@@ -103,6 +103,7 @@ def _run(relay: _Relay, ticket: LoadTicket, make, *, file: bool = False) -> None
     try:
         source = make()
         source.geometry  # noqa: B018 - framing facts computed here, not on the GUI thread
+        source.field_specs, source.colours  # noqa: B018 - and the file's own fields' looks and colours
         prepare_sampling(source.n_points)  # and the colour limits' sample index
     except (core.io.CloudFileError, OSError, ValueError) as exc:
         text = str(exc)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import itertools
 import os
+import types
 import warnings
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -20,6 +21,7 @@ import core.shapes
 from core.degenerate import MAX_COORD
 from core.io.cloud import require_points
 
+from . import file_fields
 from .geometry import CloudGeometry
 from .text import display_name
 
@@ -49,6 +51,9 @@ class CloudSource:
     viewpoints : (N, 3) float array or None
         Where each point was seen from (an E57 file's scanner positions): the default
         orientation faces them (:attr:`core.io.Cloud.viewpoints`).
+    fields : mapping of str -> (N,) array, read-only
+        The file's own per-point data the viewer can draw (:func:`app.file_fields.keep`:
+        numeric ones; colour components, intensity, scan index, ...), in the points' order.
     """
 
     name: str
@@ -59,11 +64,13 @@ class CloudSource:
     uid: int = field(default_factory=lambda: next(_uids))
     notes: tuple = ()
     viewpoints: np.ndarray | None = None
+    fields: dict = field(default_factory=dict)
 
     def __post_init__(self):
-        for arr in (self.points, self.normals, self.viewpoints):
+        for arr in (self.points, self.normals, self.viewpoints, *self.fields.values()):
             if arr is not None:
                 arr.flags.writeable = False
+        object.__setattr__(self, "fields", types.MappingProxyType(dict(self.fields)))
 
     @property
     def n_points(self) -> int:
@@ -79,11 +86,25 @@ class CloudSource:
         computes it on its thread, so the GUI thread only reads it."""
         return CloudGeometry.of(self.points)
 
+    @cached_property
+    def field_specs(self) -> dict:
+        """Field name ("rgb", "file:NAME") -> :class:`app.fields.FieldSpec` of the file's own
+        fields (:func:`app.file_fields.specs_of`; the loader computes it on its thread)."""
+        return file_fields.specs_of(self.fields)
+
+    @cached_property
+    def colours(self) -> np.ndarray | None:
+        """(N, 3) uint8 colours of the file (:func:`app.file_fields.colours_of`), or None."""
+        rgb = file_fields.colours_of(self.fields)
+        if rgb is not None:
+            rgb.flags.writeable = False
+        return rgb
+
 
 def load_file(path) -> CloudSource:
     """Read a cloud with :func:`core.io.read_cloud`, without its rows with NaN/inf coordinates
-    (as CloudCompare does); what the reader warns about (dropped rows, columns not taken for
-    normals, ...) becomes the source's ``notes``.
+    (as CloudCompare does, and from its fields as well); what the reader warns about (dropped
+    rows, columns not taken for normals, ...) becomes the source's ``notes``.
 
     The reader's warnings are caught with :func:`warnings.catch_warnings`, which swaps the
     process-wide warning state while the file is read (Python < 3.14 has no per-thread one).
@@ -110,7 +131,7 @@ def load_file(path) -> CloudSource:
     views = getattr(cloud, "viewpoints", None)
     views = None if views is None else np.array(views, dtype=float, copy=True)
     return CloudSource(name=display_name(path), points=points, normals=normals, path=path, notes=notes,
-                       viewpoints=views)
+                       viewpoints=views, fields=file_fields.keep(cloud.fields, len(points)))
 
 
 def _refuse_undrawable(path, points) -> None:
