@@ -1,4 +1,5 @@
-"""The glyph legend of a 3D view: one coloured row per glyph kind shown (GUI thread, VTK calls).
+"""The colour bar of a 3D view, and its glyph legend: one coloured row per glyph kind shown
+(GUI thread, VTK calls).
 
 Lower-left, beside the colour bar when the view is wide enough for both; in a narrower view
 (the compare view, a window with its docks) above the bar and its title, so it is never
@@ -7,10 +8,13 @@ drawn over the bar or its tick labels (saved figures carry it).
 
 from __future__ import annotations
 
-from . import glyphs
-from .framing import BAR_BOTTOM, BAR_HEIGHT, BAR_LEFT, BAR_MAX_PX
+import numpy as np
+import pyvista as pv
 
-__all__ = ["update_legend", "place_legend", "KINDS"]
+from . import glyphs
+from .framing import BAR_BOTTOM, BAR_HEIGHT, BAR_LEFT, BAR_MAX_PX, BAR_WIDTH
+
+__all__ = ["update_legend", "place_legend", "KINDS", "add_bar", "label_categories"]
 
 #: Glyph kinds, bottom row first.
 KINDS = ("normals", "e2", "e1")
@@ -57,3 +61,25 @@ def place_legend(plotter) -> tuple | None:
     for row, actor in enumerate(actors):
         actor.SetPosition(LEFT, (bottom + ROW_PX * row) / h)
     return tuple(window.GetSize())
+
+
+def add_bar(plotter, lut, title: str, colour):
+    """The horizontal colour bar of ``lut`` along the bottom of the view (once per scene)."""
+    bar = plotter.add_scalar_bar(
+        title=title or " ", lookup_table=lut, vertical=False, position_x=BAR_LEFT, position_y=BAR_BOTTOM,
+        width=BAR_WIDTH, height=BAR_HEIGHT, title_font_size=14, label_font_size=12, n_labels=3, fmt="%.3g",
+        color=colour, render=False,
+    )
+    bar.SetMaximumHeightInPixels(90)
+    # tick labels below the bar, the title above it: the title no longer sits on the middle tick label
+    bar.SetTextPositionToPrecedeScalarBar()
+    return bar
+
+
+def label_categories(bar, clim, bands: int) -> None:
+    """Tick labels at the integers of a categorical field (``bands`` of them over ``clim``,
+    labelled 10 at most), or the bar's own three for a continuous one."""
+    bar.SetUseCustomLabels(bool(bands))
+    bar.SetLabelFormat("%.0f" if bands else "%.3g")
+    if bands:
+        bar.SetCustomLabels(pv.convert_array(np.arange(clim[0] + 0.5, clim[1], -(-bands // 10), dtype=float)))

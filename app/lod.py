@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pyvista as pv
 
-__all__ = ["LevelOfDetail", "LOD_POINTS", "STILL_POINTS"]
+__all__ = ["LevelOfDetail", "LOD_POINTS", "STILL_POINTS", "paint"]
 
 #: Points drawn while the camera moves. Measured with llvmpipe on this 2-core VM under
 #: a load average of 8 (1100x850 view): 150k flat points 0.72 s per frame, 28k 0.15 s,
@@ -22,6 +22,27 @@ LOD_POINTS = 60_000
 #: a frame costs ~45 ms plus ~0.45 us a sphere (1M: 0.49 s, 200k: 0.19 s), so 100k keeps a
 #: still frame, and with it any GUI-thread step that renders, near the 0.1 s target.
 STILL_POINTS = 100_000
+
+
+def paint(mesh: pv.PolyData, mapper, *, values: np.ndarray | None = None, rgb: np.ndarray | None = None) -> None:
+    """Colour ``mesh`` (drawn by the pyvista ``mapper``): by ``rgb``, (n, 3) uint8 colours
+    drawn as they are (array "rgb"), or else by ``values`` through the lookup table (array
+    "values"; None: NaN, grey)."""
+    if rgb is not None:
+        name, other, array = "rgb", "values", np.asarray(rgb, dtype=np.uint8)
+    else:
+        name, other = "values", "rgb"
+        array = np.full(mesh.n_points, np.nan) if values is None else values
+    mesh.point_data[name] = array
+    if other in mesh.point_data:
+        mesh.point_data.remove(other)
+    mesh.set_active_scalars(name)
+    if mapper.GetArrayName() != name:
+        mapper.set_active_scalars(name)  # and in the mapper's active-scalars filter (pyvista's)
+    if rgb is not None:
+        mapper.SetColorModeToDirectScalars()
+    else:
+        mapper.SetColorModeToMapScalars()
 
 
 class LevelOfDetail:
@@ -77,9 +98,13 @@ class LevelOfDetail:
     def set_values(self, values: np.ndarray | None) -> None:
         """Values of the whole cloud (None: not estimated yet, drawn grey)."""
         if self._mesh is not None:
-            self._mesh.point_data["values"] = (np.full(len(self.index), np.nan) if values is None
-                                               else np.asarray(values, dtype=float)[self.index])
-            self._mesh.set_active_scalars("values")
+            paint(self._mesh, self._actor.mapper,
+                  values=None if values is None else np.asarray(values, dtype=float)[self.index])
+
+    def set_colours(self, rgb: np.ndarray) -> None:
+        """Colours of the whole cloud ((N, 3) uint8, drawn as they are)."""
+        if self._mesh is not None:
+            paint(self._mesh, self._actor.mapper, rgb=rgb[self.index])
 
     def set_points(self, points: np.ndarray) -> None:
         if self._mesh is not None:

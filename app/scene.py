@@ -14,7 +14,7 @@ from pyvistaqt import QtInteractor
 from . import framing, glyphs, legend
 from .detail import VisibleDetail
 from .geometry import CloudGeometry
-from .lod import LevelOfDetail
+from .lod import LevelOfDetail, paint
 from .picking import Picking
 from .theme import LIGHT, Theme
 
@@ -62,6 +62,8 @@ class CloudScene(Picking):
         self.drawn: np.ndarray | None = None  # indices of the points a still frame draws
         self._visible = 0  # of them, the points in view when they were chosen
         self._values: np.ndarray | None = None  # the colours' values on every point
+        self._rgb: np.ndarray | None = None  # or the file's own colours on every point, (N, 3) uint8
+        self._note = None  # what stands for the colour bar when the file's colours are drawn
         self.spacing = 1.0
         self.point_size = 5.0  # the user's "Point size": the sprite size at the default density
         self.sprite_size = 5.0  # what is drawn: follows the point spacing on screen (app/framing.py)
@@ -117,6 +119,7 @@ class CloudScene(Picking):
         moved = not same or points is not self.points  # a new result on the same array: positions kept
         self.geometry, self.points = geometry, points
         self._values = None if values is None else np.asarray(values, dtype=float)
+        self._rgb = None
         if same:
             self._draw(self.drawn, self._visible, moved=moved)
         else:
@@ -146,15 +149,14 @@ class CloudScene(Picking):
         """Draw the points ``drawn`` (indices) of the ``visible`` in view; sprites grow as the
         drawn points get sparser than the cloud (spacing ~ 1 / sqrt(density)). ``moved``
         False: the drawn points' positions are those on screen (only the values change)."""
-        values = np.full(len(drawn), np.nan) if self._values is None else self._values[drawn]
         if self._cloud.n_points == len(drawn):
             if moved or drawn is not self.drawn:
                 self._cloud.points = self.points[drawn]
         else:
             self._cloud = pv.PolyData(self.points[drawn])
             self._actor.mapper.SetInputData(self._cloud)
-        self._cloud.point_data["values"] = values
-        self._cloud.set_active_scalars("values")
+        paint(self._cloud, self._actor.mapper, values=None if self._values is None else self._values[drawn],
+              rgb=None if self._rgb is None else self._rgb[drawn])
         self.drawn, self._visible = drawn, visible
         self._sprite_spacing = self.geometry.spacing * np.sqrt(max(visible, 1) / max(len(drawn), 1))
 
@@ -166,29 +168,25 @@ class CloudScene(Picking):
             self.plotter.render()
 
     def _add_bar(self) -> None:  # once per scene
-        if self._bar is not None:
-            return
-        self._bar = self.plotter.add_scalar_bar(
-            title=self._bar_title or " ", lookup_table=self._lut, vertical=False,
-            position_x=framing.BAR_LEFT, position_y=framing.BAR_BOTTOM, width=framing.BAR_WIDTH,
-            height=framing.BAR_HEIGHT, title_font_size=14, label_font_size=12, n_labels=3,
-            fmt="%.3g", color=self.theme.text, render=False,
-        )
-        self._bar.SetMaximumHeightInPixels(90)
-        # tick labels below the bar, the title above it: the title no longer sits on the middle tick label
-        self._bar.SetTextPositionToPrecedeScalarBar()
+        if self._bar is None:
+            self._bar = legend.add_bar(self.plotter, self._lut, self._bar_title, self.theme.text)
 
-    def set_values(self, values: np.ndarray, *, title: str, cmap: str, clim: tuple[float, float], log: bool = False):
-        """Colour the cloud by ``values`` (NaN drawn in a neutral grey), on a log scale if ``log``."""
+    def set_values(self, values: np.ndarray, *, title: str, cmap: str, clim: tuple[float, float], log: bool = False,
+                   bands: int = 0):
+        """Colour the cloud by ``values`` (NaN drawn in a neutral grey), on a log scale if ``log``;
+        ``bands`` colours, one an integer, with a label each (a categorical field), or a smooth map."""
         if self._cloud is None:
             return
-        self._values = np.asarray(values, dtype=float)
-        self._cloud.point_data["values"] = self._values[self.drawn]
-        self._cloud.set_active_scalars("values")
+        self._values, self._rgb = np.asarray(values, dtype=float), None
+        paint(self._cloud, self._actor.mapper, values=self._values[self.drawn])
         self.lod.set_values(values)
-        if self._lut.cmap is None or getattr(self._lut.cmap, "name", None) != cmap:
+        if (self._lut.cmap is None or getattr(self._lut.cmap, "name", None) != cmap
+                or self._lut.n_values != (bands or 256)):
+            self._lut.n_values = bands or 256  # (before the map, which is sampled at that many values)
             self._lut.cmap = cmap
             self._lut.nan_color = NAN_COLOUR
+        if self._bar is not None:
+            legend.label_categories(self._bar, clim, bands)
         log = bool(log) and clim[0] > 0
         if not log:  # the scale before the range, or the range before the log scale: never a log
             self._lut.log_scale = False  # table over a range with 0 or below (a VTK warning)
@@ -197,11 +195,33 @@ class CloudScene(Picking):
         self._bar_title = title
         self.show_bar(True)
 
+    def set_colours(self, rgb: np.ndarray, *, note: str) -> None:
+        """Draw the cloud in its own colours ((N, 3) uint8, as they are: no colour map);
+        ``note`` (what the colours are) stands where the colour bar would."""
+        if self._cloud is None:
+            return
+        self._values, self._rgb = None, np.asarray(rgb, dtype=np.uint8)
+        paint(self._cloud, self._actor.mapper, rgb=self._rgb[self.drawn])
+        self.lod.set_colours(self._rgb)
+        self._bar_title = note
+        self.show_bar(True)
+
     def show_bar(self, on: bool) -> None:
-        """Show or hide the colour bar (hidden while a new cloud has no values yet)."""
+        """Show or hide the colour bar (hidden while a new cloud has no values yet), or its
+        note when the cloud is drawn in its own colours."""
+        rgb = self._rgb is not None
         if self._bar is not None:
             self._bar.SetTitle(self._bar_title or " ")
-            self._bar.SetVisibility(bool(on))
+            self._bar.SetVisibility(bool(on) and not rgb)
+        if on and rgb:
+            self._note = self.plotter.add_text(self._bar_title, position=(framing.BAR_LEFT + 0.5 * framing.BAR_WIDTH,
+                                                                          framing.BAR_BOTTOM), viewport=True,
+                                               font_size=7, color=self.theme.text, name="colour-note", render=False)
+            self._note.prop.font_size = 14  # the bar's title size, centred under the view as the bar's is
+            self._note.prop.SetJustificationToCentered()
+        elif self._note is not None:
+            self.plotter.remove_actor(self._note, render=False)
+            self._note = None
 
     def set_point_size(self, size: float):
         """The user's point size: the sprite size at the default density, a factor otherwise."""
@@ -292,8 +312,9 @@ class CloudScene(Picking):
         """Background and text colours (light or dark palette)."""
         self.theme = theme
         self.plotter.set_background(theme.background)
-        if self._title_actor is not None:
-            self._title_actor.prop.color = theme.text
+        for text in (self._title_actor, self._note):
+            if text is not None:
+                text.prop.color = theme.text
         if self._bar is not None:
             for prop in (self._bar.GetTitleTextProperty(), self._bar.GetLabelTextProperty()):
                 prop.SetColor(pv.Color(theme.text).float_rgb)
@@ -364,6 +385,6 @@ class CloudScene(Picking):
         self.detail.close()
         self._pick_callback = None
         self._cloud = None
-        self._title_actor = None
+        self._title_actor = self._note = None
         self._actor = None
         self._bar = None
