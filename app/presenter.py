@@ -12,10 +12,14 @@ import numpy as np
 
 from .captions import (degenerate, method_title, orientation_text, preview_line, result_parameters, status_line,
                        summary_line, title, uses_passes)
-from .fields import FIELDS, colouring, curvature_floor
+from . import file_fields
+from .fields import FIELDS, FILE_PREFIX, Colouring, colouring, curvature_floor, is_file_field
 
 __all__ = ["ResultPresenter", "method_title", "uses_passes", "summary_line", "status_line", "preview_line",
-           "point_info", "result_parameters", "orientation_text"]
+           "point_info", "result_parameters", "orientation_text", "LUMA"]
+
+#: Weights of the luminance of an sRGB colour (Rec. 709), which the histogram shows of a file's colours.
+LUMA = np.array([0.2126, 0.7152, 0.0722])
 
 
 class ResultPresenter:
@@ -65,12 +69,57 @@ class ResultPresenter:
         self.histogram.clear()
         self.inspector.clear()
 
-    def _look(self, name: str, values):
+    def _look(self, name: str, values, spec=None):
         """Colour limits and map of field ``name`` over ``values``, from the state's settings."""
         s = self.state
         manual = None if (s.clim_auto or s.clim is None) else s.clim
-        return colouring(FIELDS[name], values, clip=s.clip_percent, floor=curvature_floor(name, self.scene.radius()),
-                         clim=manual)
+        return colouring(spec or FIELDS[name], values, clip=s.clip_percent,
+                         floor=curvature_floor(name, self.scene.radius()), clim=manual)
+
+    def show_source(self, source) -> None:
+        """A new cloud is on screen, not estimated yet: the Field box lists its file's own
+        fields, and the one chosen, if it is one of them, is drawn now (those do not wait for
+        the estimate). A command line's "file:Intensity" becomes the file's "file:intensity"."""
+        self.field_panel.set_file_fields({name: spec.title for name, spec in source.field_specs.items()})
+        name = file_fields.find(self.state.field, source.field_specs) if is_file_field(self.state.field) else None
+        if name is not None and name != self.state.field:
+            self.state.set(field=name)
+        self._colour_source()
+
+    def _colour_source(self) -> None:
+        """No estimate on screen: a file's own field is drawn from the file, any other waits
+        for the estimate (the cloud grey, no colour bar)."""
+        source = self.state.source
+        if source is None:
+            return
+        if self.state.field in source.field_specs:
+            self._colour_file(self.state.field, source, gen=None)
+        elif self.shown:  # a file field was drawn
+            self.scene.set_cloud(source.points, geometry=source.geometry)
+            self.scene.show_bar(False)
+            self.field_panel.show_limits(*self.shown["clim"])  # (the limit boxes editable again)
+            self.histogram.clear()
+            self.shown = {}
+
+    def _colour_file(self, name: str, source, *, gen) -> None:
+        """Draw the file's own field ``name`` in every view showing the cloud: its colours as
+        they are (the histogram: their luminance), or its values. The same in every view:
+        they belong to the points (a noisy copy keeps their order), not to an estimate."""
+        spec = source.field_specs[name]
+        scenes = [self.scene] if self.output is None or self.preview is not None else [p[0] for p in self._pairs()]
+        if spec.scale == "rgb":
+            for scene in scenes:
+                scene.set_colours(source.colours, note=spec.label)
+            values, look, label = source.colours @ LUMA, Colouring((0.0, 255.0), "gray"), "Luminance of the file colour"
+        else:
+            values, label = source.fields[name[len(FILE_PREFIX):]], spec.label
+            look = self._look(name, values, spec)
+            for scene in scenes:
+                scene.set_values(values, title=spec.title, cmap=look.cmap, clim=look.clim, log=look.log,
+                                 bands=look.bands)
+        self.field_panel.show_limits(*look.clim, editable=spec.scale != "rgb")
+        self.histogram.set_data(values, clim=look.clim, cmap=look.cmap, label=label)
+        self.shown = {"field": name, "clim": look.clim, "cmap": look.cmap, "gen": gen, "file": True}
 
     def show_preview(self, out) -> None:
         """Colour the cloud by a preview (:mod:`app.preview`); glyphs and pick wait for the full result."""
@@ -86,8 +135,9 @@ class ResultPresenter:
         follows as if H had been chosen in the Field box (which thus names what is drawn),
         with a notice why. The recolour that change asks for is this one (no loop)."""
         name = self.state.field
-        if name in out.fields or self._falling_back:
-            return name if name in out.fields else "mean"
+        drawable = name in out.fields or name in out.request.source.field_specs
+        if drawable or self._falling_back:
+            return name if drawable else "mean"
         self._falling_back = True
         try:
             self.state.set(field="mean", clim_auto=True)
@@ -101,6 +151,10 @@ class ResultPresenter:
         """The preview's colours, colour bar, limit boxes and histogram for the current field."""
         out = self.preview
         name = self._drawable_field(out)
+        if is_file_field(name):
+            self._colour_file(name, out.request.source, gen=out.gen)
+            self.shown["preview"] = True
+            return
         spec = FIELDS[name]
         values = out.fields[name]
         look = self._look(name, values)
@@ -122,6 +176,7 @@ class ResultPresenter:
             self.clear()
             self.scene.set_cloud(out.request.source.points, geometry=out.request.source.geometry)
             self.scene.lod.hold(False)
+            self._colour_source()
         return True
 
     def show(self, out) -> None:
@@ -147,9 +202,13 @@ class ResultPresenter:
             return
         out = self.output
         if out is None:
+            self._colour_source()
             return
-        self.field_panel.set_available(out.fields)
+        self.field_panel.set_available(set(out.fields) | set(out.request.source.field_specs))
         name = self._drawable_field(out)
+        if is_file_field(name):
+            self._colour_file(name, out.request.source, gen=out.gen)
+            return
         spec = FIELDS[name]
         pairs = self._pairs()
         # border points (scan rims, holes) are drawn grey and kept out of the colour limits
@@ -197,9 +256,12 @@ class ResultPresenter:
 def _unavailable_text(name: str, source) -> str:
     """Why field ``name`` is not drawn for ``source``, and what is."""
     spec = FIELDS.get(name)
+    own = ", ".join(getattr(source, "field_specs", None) or ()) or "none"
     why = {"truth": "it has no ground truth (only the synthetic shapes have one)",
            "reference": "it has no reference normals (the file has none)"}.get(getattr(spec, "needs", None),
                                                                             "the result has no such field")
+    if is_file_field(name):
+        why = f"the file has no such field (its own: {own})"
     label = spec.label if spec is not None else repr(name)
     name = getattr(source, "name", "this cloud")
     return f"{label} is not available for {name}: {why}; showing {FIELDS['mean'].label}."
@@ -245,6 +307,8 @@ def point_info(out, index: int) -> dict:
     if sample is not None:
         k1, k2 = float(sample.k1[index]), float(sample.k2[index])
         info.update(true_k1=k1, true_k2=k2, true_mean=0.5 * (k1 + k2), true_gaussian=k1 * k2)
+    if out.request.source.fields:
+        info["file"] = file_fields.point_values(out.request.source.fields, index)
     return info
 
 

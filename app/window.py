@@ -217,6 +217,7 @@ class MainWindow(WindowActions, WindowStatus, QMainWindow):
         self.status_label.setText(f"{source.name}: {source.n_points:,} points — estimating…")
         self.normals_check.setEnabled(source.normals is not None)  # nothing to use otherwise
         self.summary_label.setText("")
+        self.presenter.show_source(source)  # the file's own fields: listed, and drawn if chosen
         self.render_all()
 
     def _eye_dome(self) -> None:

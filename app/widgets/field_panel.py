@@ -1,5 +1,6 @@
 """Displayed field, colour limits and point size (bound to ``state.field``,
-``clim_auto``, ``clim``, ``clip_percent``, ``point_size``)."""
+``clim_auto``, ``clim``, ``clip_percent``, ``point_size``). The Field box lists the
+estimate's fields, then the loaded file's own (its colours, intensity, ...)."""
 
 from __future__ import annotations
 
@@ -122,7 +123,7 @@ class FieldPanel(QWidget):
             self.combo.setCurrentIndex(max(self.combo.findData(s.field), 0))
             self.auto.setChecked(s.clim_auto)
             self.clip.setValue(s.clip_percent)
-            self.clip.setEnabled(s.clim_auto)
+            self.clip.setEnabled(s.clim_auto and self.auto.isEnabled())
             self.point_size.setValue(s.point_size)
         if s.clim is not None:
             self.show_limits(*s.clim)
@@ -132,8 +133,9 @@ class FieldPanel(QWidget):
         if name in ("field", "clim_auto", "clip_percent", "point_size", "clim"):
             self._sync_all()
 
-    def show_limits(self, lo: float, hi: float) -> None:
-        """Display the limits in use (called by the window after a recolour)."""
+    def show_limits(self, lo: float, hi: float, *, editable: bool = True) -> None:
+        """Display the limits in use (called by the window after a recolour); not ``editable``
+        where no limits apply (a file's own colours, drawn as they are)."""
         span = abs(hi - lo) or 1.0
         step = 10.0 ** (math.floor(math.log10(span)) - 1) if math.isfinite(span) else 1.0
         self._limits = (float(lo), float(hi))
@@ -141,12 +143,28 @@ class FieldPanel(QWidget):
             for box, v in ((self.lo, lo), (self.hi, hi)):
                 box.setSingleStep(step)
                 box.setValue(v)
+        for widget in (self.auto, self.lo, self.hi):
+            widget.setEnabled(editable)
+        self.clip.setEnabled(editable and self._state.clim_auto)
+
+    def set_file_fields(self, titles: dict) -> None:
+        """List the loaded file's own fields (name -> combo text) after the estimate's, behind
+        a separator, instead of the previous file's. The box keeps naming the state's field."""
+        with blocked(self.combo):
+            for row in reversed(range(len(FIELDS), self.combo.count())):
+                self.combo.removeItem(row)
+            if titles:
+                self.combo.insertSeparator(self.combo.count())
+            for name, title in titles.items():
+                self.combo.addItem(title, name)
+        self._sync_all()
 
     def set_available(self, names) -> None:
         """Grey out fields the current cloud cannot provide (e.g. errors without truth)."""
         for row in range(self.combo.count()):
             item = self._items.item(row)
-            item.setEnabled(self.combo.itemData(row) in names)
+            if self.combo.itemData(row) is not None:  # (not the separator)
+                item.setEnabled(self.combo.itemData(row) in names)
         if self.combo.currentData() not in names:
             self.combo.setToolTip("This field is not available for the current cloud")
         else:

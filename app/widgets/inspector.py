@@ -70,9 +70,13 @@ class PointInspector(QWidget):
         self.values: dict[str, str] = {}
 
     def show_point(self, info: dict) -> None:
-        """Fill the table from ``info`` (key -> number, vector or bool; missing keys are skipped)."""
+        """Fill the table from ``info`` (key -> number, vector or bool; missing keys are skipped),
+        then a row for each of ``info["file"]`` (label -> value: the file's own fields)."""
         rows = [(label, _fmt(info[key])) for key, label in ROWS if key in info]
         self.values = {key: _fmt(info[key]) for key, _ in ROWS if key in info}
+        extra = [(label, _fmt(value)) for label, value in info.get("file", {}).items()]
+        rows += extra
+        self.values.update(extra)
         self.table.setRowCount(len(rows))
         for r, (label, text) in enumerate(rows):
             self.table.setItem(r, 0, QTableWidgetItem(label))
