@@ -20,7 +20,8 @@ import core.shapes
 from core.tuning import AUTO_PASSES
 
 from . import DEFAULT_CLOUD
-from .fields import resolve_field
+from . import file_fields
+from .fields import is_file_field, resolve_field
 from .hard_exit import end_now, exit_at_once
 from .jobs import live_job_threads
 from .persist import restore_layout, restore_state
@@ -64,7 +65,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "write --viewpoint=-1,0,2 when X is negative)")
     p.add_argument("--noise", type=float, metavar="PCT", help="Gaussian noise, sigma in %% of the mean spacing")
     p.add_argument("--field", metavar="NAME", help="displayed field: mean (H), gaussian (K), k1, k2, shape_index, "
-                   "curvedness, k_point, degree_point, normal_dev, err_mean, err_gaussian, ...")
+                   "curvedness, k_point, degree_point, normal_dev, err_mean, err_gaussian, ...; or the file's own: "
+                   "rgb (its colours), file:NAME (its field NAME: file:intensity, file:scan, ...)")
     p.add_argument("--compare", metavar="METHOD", help="show a second method side by side")
     p.add_argument("--glyphs", metavar="LIST", help="comma-separated glyphs to show: e1,e2,normals")
     p.add_argument("--pick", type=int, metavar="INDEX", help="inspect this point (panel, neighbourhood, frame)")
@@ -179,6 +181,14 @@ def pick_error(pick: int | None, out) -> str | None:
             f"(it has {n:,} points)")
 
 
+def field_error(field: str, source) -> str | None:
+    """Why ``--field`` cannot be shown for ``source``: a field of the file that it has not
+    (the file's fields are known once it is read), or None."""
+    if not is_file_field(field) or file_fields.find(field, source.field_specs) is not None:
+        return None
+    return file_fields.unknown_text(field, source.field_specs, source.name)
+
+
 def _quit_on_sigint(app: QApplication, outcome: dict) -> QTimer:
     """Ctrl-C quits the event loop with exit status 130 (Qt's loop never returns to Python
     otherwise, so a Python signal handler would not run: a 200 ms timer gives it the chance)."""
@@ -201,6 +211,8 @@ class _Screenshot:
         self.window, self.outcome, self.pick = window, outcome, pick
         self.target, self.whole = Path(args.screenshot), not args.view_only
         self.done = False
+        self.field = window.state.field  # as given (the state falls back to H where it is not drawn)
+        window.loader.loaded.connect(self.on_loaded)
         window.result_shown.connect(self.on_result)
         window.estimator.failed.connect(lambda msg: self.fail(f"the estimate failed: {msg}"))
         # a warning (a field not available, what a reader skipped) reaches stderr through the log
@@ -214,6 +226,13 @@ class _Screenshot:
             print(f"darboux: {message}", file=sys.stderr)
             self.outcome["code"] = code
             self.window.close()
+
+    def on_loaded(self, _ticket, source) -> None:
+        """A file field the file has not is refused as an unknown field is (argparse's status 2),
+        once the file is read and before its estimate."""
+        problem = field_error(self.field, source)
+        if problem:
+            self.fail(f"error: {problem}", code=2)
 
     def on_result(self, out) -> None:
         problem = pick_error(self.pick, out)
