@@ -137,8 +137,9 @@ class Histogram(FigureCanvasQTAgg):
         self._message.set_text(message)
         self._message.set_visible(bool(message))
 
-    def set_data(self, values: np.ndarray, *, clim: tuple[float, float], cmap: str, label: str) -> None:
-        """Show the distribution of ``values`` with the colour limits ``clim`` marked.
+    def set_data(self, values: np.ndarray, *, clim: tuple[float, float], cmap: str, label: str, bands: int = 0) -> None:
+        """Show the distribution of ``values`` with the colour limits ``clim`` marked, coloured
+        by ``cmap`` (sampled at ``bands`` colours for a categorical field, as the cloud's are).
 
         The bars, limit lines and ticks are made once and updated in place (``ax.clear()``
         and new bars cost the GUI thread ~0.1 s a change; updating them a few ms)."""
@@ -160,7 +161,8 @@ class Histogram(FigureCanvasQTAgg):
         if values.size > SAMPLE:  # counted on a fixed random subset: scaled to the whole
             counts = np.rint(counts * (n_shown / shown.size)).astype(np.int64)
         centres = 0.5 * (edges[:-1] + edges[1:])
-        colours = matplotlib.colormaps[cmap](np.clip((centres - lo) / (hi - lo), 0.0, 1.0))
+        colormap = matplotlib.colormaps[cmap].resampled(bands) if bands else matplotlib.colormaps[cmap]
+        colours = colormap(np.clip((centres - lo) / (hi - lo), 0.0, 1.0))
         width = edges[1] - edges[0]
         for bar, x0, count, colour in zip(self._bars, edges[:-1], counts, colours):
             bar.set_bounds(x0, 0.0, width, count)
