@@ -118,7 +118,7 @@ class ResultPresenter:
                 scene.set_values(values, title=spec.title, cmap=look.cmap, clim=look.clim, log=look.log,
                                  bands=look.bands)
         self.field_panel.show_limits(*look.clim, editable=spec.scale != "rgb")
-        self.histogram.set_data(values, clim=look.clim, cmap=look.cmap, label=label)
+        self.histogram.set_data(values, clim=look.clim, cmap=look.cmap, label=label, bands=look.bands)
         self.shown = {"field": name, "clim": look.clim, "cmap": look.cmap, "gen": gen, "file": True}
 
     def show_preview(self, out) -> None:
@@ -261,8 +261,8 @@ def _unavailable_text(name: str, source) -> str:
            "reference": "it has no reference normals (the file has none)"}.get(getattr(spec, "needs", None),
                                                                             "the result has no such field")
     if is_file_field(name):
-        why = f"the file has no such field (its own: {own})"
-    label = spec.label if spec is not None else repr(name)
+        why = f"it has no such field of its own (its own: {own})"
+    label = spec.label if spec is not None else file_fields.RGB_LABEL if name == "rgb" else repr(name)
     name = getattr(source, "name", "this cloud")
     return f"{label} is not available for {name}: {why}; showing {FIELDS['mean'].label}."
 
