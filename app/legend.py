@@ -14,7 +14,7 @@ import pyvista as pv
 from . import glyphs
 from .framing import BAR_BOTTOM, BAR_HEIGHT, BAR_LEFT, BAR_MAX_PX, BAR_WIDTH
 
-__all__ = ["update_legend", "place_legend", "KINDS", "add_bar", "label_categories"]
+__all__ = ["update_legend", "place_legend", "KINDS", "add_bar", "label_categories", "band_map"]
 
 #: Glyph kinds, bottom row first.
 KINDS = ("normals", "e2", "e1")
@@ -22,6 +22,16 @@ KINDS = ("normals", "e2", "e1")
 LEFT = 0.012
 #: Pixels: a row, the room the bar's title takes above it, half a tick label left of the bar.
 ROW_PX, TITLE_PX, TICK_PX = 20.0, 26.0, 30.0
+
+
+def band_map(cmap: str, bands: int):
+    """A categorical field's colour map: the first ``bands`` colours of the qualitative map
+    ``cmap`` (tab10, tab20), one a value, for the cloud and its histogram alike. Sampled over
+    its whole range instead, two scans took the map's two ends, blue and cyan."""
+    import matplotlib
+    from matplotlib.colors import ListedColormap
+
+    return ListedColormap(list(matplotlib.colormaps[cmap].colors[:bands]), name=f"{cmap}_{bands}")
 
 
 def update_legend(plotter, shown, colours: dict) -> tuple | None:

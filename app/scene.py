@@ -180,10 +180,11 @@ class CloudScene(Picking):
         self._values, self._rgb = np.asarray(values, dtype=float), None
         paint(self._cloud, self._actor.mapper, values=self._values[self.drawn])
         self.lod.set_values(values)
-        if (self._lut.cmap is None or getattr(self._lut.cmap, "name", None) != cmap
+        want = legend.band_map(cmap, bands) if bands else cmap
+        if (self._lut.cmap is None or getattr(self._lut.cmap, "name", None) != getattr(want, "name", want)
                 or self._lut.n_values != (bands or 256)):
             self._lut.n_values = bands or 256  # (before the map, which is sampled at that many values)
-            self._lut.cmap = cmap
+            self._lut.cmap = want
             self._lut.nan_color = NAN_COLOUR
         if self._bar is not None:
             legend.label_categories(self._bar, clim, bands)

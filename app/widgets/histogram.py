@@ -10,6 +10,7 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
 from ..fields import subsample
+from ..legend import band_map
 
 
 #: Above this many values the bars are counted on a fixed random subset and scaled (the
@@ -161,7 +162,7 @@ class Histogram(FigureCanvasQTAgg):
         if values.size > SAMPLE:  # counted on a fixed random subset: scaled to the whole
             counts = np.rint(counts * (n_shown / shown.size)).astype(np.int64)
         centres = 0.5 * (edges[:-1] + edges[1:])
-        colormap = matplotlib.colormaps[cmap].resampled(bands) if bands else matplotlib.colormaps[cmap]
+        colormap = band_map(cmap, bands) if bands else matplotlib.colormaps[cmap]
         colours = colormap(np.clip((centres - lo) / (hi - lo), 0.0, 1.0))
         width = edges[1] - edges[0]
         for bar, x0, count, colour in zip(self._bars, edges[:-1], counts, colours):

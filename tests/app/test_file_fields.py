@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import matplotlib
 import numpy as np
 import pytest
 import vtk
@@ -198,10 +199,12 @@ def test_scan_index_is_drawn_one_colour_a_scan(make_window, qtbot, tmp_path):
     bar = window.scene._bar
     labels = bar.GetCustomLabels()
     assert bar.GetUseCustomLabels() and [labels.GetValue(i) for i in range(labels.GetNumberOfTuples())] == [0, 1, 2, 3]
-    for scan in range(4):  # the histogram's bars in the cloud's colours
+    tab10 = matplotlib.colormaps["tab10"].colors
+    for scan in range(4):  # tab10's first four colours (not its ends), the histogram's bars in the cloud's
         bar_of = next(b for b in window.histogram._bars if b.get_x() <= scan < b.get_x() + b.get_width())
         rgb = [0.0, 0.0, 0.0]
         window.scene._lut.GetColor(float(scan), rgb)
+        assert np.allclose(rgb, tab10[scan], atol=0.01), scan
         assert np.allclose(bar_of.get_facecolor()[:3], rgb, atol=0.01), scan
     window.state.set(field="mean")  # a continuous map again
     assert window.scene._lut.n_values == 256 and not bar.GetUseCustomLabels()
