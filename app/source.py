@@ -128,8 +128,7 @@ def load_file(path) -> CloudSource:
     _refuse_undrawable(path, cloud.points)
     points = np.array(cloud.points, dtype=float, copy=True)
     normals = None if cloud.normals is None else np.array(cloud.normals, dtype=float, copy=True)
-    views = getattr(cloud, "viewpoints", None)
-    views = None if views is None else np.array(views, dtype=float, copy=True)
+    views = None if cloud.viewpoints is None else np.array(cloud.viewpoints, dtype=float, copy=True)
     return CloudSource(name=display_name(path), points=points, normals=normals, path=path, notes=notes,
                        viewpoints=views, fields=file_fields.keep(cloud.fields, len(points)))
 

@@ -38,7 +38,7 @@ def initial_normals(pts, nb, plan, outlier, report, views=None) -> Initial:
     if not plan.auto:
         return init
     nrm, ok = plane_spread.spanning_normals(pts, init.normals, init.has_normal, nb, init.k, plan.candidates,
-                                            plane_spread.ray_sheets(pts, init.normals, plan.orientation, views))
+                                            plane_spread.ray_sheets(pts, init.normals, plan.mode(views)))
     left = refused & ok & (nrm == init.normals).all(axis=1)  # not widened as a line already
     nrm = plane_spread.determined_normals(pts, nrm, left, nb, init.k, plan.candidates)
     return init._replace(normals=nrm, has_normal=ok)

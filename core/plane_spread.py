@@ -315,18 +315,15 @@ def _tubes(pts, nb, k) -> np.ndarray:
     return out
 
 
-def ray_sheets(pts, normals, view, views=None) -> np.ndarray | None:
+def ray_sheets(pts, normals, view) -> np.ndarray | None:
     """(N,) bool: the plane of a point's normal holds the ray from the scanner's viewpoint
-    ``view`` (a (3,) tuple, or each point's own ``views`` (N, 3) where ``view`` is
-    :data:`core.planning.PER_POINT`; None for any other orientation) within
-    :data:`RAY_SHEET` degrees.
+    ``view`` (a (3,) tuple, or each point's own, (N, 3); None for any other orientation:
+    ``EstimatePlan.mode``) within :data:`RAY_SHEET` degrees.
     A surface seen from a scanner meets its rays at an angle; range noise wider than the
     points are apart along a scan line spreads the line into a sheet along the rays (a
     rotating scanner's ground within 10 m: normals tilted by the ray's elevation, 15-25
     degrees, with the ray 0.1-0.3 degrees from their plane at 15-28 neighbours)."""
-    if isinstance(view, str) and views is not None:
-        view = views
-    elif not isinstance(view, tuple):
+    if view is None or isinstance(view, str):
         return None
     ray = pts - np.asarray(view)
     with np.errstate(invalid="ignore", divide="ignore"):

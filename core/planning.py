@@ -96,6 +96,22 @@ class EstimatePlan:
     fold_typical: float | None = None
 
     @property
+    def decides_signs(self) -> bool:
+        """Whether the spanning forest decides the signs ("outward", "propagate"), rather than
+        the caller (normals kept, one viewpoint, or each point's own)."""
+        return self.orientation in ("outward", "propagate")
+
+    @property
+    def faces_viewpoints(self) -> bool:
+        """Whether the normals face a viewpoint: one (x, y, z), or each point's own."""
+        return not isinstance(self.orientation, str) or self.orientation == PER_POINT
+
+    def mode(self, views=None):
+        """The orientation as :func:`core.orientation.orient` reads it: ``views`` (each point's
+        viewpoint, in the points' order) where the plan faces them, else ``orientation``."""
+        return views if self.orientation == PER_POINT else self.orientation
+
+    @property
     def robust(self) -> bool:
         """Whether the fit is robust (outliers then sit out the fits and the choice of k)."""
         return self.options.get("robust") is not None

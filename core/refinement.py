@@ -202,7 +202,7 @@ def settle_signs(pts, best: Refined, nb, plan, confidence):
     to its side), so a flip here is a flip of the result (:func:`core.frame.turned_over`).
     Returns ``(best, confidence)``, both new where
     anything changed."""
-    if plan.orientation not in ("outward", "propagate"):  # kept, or facing viewpoints
+    if not plan.decides_signs:  # kept, or facing viewpoints
         return best, confidence
     fit = best.fit
     final = np.where(fit.valid[:, None], fit.normals, best.input_normals)

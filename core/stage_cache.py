@@ -32,7 +32,6 @@ from collections import Counter
 
 import numpy as np
 
-from .planning import PER_POINT
 from .wide_neighbours import LazyNeighbours
 
 __all__ = ["StageCache", "STAGE_FIELDS"]
@@ -231,8 +230,7 @@ def _to_caller(order, nb, points, *, in_place):
 
 def _field(plan, name: str):
     if name == "viewpoint":  # a viewpoint (or each point's) where k="auto" reads it, else None
-        value = plan.orientation
-        return repr(value) if plan.auto and (not isinstance(value, str) or value == PER_POINT) else None
+        return repr(plan.orientation) if plan.auto and plan.faces_viewpoints else None
     value = getattr(plan, name)
     if name == "method":
         return value.name

@@ -18,7 +18,6 @@ from .neighbours import Neighbours, search_neighbours
 from .normal_repair import repair_normals
 from .initial_normals import Initial
 from .orientation import orient
-from .planning import PER_POINT
 from .patch import Chunk
 from .spatial_order import SpatialOrder, given_in_spatial_order
 from .wide_neighbours import search_in_spatial_order
@@ -138,11 +137,9 @@ def orient_signs(pts, init: Initial, idx, plan, *, rank=None, views=None,
     decides (kept, or facing viewpoints) that disagree among neighbours at more than
     :data:`MIXED_SIGNS` of the points are returned as the spanning forest makes
     them consistent ("outward"): the scale rule reads signed normals."""
-    mode = views if plan.orientation == PER_POINT else plan.orientation
-    out = orient(pts, init.normals, idx, mode, ok=init.has_normal, rank=rank, trust=plan.auto)
-    caller = plan.orientation not in ("outward", "propagate")
-    mixed = np.count_nonzero(out.confidence[init.has_normal] < 0.5) > MIXED_SIGNS * max(len(pts), 1)
-    if not (consistent and plan.auto and caller and mixed):
+    out = orient(pts, init.normals, idx, plan.mode(views), ok=init.has_normal, rank=rank, trust=plan.auto)
+    if not (consistent and plan.auto and not plan.decides_signs) \
+            or np.count_nonzero(out.confidence[init.has_normal] < 0.5) <= MIXED_SIGNS * len(pts):
         return init._replace(normals=out.normals), out.confidence, None
     inner = orient(pts, out.normals, idx, "outward", ok=init.has_normal, rank=rank, trust=plan.auto)
     flip = np.einsum("ij,ij->i", np.nan_to_num(inner.normals), np.nan_to_num(out.normals)) < 0

@@ -12,6 +12,8 @@ from PySide6.QtCore import Qt
 from PySide6.QtGui import QStandardItemModel
 from PySide6.QtWidgets import QComboBox
 
+from core.interop import facing
+
 from ..presenter import orientation_text
 from ._bind import blocked
 
@@ -57,11 +59,13 @@ class OrientationCombo(QComboBox):
         return source is not None and source.normals is not None and bool(self._state.use_input_normals)
 
     def scanners_default(self) -> bool:
-        """Whether the default faces the scanners: the cloud carries their positions and no
-        normals are used (what core.interop.facing decides for the estimate)."""
+        """Whether the default faces the scanners, as :func:`core.interop.facing` decides for
+        the estimate: the cloud carries their positions and no normals are used."""
         source = self._state.source
-        return (source is not None and getattr(source, "viewpoints", None) is not None
-                and (source.normals is None or not self._state.use_input_normals))
+        if source is None:
+            return False
+        normals = source.normals if self._state.use_input_normals else None
+        return not isinstance(facing(source, normals, "auto"), str)
 
     def _on_activated(self, index: int) -> None:
         value = self.itemData(index)
