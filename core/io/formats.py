@@ -14,11 +14,13 @@ READ_FORMATS = {
     ".pcd": "PCL point cloud data",
     ".obj": "Wavefront OBJ (vertices)",
     ".stl": "STL mesh (vertices)",
+    ".off": "Geomview OFF mesh (vertices)",
     ".vtk": "VTK legacy",
     ".vtp": "VTK XML PolyData",
     ".las": "LAS lidar",
     ".laz": "LAZ compressed lidar",
     ".e57": "ASTM E57 laser scans (all scans, in world coordinates)",
+    ".ptx": "Leica PTX laser scans (all scans, in world coordinates)",
 }
 
 #: extension -> description, for the formats :func:`core.io.write_cloud` writes

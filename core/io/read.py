@@ -8,7 +8,7 @@ import struct
 
 import numpy as np
 
-from . import e57, las, mesh, pcd, ply, text, vtk
+from . import e57, las, mesh, off, pcd, ply, ptx, text, vtk
 from .._validate import check_bool
 from .cloud import Cloud, CloudFileError, RawCloud, file_path, finalize
 from .formats import READ_FORMATS, resolve_format
@@ -22,11 +22,13 @@ _READERS = {
     "pcd": pcd.read_pcd,
     "obj": mesh.read_obj,
     "stl": mesh.read_stl,
+    "off": off.read_off,
     "vtk": vtk.read_vtk,
     "vtp": vtk.read_vtp,
     "las": las.read_las,
     "laz": las.read_las,
     "e57": e57.read_e57,
+    "ptx": ptx.read_ptx,
 }
 assert set(_READERS) == {ext[1:] for ext in READ_FORMATS}
 

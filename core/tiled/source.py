@@ -1,7 +1,7 @@
 """Where the points of a tiled run come from: a LAS/LAZ file read in chunks, an E57 file
 read scan by scan (each scan's pose gives its points' viewpoint, the scanner position),
-any other cloud file read once, or an array; all seen as a stream of
-``(start, points, normals, viewpoints)``."""
+any other cloud file read once (with its viewpoints, a PTX file's scanners), or an array; all
+seen as a stream of ``(start, points, normals, viewpoints)``."""
 
 from __future__ import annotations
 
@@ -29,7 +29,7 @@ class Source:
     name : the file (or "array"), for messages.
     count : number of points.
     has_normals : the source carries normals (they are then kept, as in memory).
-    has_views : the source carries a viewpoint per point (E57 scanner poses).
+    has_views : the source carries a viewpoint per point (E57 and PTX scanner positions).
     identity : what makes two runs on this source the same (path, size, mtime).
     scales, offsets : LAS coordinate quantisation to reuse when writing LAS/LAZ, or None.
     """
@@ -44,6 +44,7 @@ class Source:
     _path: object = None
     _points: object = None
     _normals: object = None
+    _views: object = None
 
     @property
     def is_file(self) -> bool:
@@ -74,7 +75,8 @@ class Source:
         for start in range(0, self.count, chunk):
             stop = min(self.count, start + chunk)
             nrm = None if self._normals is None else self._normals[start:stop]
-            yield start, self._points[start:stop], nrm, None
+            view = None if self._views is None else self._views[start:stop]
+            yield start, self._points[start:stop], nrm, view
 
 
 def open_source(source, normals=None, *, use_normals: bool = True) -> Source:
@@ -91,18 +93,18 @@ def open_source(source, normals=None, *, use_normals: bool = True) -> Source:
         if path.lower().endswith(_E57):
             return Source(path, _e57_count(path), False, identity, has_views=True, _path=path)
         cloud = read_cloud(path)
-        return _from_arrays(path, cloud.points, cloud.normals if use_normals else None, identity)
+        return _from_arrays(path, cloud.points, cloud.normals if use_normals else None, identity, cloud.viewpoints)
     pts, _ = as_points(source)
     nrm = None if normals is None else as_normals(normals, len(pts))
     digest = hashlib.blake2b(pts.tobytes(), digest_size=16).hexdigest()
     return _from_arrays("array", pts, nrm, ("array", len(pts), digest))
 
 
-def _from_arrays(name, points, normals, identity) -> Source:
+def _from_arrays(name, points, normals, identity, views=None) -> Source:
     if len(points) < 3:
         raise ValueError(f"{name}: points must hold at least 3 points, got {len(points)}")
-    return Source(name, len(points), normals is not None, identity, _points=points,
-                  _normals=None if normals is None else np.asarray(normals, dtype=np.float64))
+    return Source(name, len(points), normals is not None, identity, has_views=views is not None, _points=points,
+                  _normals=None if normals is None else np.asarray(normals, dtype=np.float64), _views=views)
 
 
 def _e57_count(path) -> int:
