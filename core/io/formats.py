@@ -29,6 +29,7 @@ WRITE_FORMATS = {
     ".csv": "CSV with a header line",
     ".xyz": "XYZ text columns",
     ".txt": "Text columns",
+    ".vtp": "VTK XML PolyData (binary; ParaView)",
 }
 
 

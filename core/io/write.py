@@ -1,4 +1,4 @@
-"""Writing point clouds and curvature results: PLY (binary) or text, always atomically."""
+"""Writing point clouds and curvature results: PLY (binary), text or VTK XML PolyData, always atomically."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from typing import BinaryIO
 import numpy as np
 from numpy.typing import ArrayLike
 
-from . import ply, text
+from . import ply, text, vtp_write
 from .atomic import atomic_write
 from .cloud import CloudFileError, file_path
 from .formats import WRITE_FORMATS, resolve_format
@@ -22,6 +22,7 @@ _WRITERS = {
     "csv": partial(text.write_text, delimiter=",", header=True),
     "xyz": partial(text.write_text, delimiter=" ", header=False),
     "txt": partial(text.write_text, delimiter=" ", header=False),
+    "vtp": vtp_write.write_vtp,
 }
 assert set(_WRITERS) == {ext[1:] for ext in WRITE_FORMATS}
 
@@ -41,7 +42,7 @@ RESULT_FLAGS = {"k": "k_point", "degree": "degree_point", "border": "border",
 
 def write_cloud(path: str | os.PathLike | BinaryIO, points: ArrayLike, *, normals: ArrayLike | None = None,
                 fields: Mapping[str, ArrayLike] | None = None, format: str | None = None) -> pathlib.Path | BinaryIO:
-    """Write points (with optional normals and per-point fields) to a PLY or text file.
+    """Write points (with optional normals and per-point fields) to a PLY, text or VTP file.
 
     Parameters
     ----------
@@ -52,10 +53,11 @@ def write_cloud(path: str | os.PathLike | BinaryIO, points: ArrayLike, *, normal
         name -> (N,) or (N, 3) array (numeric or bool); an (N, 3) array is written as
         name_x, name_y, name_z. Names must not contain whitespace, ``,;"#``, nor equal
         x y z nx ny nz or each other ignoring case.
-    format : {"ply", "csv", "xyz", "txt"}, optional
+    format : {"ply", "csv", "xyz", "txt", "vtp"}, optional
         By default from the extension. PLY is binary little-endian (bool -> uint8); CSV has
         a header line; XYZ/TXT are space-separated columns, preceded by a ``# names`` line
-        only when there is more than x y z [nx ny nz].
+        only when there is more than x y z [nx ny nz]; VTP (ParaView) is binary with a vertex
+        cell per point, normals as its Normals and (N, 3) fields as 3-component arrays.
 
     Returns
     -------
