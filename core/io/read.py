@@ -69,7 +69,9 @@ def describe(path: str | os.PathLike, *, format: str | None = None) -> dict:
     dict with keys ``path``, ``format``, ``file_size`` (bytes), ``n_points``,
     ``n_nonfinite`` (points with NaN/inf coordinates), ``has_normals``, ``bbox_min`` and
     ``bbox_max`` (lists of 3 floats over the finite points, None if there are none),
-    ``bbox_diagonal`` (float or None) and ``fields`` (names of the other properties).
+    ``bbox_diagonal`` (float or None), ``fields`` (names of the other properties) and
+    ``n_viewpoints`` (the distinct scanner positions an E57 or PTX file gives its points, 0 for
+    a file without them).
     """
     path, fmt = _path_and_format(path, format)
     raw = _read_raw(path, fmt)
@@ -90,6 +92,7 @@ def describe(path: str | os.PathLike, *, format: str | None = None) -> dict:
         "bbox_max": None if high is None else high.tolist(),
         "bbox_diagonal": None if low is None else float(np.linalg.norm(high - low)),
         "fields": list(raw.fields),
+        "n_viewpoints": 0 if raw.viewpoints is None else len(np.unique(np.asarray(raw.viewpoints), axis=0)),
     }
 
 

@@ -631,7 +631,7 @@ def test_describe_and_file_untouched(tmp_path):
     digest, mtime = hashlib.sha256(path.read_bytes()).hexdigest(), path.stat().st_mtime_ns
     info = describe(path)
     assert info["format"] == "ply" and info["n_points"] == 20 and info["n_nonfinite"] == 1
-    assert info["has_normals"] and info["fields"] == ["k"]
+    assert info["has_normals"] and info["fields"] == ["k"] and info["n_viewpoints"] == 0
     np.testing.assert_array_equal(info["bbox_min"], PTS[1:].min(axis=0))
     np.testing.assert_array_equal(info["bbox_max"], PTS[1:].max(axis=0))
     assert info["file_size"] == path.stat().st_size and info["bbox_diagonal"] > 0

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import core
-from core.io import read_cloud
+from core.io import describe, read_cloud
 from core.tiled import estimate_tiled
 from io_testutils import refused
 
@@ -67,6 +67,8 @@ def test_scans_placed_by_their_transforms_seen_from_their_scanners_and_missing_p
     assert res.params["orientation"] == "viewpoints"
     assert (np.einsum("ij,ij->i", res.normals, cloud.viewpoints - cloud.points) > 0).mean() > 0.99
     assert (res.mean[cloud.fields["scan"] == 1] < 0).mean() > 0.99  # seen from inside: H = -1/R
+    info = describe(path)
+    assert info["n_points"] == len(cloud) and info["n_viewpoints"] == 2 and "scan" in info["fields"]
 
 
 def test_viewpoint_is_the_registered_position_also_when_the_transform_was_already_applied(tmp_path):
