@@ -112,7 +112,7 @@ def _path_and_format(path, format):
 
 
 #: the extra that installs the optional package a format needs
-_EXTRAS = {"las": "las", "laz": "las", "vtk": "viewer", "vtp": "viewer", "e57": "big"}
+_EXTRAS = {"las": "las", "laz": "las", "vtk": "viewer", "vtp": "viewer"}  # E57 names its own (core.io.e57)
 
 
 def _read_raw(path, fmt) -> RawCloud:
