@@ -96,6 +96,10 @@ class WindowActions:
         self.eye_dome_action = self._action(menu, "&Eye-dome lighting (scans)",
                                             lambda: self.state.set(eye_dome=self.eye_dome_action.isChecked()), "E")
         self.eye_dome_action.setCheckable(True)
+        self.scanners_action = self._action(menu, "Scanner &positions (E57, PTX)",
+                                            lambda: self.state.set(scanners=self.scanners_action.isChecked()))
+        self.scanners_action.setCheckable(True)
+        self.scanners_action.setEnabled(False)  # until a cloud with scanner positions is shown
         menu.addSeparator()
         for dock in (self.controls_dock, self.histogram_dock, self.inspector_dock):
             menu.addAction(DockToggle(dock, self))

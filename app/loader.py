@@ -104,6 +104,7 @@ def _run(relay: _Relay, ticket: LoadTicket, make, *, file: bool = False) -> None
         source = make()
         source.geometry  # noqa: B018 - framing facts computed here, not on the GUI thread
         source.field_specs, source.colours  # noqa: B018 - and the file's own fields' looks and colours
+        source.scanners  # noqa: B018 - and its distinct scanner positions
         prepare_sampling(source.n_points)  # and the colour limits' sample index
     except (core.io.CloudFileError, OSError, ValueError) as exc:
         text = str(exc)

@@ -21,7 +21,7 @@ import core.shapes
 from core.degenerate import MAX_COORD
 from core.io.cloud import require_points
 
-from . import file_fields
+from . import file_fields, scanners
 from .geometry import CloudGeometry
 from .text import display_name
 
@@ -91,6 +91,13 @@ class CloudSource:
         """Field name ("rgb", "file:NAME") -> :class:`app.fields.FieldSpec` of the file's own
         fields (:func:`app.file_fields.specs_of`; the loader computes it on its thread)."""
         return file_fields.specs_of(self.fields)
+
+    @cached_property
+    def scanners(self) -> np.ndarray:
+        """(M, 3) distinct scanner positions of the viewpoints, in the order they first
+        appear ((0, 3) without viewpoints; :func:`app.scanners.positions`; the loader
+        computes it on its thread)."""
+        return scanners.positions(self.viewpoints)
 
     @cached_property
     def colours(self) -> np.ndarray | None:

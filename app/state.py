@@ -103,6 +103,7 @@ class ViewerState(QObject):
         "glyph_density": _Field(0.05, float),  # fraction of the glyph positions (app.glyphs.GLYPH_POINTS at most)
         "glyph_length": _Field(3.0, float),  # x mean point spacing
         "eye_dome": _Field(False, bool),  # eye-dome lighting (depth edges, for scans)
+        "scanners": _Field(True, bool),  # markers at an E57 or PTX file's scanner positions
         # inspection
         "picked": _Field(None, _opt_int),
     }

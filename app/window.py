@@ -32,6 +32,7 @@ from .loader import CloudLoader
 from .persist import save_layout, save_state
 from .presenter import ResultPresenter, preview_line
 from .request import ESTIMATE_KEYS, EstimateRequest
+from .scanners import show_scanners
 from .scene import CloudScene, make_plotter
 from .source import CloudSource
 from .state import ViewerState
@@ -182,7 +183,7 @@ class MainWindow(WindowActions, WindowStatus, QMainWindow):
         if name in ESTIMATE_KEYS:
             self._debounce.start()  # restarts: a burst of changes makes one request
             return
-        handlers = {"picked": self.presenter.pick, "eye_dome": self._eye_dome,
+        handlers = {"picked": self.presenter.pick, "eye_dome": self._eye_dome, "scanners": self._scanners,
                     "point_size": lambda: self.presenter.set_point_size(self.state.point_size)}
         handlers.update(dict.fromkeys(_DISPLAY_KEYS, self.presenter.recolour))
         handlers.update(dict.fromkeys(_GLYPH_KEYS, self.presenter.glyphs))
@@ -218,7 +219,15 @@ class MainWindow(WindowActions, WindowStatus, QMainWindow):
         self.normals_check.setEnabled(source.normals is not None)  # nothing to use otherwise
         self.summary_label.setText("")
         self.presenter.show_source(source)  # the file's own fields: listed, and drawn if chosen
+        self._scanners()
         self.render_all()
+
+    def _scanners(self) -> None:
+        """Markers at the cloud's scanner positions (View › Scanner positions), where it has any."""
+        at = getattr(self.state.source, "scanners", None)  # (a stored result, app.big_result, has none)
+        self.scanners_action.setEnabled(at is not None and len(at) > 0)
+        self.scanners_action.setChecked(bool(self.state.scanners))
+        show_scanners(self.scene.plotter, at if self.state.scanners else None, self.scene.radius())
 
     def _eye_dome(self) -> None:
         on = bool(self.state.eye_dome)
