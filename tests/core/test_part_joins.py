@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.spatial import cKDTree
 
 import core
 from core import shapes, shapes_thin
@@ -99,3 +100,15 @@ def test_only_the_largest_parts_are_joined():
     group, _ = join_parts(pts, np.tile([0.0, 0.0, 1.0], (len(pts), 1)), labels, np.zeros(len(pts)),
                           np.arange(len(pts)), GATE)
     assert np.all(group[:4] == np.arange(4)) and len(set(group[4:])) == 1
+
+
+@pytest.mark.parametrize("k", [15, "auto"])
+def test_a_torus_sampled_in_hundreds_of_clumps_faces_out(k):
+    """200 clumps of 25 points, each its own part: every one is joined to its nearest, and the
+    torus faces out (with only the 64 largest joined, 9 % (k = 15) and 24 % (auto) of the
+    points faced in: the clumps around the hole, each turned away from the centre)."""
+    t = shapes.torus(40000, seed=2)
+    centres = np.random.default_rng(0).choice(len(t.points), 200, replace=False)
+    rows = np.unique(cKDTree(t.points).query(t.points[centres], 25)[1])
+    r = core.estimate(t.points[rows], k=k)
+    assert _facing(r, t.normals[rows])[r.valid].all()
