@@ -50,6 +50,8 @@ def _content(f):
 def _header(path, lines) -> tuple[dict, int]:
     """The keyword's flags and the vertex count, from the first content lines."""
     first = next(lines, b"").removeprefix(b"\xef\xbb\xbf")
+    if first[:3] == b"off":  # a lower-case plain keyword, as some writers spell it
+        first = b"OFF" + first[3:]
     match = _KEYWORD.match(first)
     if match is None:
         raise CloudFileError(path, f"is not an OFF file: it starts with {first[:40].decode('latin-1')!r}, not a "

@@ -143,6 +143,7 @@ _OFF_GRID = "0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
     "OFF4 1 0\n" + _OFF_GRID,  # ModelNet's keyword run into the counts
     "\ufeffOFF\n\n4 0 0  # counts\n" + _OFF_GRID,
     "nOFF 3\n4 0 0\n" + _OFF_GRID,
+    "off\r\n4 0 0\r\n" + _OFF_GRID.replace("\n", "\r\n"),
     "4OFF\n4 0 0\n0 0 0 1\n2 0 0 2\n0 3 0 3\n0 0 0.5 0.5\n",
 ])
 def test_off_variants_give_the_vertices(tmp_path, text):
