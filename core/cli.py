@@ -12,6 +12,7 @@ import sys
 
 from . import __version__, _cli_commands
 from ._validate import word
+from .io.formats import READ_FORMATS, WRITE_FORMATS
 from .tiled import cli as tiled_cli
 
 BENCHES = ("paper", "perf", "accuracy", "tiled", "stability", "teach", "holdout", "scanlines")
@@ -65,14 +66,15 @@ def _viewpoint(text):
 
 def _add_io_arguments(e) -> None:
     e.add_argument("inputs", nargs="+", metavar="input",
-                   help="point cloud file(s) or glob patterns (PLY, XYZ/PTS/TXT/CSV, PCD, OBJ, STL, VTK/VTP, "
-                        "LAS/LAZ); - reads standard input (see --input-format)")
+                   help=f"point cloud file(s) or glob patterns ({', '.join(READ_FORMATS)}); - reads standard "
+                        "input (see --input-format)")
     e.add_argument("-o", "--output", required=True,
-                   help="output file (.ply, .csv, .xyz, .txt, .las, .laz); - writes standard output (not LAS/LAZ); "
+                   help=f"output file ({', '.join(WRITE_FORMATS)}, .las, .laz); - writes standard output (not LAS/LAZ); "
                         "with several inputs a directory or a pattern with {stem} (filled for one input too), "
                         "e.g. out/{stem}_k.laz")
     e.add_argument("--format", dest="out_format", default=None,
-                   help="output format when it cannot come from the extension: ply, csv, xyz, txt, or las/laz "
+                   help=f"output format when it cannot come from the extension: {', '.join(f[1:] for f in WRITE_FORMATS)}, "
+                        "or las/laz "
                         "in a directory (default: csv for -, ply in a directory)")
     e.add_argument("--input-format", default="xyz", help="format of standard input (default xyz)")
     e.add_argument("--drop-nonfinite", action="store_true", help="drop points with NaN/inf coordinates")
