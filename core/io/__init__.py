@@ -2,8 +2,8 @@
 
 Read PLY, XYZ/PTS/TXT/CSV, PCD, OBJ, STL, OFF, VTK/VTP, LAS/LAZ, E57 and PTX files into a
 :class:`Cloud` (:data:`READ_FORMATS`); write points, normals and per-point fields (or a
-curvature result) to PLY, text or VTP (:data:`WRITE_FORMATS`), atomically. Every problem with a file raises :class:`CloudFileError` (a ``ValueError``)
-whose message names the file.
+curvature result) to PLY, text or VTP (:data:`WRITE_FORMATS`), atomically. Every problem
+with a file raises :class:`CloudFileError` (a ``ValueError``) whose message names the file.
 """
 
 from .cloud import Cloud, CloudFileError
