@@ -8,7 +8,7 @@ wall. A nearly flat part has no outside, so its sign was a coin flip, and one sh
 scan lines 12 spacings apart came out as two blocks of opposite orientation, each with
 confidence 1.
 
-Here the parts of at least :data:`core.tuning.VOTE_SIZE` points are joined by the same
+Here the parts of at least :data:`JOIN_MIN` points are joined by the same
 signed evidence (:func:`core.kernels.sign_evidence.sign_evidence`) on the chords between
 their closest points: Hoppe's test where a chord lies in both tangent planes (pieces of
 one sheet), the chord test where it leaves them. The chord test holds at any distance: a
@@ -36,7 +36,11 @@ JOIN_SAMPLE = 128
 #: parts, :class:`_Nearest`: ~0.2 ms a part; 64 until 2026-12-07, when a torus sampled in 200
 #: clumps of 25 points had 9-24 % of its points facing in, the clumps beyond the 64th on their own)
 JOIN_PARTS = 1024
-#: nearest parts each part is offered to
+#: least points of a part that is joined; smaller ones keep their own vote. 16 (VOTE_SIZE) until
+#: 2026-12-07, when a torus sampled in 300 clumps of 15 points had 8 % of them facing in at k = 15
+JOIN_MIN = 8
+#: nearest parts each part is offered to (a part of VOTE_SIZE points or more also to its nearest
+#: such parts: small pieces between two large parts do not stand in for their direct tie)
 JOIN_NEAREST = 3
 #: closest sample pairs whose chords vote on one offer, from each side
 JOIN_PAIRS = 8
@@ -58,10 +62,12 @@ def join_parts(points, normals, labels, spread, rank, gate):
     """
     n_parts = int(labels.max()) + 1 if len(labels) else 0
     group, parity = np.arange(n_parts), np.ones(n_parts)
-    parts, samples = _samples(labels, rank, n_parts)
+    parts, samples, sizes = _samples(labels, rank, n_parts)
     if len(parts) < 2:
         return group, parity
-    offers = _offers(points, normals, (spread, gate), _Nearest(points, samples))
+    near = _Nearest(points, samples)
+    pairs = set(near.pairs(np.arange(len(parts)))) | set(near.pairs(np.flatnonzero(sizes >= VOTE_SIZE)))
+    offers = _offers(points, normals, (spread, gate), near, sorted(pairs))
     link = signed_forest(len(parts))  # the spanning forest's parity union-find
     for strength, a, b in sorted(offers, key=lambda o: (-abs(o[0]), o[1], o[2])):
         ra, pa = find_signed(link, a)
@@ -76,15 +82,15 @@ def join_parts(points, normals, labels, spread, rank, gate):
 
 
 def _samples(labels, rank, n_parts):
-    """The parts that take part (at least VOTE_SIZE points, the JOIN_PARTS largest; ties
-    to the part whose first point comes first in the caller's order) and each one's
-    sample rows, evenly spaced in the caller's order."""
+    """The parts that take part (at least JOIN_MIN points, the JOIN_PARTS largest; ties
+    to the part whose first point comes first in the caller's order), each one's
+    sample rows, evenly spaced in the caller's order, and their sizes."""
     have = np.flatnonzero(labels >= 0)
     lab = labels[have]
     size = np.bincount(lab, minlength=n_parts)
-    big = np.flatnonzero(size >= VOTE_SIZE)
+    big = np.flatnonzero(size >= JOIN_MIN)
     if len(big) < 2:  # one surface: nothing to join, at the cost of a count
-        return big, []
+        return big, [], size[big]
     first = np.full(n_parts, np.iinfo(np.int64).max)
     np.minimum.at(first, lab, rank[have])
     parts = np.sort(big[np.lexsort((first[big], -size[big]))][:JOIN_PARTS])
@@ -94,7 +100,7 @@ def _samples(labels, rank, n_parts):
     for part in parts:
         rows = order[start[part]:start[part + 1]]
         samples.append(rows[np.linspace(0, len(rows) - 1, min(len(rows), JOIN_SAMPLE)).astype(np.int64)])
-    return parts, samples
+    return parts, samples, size[parts]
 
 
 class _Nearest:
@@ -124,26 +130,28 @@ class _Nearest:
             self._gaps[key] = float(self.query(*key)[0].min())
         return self._gaps[key]
 
-    def pairs(self) -> list:
-        """Sorted (a, b), a < b: each part with its JOIN_NEAREST nearest (ties to the lower index)."""
+    def pairs(self, among) -> list:
+        """Sorted (a, b), a < b: each part of ``among`` (part positions, ascending) with its
+        JOIN_NEAREST nearest of them (ties to the lower index)."""
         found = set()
-        for b in range(len(self.samples)):
-            bound = np.linalg.norm(self.centres - self.centres[b], axis=1) - self.radii - self.radii[b]
+        centres, radii = self.centres[among], self.radii[among]
+        for i, b in enumerate(among.tolist()):
+            bound = np.linalg.norm(centres - centres[i], axis=1) - radii - radii[i]
             bound = np.maximum(bound, 0.0) * (1 - 1e-9)  # below every gap, rounding included
-            bound[b] = np.inf
+            bound[i] = np.inf
             kept = []  # (gap, a), the nearest so far
-            for a in np.argsort(bound, kind="stable"):
-                if a == b or (len(kept) >= JOIN_NEAREST and bound[a] > kept[JOIN_NEAREST - 1][0]):
+            for j in np.argsort(bound, kind="stable"):
+                if j == i or (len(kept) >= JOIN_NEAREST and bound[j] > kept[JOIN_NEAREST - 1][0]):
                     break
-                kept = sorted(kept + [(self.gap(a, b), int(a))])
+                kept = sorted(kept + [(self.gap(among[j], b), int(among[j]))])
             found.update((min(a, b), max(a, b)) for _, a in kept[:JOIN_NEAREST])
         return sorted(found)
 
 
-def _offers(points, normals, noise, near) -> list:
-    """(mean evidence, a, b) of each pair of :meth:`_Nearest.pairs`: the chords of the
+def _offers(points, normals, noise, near, pairs) -> list:
+    """(mean evidence, a, b) of each of ``pairs`` (sorted (a, b)): the chords of the
     JOIN_PAIRS closest sample pairs seen from each side, all pairs' chords in one kernel call."""
-    pairs, ends = near.pairs(), []
+    ends = []
     for a, b in pairs:
         for x, y in ((a, b), (b, a)):
             d, j = near.query(x, y)
