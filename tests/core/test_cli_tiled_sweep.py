@@ -204,7 +204,8 @@ def test_help_lists_the_las_outputs(capsys):
     with pytest.raises(SystemExit):
         cli.main(["estimate", "--help"])
     help_text = " ".join(capsys.readouterr().out.split())
-    assert "(.ply, .csv, .xyz, .txt, .las, .laz)" in help_text
+    assert "(.ply, .csv, .xyz, .txt, .vtp, .las, .laz)" in help_text
+    assert all(ext in help_text for ext in (".e57", ".ptx", ".off"))  # the inputs, from READ_FORMATS
 
 
 # --------------------------------------------------- M4: temporaries left by a killed write
