@@ -129,6 +129,26 @@ class RawCloud(NamedTuple):
     viewpoints: np.ndarray | None = None
 
 
+class Scan(NamedTuple):
+    """One scan of a file of registered scans (E57, PTX): its points in world coordinates
+    (m, 3), its fields (name -> (m,) array) and its scanner position (3,), in world coordinates."""
+
+    points: np.ndarray
+    fields: dict
+    viewpoint: np.ndarray
+
+
+def joined_scans(scans, names) -> RawCloud:
+    """The ``scans`` one after another: the fields ``names`` (every scan with points has
+    them), ``scan`` (int32, the scan's index) and each point's viewpoint, its scan's scanner
+    position."""
+    sizes = [len(scan.points) for scan in scans]
+    fields = {name: np.concatenate([scan.fields[name] for scan in scans if len(scan.points)]) for name in names}
+    fields["scan"] = np.repeat(np.arange(len(scans), dtype=np.int32), sizes)
+    viewpoints = np.repeat(np.array([scan.viewpoint for scan in scans]), sizes, axis=0)
+    return RawCloud(np.concatenate([scan.points for scan in scans]), None, fields, viewpoints)
+
+
 # Property names meaning a normal component, lower-cased, in x, y, z order.
 NORMAL_NAMES = (
     ("nx", "ny", "nz"),

@@ -10,7 +10,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .cloud import CloudFileError, RawCloud, check_memory
+from .cloud import CloudFileError, RawCloud, Scan, check_memory, joined_scans
 
 #: records libE57 decodes per call, into buffers reused for every block of a scan
 BLOCK = 1 << 18
@@ -20,15 +20,6 @@ _INVALID = ("cartesianInvalidState", "sphericalInvalidState")
 #: E57 colour fields -> the names core's other readers (PLY, LAS, PCD, text) give colours
 _COLOURS = {"colorRed": "red", "colorGreen": "green", "colorBlue": "blue"}
 _HINT = " (a damaged header, or a file to estimate in tiles: `darboux-cli estimate --tile-points ...`)"
-
-
-class Scan(NamedTuple):
-    """A scan's valid points in world coordinates (m, 3), its other fields asked for (name
-    -> (m,) array) and its scanner position (3,), in world coordinates."""
-
-    points: np.ndarray
-    fields: dict
-    viewpoint: np.ndarray
 
 
 class Layout(NamedTuple):
@@ -68,10 +59,7 @@ def read_e57(path) -> RawCloud:
     sizes = [len(part.points) for part in parts]
     if count and not sum(sizes):
         raise CloudFileError(path, f"contains no points: all {count} are marked invalid")
-    fields = {name: np.concatenate([part.fields[name] for part in parts]) for name in parts[0].fields}
-    fields["scan"] = np.repeat(np.arange(len(parts), dtype=np.int32), sizes)
-    viewpoints = np.repeat(np.array([part.viewpoint for part in parts]), sizes, axis=0)
-    return RawCloud(np.concatenate([part.points for part in parts]), None, fields, viewpoints)
+    return joined_scans(parts, parts[0].fields)
 
 
 class E57Scans:

@@ -14,11 +14,10 @@ from __future__ import annotations
 
 import itertools
 import os
-from typing import NamedTuple
 
 import numpy as np
 
-from .cloud import CloudFileError, RawCloud, check_memory
+from .cloud import CloudFileError, RawCloud, Scan, check_memory, joined_scans
 
 #: bytes of the shortest possible point line, "0 0 0\n": a bound on the points a file can hold
 _MIN_LINE = 6
@@ -80,13 +79,7 @@ class _Lines:
         return values
 
 
-class _Scan(NamedTuple):
-    points: np.ndarray  # (m, 3) in world coordinates
-    fields: dict  # name -> (m,)
-    viewpoint: np.ndarray  # (3,) the scanner's registered position
-
-
-def _read_scan(reader: _Lines, index: int, size: int) -> _Scan:
+def _read_scan(reader: _Lines, index: int, size: int) -> Scan:
     """One scan: its header checked, its declared lines read, its missing points dropped."""
     path = reader.path
     columns, rows = (int(reader.numbers(1, what, integer=True)[0]) for what in ("columns", "rows"))
@@ -112,7 +105,7 @@ def _read_scan(reader: _Lines, index: int, size: int) -> _Scan:
     points = table[:, :3] @ rotation + transform[3, :3]
     names = _LAYOUTS[table.shape[1]]
     fields = {name: table[:, 3 + i] for i, name in enumerate(names)}
-    return _Scan(points, fields, position)
+    return Scan(points, fields, position)
 
 
 def _point_lines(reader: _Lines, index: int, count: int) -> np.ndarray:
@@ -139,22 +132,17 @@ def _joined(path, scans) -> RawCloud:
     if not any(len(s.points) for s in scans):
         raise CloudFileError(path, f"contains no points: every point of its {len(scans)} scan"
                                    f"{'s' * (len(scans) > 1)} is missing (0 0 0)")
-    nonempty = [s for s in scans if len(s.points)]
-    common = set.intersection(*(set(s.fields) for s in nonempty))
-    fields = {name: np.concatenate([s.fields[name] for s in nonempty]) for name in _LAYOUTS[7] if name in common}
+    common = set.intersection(*(set(s.fields) for s in scans if len(s.points)))
+    raw = joined_scans(scans, [name for name in _LAYOUTS[7] if name in common])
     for name in ("red", "green", "blue"):
-        if name in fields:
-            fields[name] = _colour(path, name, fields[name])
-    sizes = [len(s.points) for s in scans]
-    fields["scan"] = np.repeat(np.arange(len(scans), dtype=np.int32), sizes)
-    points = np.concatenate([s.points for s in scans])
-    views = np.repeat(np.array([s.viewpoint for s in scans]), sizes, axis=0)
-    return RawCloud(points, None, fields, views)
+        if name in raw.fields:
+            raw.fields[name] = _colour(path, name, raw.fields[name])
+    return raw
 
 
 def _colour(path, name, values) -> np.ndarray:
     """A colour channel as uint8: PTX colours are integers 0-255."""
-    if not ((values >= 0) & (values <= 255) & (values == np.round(values))).all():
-        bad = values[~((values >= 0) & (values <= 255) & (values == np.round(values)))][0]
-        raise CloudFileError(path, f"a {name} value is {bad}; PTX colours are integers 0-255")
+    ok = (values >= 0) & (values <= 255) & (values == np.round(values))
+    if not ok.all():
+        raise CloudFileError(path, f"a {name} value is {values[~ok][0]}; PTX colours are integers 0-255")
     return values.astype(np.uint8)
