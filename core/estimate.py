@@ -114,8 +114,8 @@ def estimate(
     >>> bool(abs(np.median(r.mean) - 0.5) < 0.01)
     True
     """
-    orientation, views = _per_point(orientation, points, normals)  # an E57 cloud's own: its scanners'
-    points, normals = interop.unwrap(points, normals)  # harden: pyvista/Open3D/trimesh/laspy objects
+    obj, (points, normals) = points, interop.unwrap(points, normals)  # harden: pyvista/Open3D/trimesh/laspy objects
+    orientation, views = _per_point(orientation, obj, normals)  # an E57 or PTX cloud's own: its scanners'
     pts, kept = as_points(points, drop_nonfinite=drop_nonfinite)
     if len(pts) < MIN_POINTS:
         raise ValueError(f"points must hold at least {MIN_POINTS} points, got {len(pts)}")
@@ -159,19 +159,17 @@ def estimate(
     return _result(pts, kept, plan, stages=stages, neighbours=nb, repaired=front.repaired)
 
 
-def _per_point(orientation, points, normals):
+def _per_point(orientation, obj, normals):
     """``(orientation, views)``: an (N, 3) array of viewpoints is :data:`PER_POINT` with the
-    array as ``views``; so is "auto" on a cloud ``points`` that carries its scanners'
-    positions (:func:`core.interop.viewpoints`) and no normals; else as given, no views."""
+    array as ``views``; so is "auto" on a cloud ``obj`` that carries its scanners'
+    positions (:func:`core.interop.facing`) with no ``normals`` in use; else as given, no views."""
     try:
         per_point = not isinstance(orientation, str) and np.ndim(orientation) == 2
     except ValueError:  # a ragged sequence: planning names it
         per_point = False
     if per_point:
         return PER_POINT, orientation
-    if interop.viewpoints(points) is None:  # (unwrap copies a laspy object's coordinates: not twice)
-        return orientation, None
-    faced = interop.facing(points, interop.unwrap(points, normals)[1], orientation)
+    faced = interop.facing(obj, normals, orientation)
     return (orientation, None) if faced is orientation else (PER_POINT, faced)
 
 

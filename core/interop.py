@@ -13,6 +13,7 @@ from typing import Any, Callable, NamedTuple
 
 import numpy as np
 
+from ._validate import word
 from .io.cloud import find_normals
 
 
@@ -86,7 +87,7 @@ def facing(obj, normals, orientation):
     "auto" on a cloud that carries each point's viewpoint (an E57 file's scanners) with no
     normals in use is those viewpoints (what ``core.estimate(obj)`` does itself); else as given."""
     views = viewpoints(obj)
-    if views is None or normals is not None or not isinstance(orientation, str) or orientation.strip().lower() != "auto":
+    if views is None or normals is not None or not isinstance(orientation, str) or word(orientation) != "auto":
         return orientation
     return views
 
