@@ -13,9 +13,11 @@ import numpy as np
 from .fields import FIELDS, FILE_PREFIX, RGB, FieldSpec
 
 __all__ = ["keep", "colour_names", "colours_of", "specs_of", "find", "unknown_text", "point_values", "RGB_LABEL",
-           "MAX_CATEGORIES"]
+           "MAX_CATEGORIES", "LUMA"]
 
 RGB_LABEL = "File colour (RGB)"
+#: Weights of the luminance of an sRGB colour (Rec. 709), which the histogram shows of a file's colours.
+LUMA = np.array([0.2126, 0.7152, 0.0722])
 #: The fields holding a colour's components (every reader names them so; compared ignoring case).
 COLOURS = ("red", "green", "blue")
 #: An integer field whose values span at most this many integers is drawn one colour a value.

@@ -16,10 +16,7 @@ from . import file_fields
 from .fields import FIELDS, FILE_PREFIX, Colouring, colouring, curvature_floor, is_file_field
 
 __all__ = ["ResultPresenter", "method_title", "uses_passes", "summary_line", "status_line", "preview_line",
-           "point_info", "result_parameters", "orientation_text", "LUMA"]
-
-#: Weights of the luminance of an sRGB colour (Rec. 709), which the histogram shows of a file's colours.
-LUMA = np.array([0.2126, 0.7152, 0.0722])
+           "point_info", "result_parameters", "orientation_text"]
 
 
 class ResultPresenter:
@@ -110,7 +107,7 @@ class ResultPresenter:
         if spec.scale == "rgb":
             for scene in scenes:
                 scene.set_colours(source.colours, note=spec.label)
-            values, look, label = source.colours @ LUMA, Colouring((0.0, 255.0), "gray"), "Luminance of the file colour"
+            values, look, label = source.luminance, Colouring((0.0, 255.0), "gray"), "Luminance of the file colour"
         else:
             values, label = source.fields[name[len(FILE_PREFIX):]], spec.label
             look = self._look(name, values, spec)

@@ -93,6 +93,12 @@ class CloudSource:
         return file_fields.specs_of(self.fields)
 
     @cached_property
+    def luminance(self) -> np.ndarray | None:
+        """(N,) luminance of the file's colours (:data:`app.file_fields.LUMA`), which the histogram
+        shows while they are drawn: computed once, not at each recolour; None without colours."""
+        return None if self.colours is None else self.colours @ file_fields.LUMA
+
+    @cached_property
     def scanners(self) -> np.ndarray:
         """(M, 3) distinct scanner positions of the viewpoints, in the order they first
         appear ((0, 3) without viewpoints; :func:`app.scanners.positions`; the loader
