@@ -65,10 +65,10 @@ class Source:
     def chunks(self, chunk: int = CHUNK):
         """Yield ``(start, points (m, 3), normals (m, 3) or None, viewpoints (m, 3) or None)``
         in input order."""
-        if self._path is not None and self.has_views:
+        if self._path is not None and str(self._path).lower().endswith(_E57):  # read scan by scan
             yield from _iter_e57(self._path, chunk)
             return
-        if self._path is not None:
+        if self._path is not None:  # LAS/LAZ, streamed
             for start, pts, nrm in iter_las(self._path, chunk=chunk):
                 yield start, pts, nrm, None
             return
