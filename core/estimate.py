@@ -77,6 +77,8 @@ def estimate(
         With k="auto" the initial neighbourhood grows as the square root of the noise,
         measured from the residuals of 2-jets on 15 neighbours (``params["noise"]``, in
         units of their radius; ``params["initial_k"]``; see :data:`core.scale.INITIAL_K0`),
+        per region where the noise differs across the cloud (:mod:`core.local_noise`;
+        ``params["initial_local"]``: the share of points whose region set theirs),
         and in robust mode leaves out the points flagged as outliers.
     orientation : "auto" (keep given normals; orient estimated ones outward, or toward
         the scanners of a cloud read from an E57 file), "propagate" (each component's
@@ -342,7 +344,8 @@ def _result(pts, kept, plan, *, stages, neighbours, repaired) -> CurvatureResult
         orientation=plan.orientation_label, options=dict(plan.options), n_points=len(pts),
         dropped=int(np.count_nonzero(~kept)), normals_given=normals_given,
         initial=None if normals_given else plan.initial, initial_k=init.k, noise=init.noise,
-        fold_typical=init.fold_typical, crease_typical=marks.crease_typical, normals_repaired=repaired,
+        fold_typical=init.fold_typical, initial_local=init.local, crease_typical=marks.crease_typical,
+        normals_repaired=repaired,
         jet_fraction=float(kc.on_jet.mean()),
     )
     fitted = np.where(fit.degree > 0, fit.degree.astype(np.int64), plan.options.get("degree", -1))  # a fit may fall a degree

@@ -9,20 +9,24 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import anchors, kernels, plane_spread, scale, tuning
+from . import anchors, kernels, local_noise, plane_spread, scale, tuning
+from .kernels.knn import unflagged_first
 from .normals import jet_normals, pca_normals
+from .tuning import COLLINEAR, THETA_REACH
 
 
 class Initial(NamedTuple):
     """Initial normals: ``normals`` (N, 3), ``has_normal`` (N,) bool, and with k="auto"
     the measured (or given) ``noise`` ratio, the ``k`` it chose and the ``fold_typical``
-    spread folds were judged against (:func:`unfolded`; None otherwise)."""
+    spread folds were judged against (:func:`unfolded`; None otherwise), and the share
+    of points whose region's noise gave them another initial k (:mod:`core.local_noise`)."""
 
     normals: np.ndarray
     has_normal: np.ndarray
     noise: float | None = None
     k: int | None = None
     fold_typical: float | None = None
+    local: float = 0.0
 
 
 def initial_normals(pts, nb, plan, outlier, report, views=None) -> Initial:
@@ -65,6 +69,18 @@ def _initial_normals(pts, nb, plan, outlier, report) -> tuple[Initial, np.ndarra
         nb.widen(k_init if anchors.shares_scale(plan) else plan.k_search)
         idx_p, dist_p = nb.take(plan.k_initial)
     small, height = _small_normals(pts, nrm, ok, idx_p, dist_p, jet, plan)
+    levels = _levels(pts, nb, plan, outlier, (idx_p, dist_p), (small, height), jet, k_init)
+    init, refused = _at_cloud_scale(pts, nb, plan, outlier, report, (ok, idx_p, noise, k_init), (small, height))
+    if levels is None:
+        return init, refused
+    return _at_levels(pts, nb, plan, outlier, levels, init, refused, (small, height, ok, idx_p))
+
+
+def _at_cloud_scale(pts, nb, plan, outlier, report, cloud, smalls) -> tuple[Initial, np.ndarray]:
+    """:func:`_initial_normals` at the cloud's initial k: ``cloud`` = (ok, the small rows,
+    the noise, that k), ``smalls`` = the small normals and their jets' heights."""
+    ok, idx_p, noise, k_init = cloud
+    small, height = smalls
     if k_init == plan.k_initial and not (plan.robust and outlier.any()):
         return Initial(small, ok, noise, k_init), _refused(ok, height, plan)
     idx, dist = initial_rows(nb, k_init, outlier, plan)
@@ -77,6 +93,69 @@ def _initial_normals(pts, nb, plan, outlier, report) -> tuple[Initial, np.ndarra
     nrm, typical, folded = unfolded(nrm, small, *fold_spreads(small, idx, nb, k_init, outlier, plan),
                                     plan.fold_typical, pts=pts, small_rows=idx_p)
     return Initial(nrm, ok, noise, k_init, typical), _refused(ok, np.where(folded, height, wide), plan)
+
+
+def _levels(pts, nb, plan, outlier, small_rows, smalls, jet, k_init):
+    """Each point's initial k where its region's noise asks for another than the cloud's
+    ``k_init`` (:func:`core.local_noise.local_k`, from the ratios of the 2-jets ``jet``
+    measured, else of the ``smalls`` (normals, heights) over the ``small_rows`` (idx,
+    dist) radii, without the suspects whose residual is a bias); None where none does."""
+    idx_p, dist_p = small_rows
+    small, height = smalls
+    if jet is None and plan.initial != "jet":
+        return None  # the noise was given and no jet measures its regions
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratio = jet[1] if jet is not None else height / dist_p[:, -1]
+    width = min(nb.width, local_noise.POOL)
+    suspect = np.flatnonzero(local_noise.suspects(ratio, k_init) & np.isfinite(small[:, 0]))
+    if len(suspect) and width > plan.k_initial:  # no bias in the pools: where a wider jet's residual grows
+        idx, dist = nb.rows(suspect, width)
+        _, wide = jet_normals(pts, small[suspect], np.ones(len(suspect), dtype=bool), np.ascontiguousarray(idx),
+                              np.ascontiguousarray(dist), centres=suspect)
+        ratio = ratio.copy()
+        ratio[suspect[local_noise.biased(ratio[suspect] * dist_p[suspect, -1], wide)]] = np.nan
+    clean = ~outlier[idx_p].any(axis=1)
+    return local_noise.local_k(ratio, clean, nb.take_indices(width), k_init, plan.k_initial, plan.k_search,
+                               plan.n_points)
+
+
+def _at_levels(pts, nb, plan, outlier, levels, init, refused, smalls) -> tuple[Initial, np.ndarray]:
+    """``init`` and ``refused`` with the points whose region asks for another initial k
+    (``levels`` (N,), :func:`_levels`) fitted on it, each level's fold test against the
+    typical agreement of its own points; ``smalls`` = (the small normals, their jets'
+    heights, whether they have one, their rows)."""
+    small, height, ok0, idx_p = smalls
+    nrm, ok, refused = init.normals.copy(), init.has_normal.copy(), refused.copy()
+    for k in np.unique(levels[levels != init.k]):
+        c = np.flatnonzero(levels == k)
+        if k == plan.k_initial:  # a quiet region of a noisy cloud: the small normals
+            nrm[c], ok[c], refused[c] = small[c], ok0[c], _refused(ok0[c], height[c], plan)
+            continue
+        idx, dist, clean = _level_rows(nb, c, int(k), outlier, plan)
+        n_c, ok_c = np.empty((len(c), 3)), np.empty(len(c), dtype=bool)
+        kernels.pca_normals_at(pts, c, idx, dist, THETA_REACH, COLLINEAR, n_c, ok_c)
+        wide = np.zeros(len(c))
+        if plan.initial == "jet":
+            n_c, wide = jet_normals(pts, n_c, ok_c, idx, dist, centres=c)
+        spread = np.empty(len(c))
+        kernels.normal_spread(small, idx, spread)
+        n_c, _, folded = unfolded(n_c, small[c], spread, clean, pts=pts, small_rows=idx_p[c])
+        nrm[c], ok[c], refused[c] = n_c, ok_c, _refused(ok_c, np.where(folded, height[c], wide), plan)
+    return init._replace(normals=nrm, has_normal=ok, local=float(np.mean(levels != init.k))), refused
+
+
+def _level_rows(nb, centres, k, outlier, plan):
+    """The ``k`` nearest of ``centres`` (without the known outliers in robust mode, as
+    :func:`initial_rows`) and whether their plain k nearest hold no outlier (as :func:`fold_spreads`)."""
+    robust = plan.robust and outlier.any()
+    idx, dist = nb.rows(centres, min(nb.k_max, 2 * k) if robust else k)
+    if not robust:
+        return np.ascontiguousarray(idx), np.ascontiguousarray(dist), np.ones(len(centres), dtype=bool)
+    clean = ~outlier[idx[:, :k]].any(axis=1)
+    out_i, out_d = np.empty((len(centres), k), dtype=idx.dtype), np.empty((len(centres), k))
+    unflagged_first(np.ascontiguousarray(idx), np.ascontiguousarray(dist), np.ascontiguousarray(outlier, dtype=np.bool_),
+                    out_i, out_d, np.empty(len(centres), dtype=np.int64))
+    return out_i, out_d, clean
 
 
 def _refused(ok, height, plan) -> np.ndarray:

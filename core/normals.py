@@ -42,7 +42,7 @@ def _run(centres):
     return centres
 
 
-def jet_normals(points, normals, ok, idx, dist, *, progress=None):
+def jet_normals(points, normals, ok, idx, dist, *, centres=None, progress=None):
     """Normals of the osculating 2-jet (Cazals & Pouget 2005) fitted in the PCA frames.
 
     A full quadric with constant and linear terms follows a curved patch where a plane
@@ -52,23 +52,25 @@ def jet_normals(points, normals, ok, idx, dist, *, progress=None):
 
     Returns ``(normals, height)``: ``height`` (N,) is the RMS distance of the neighbours
     from the fitted quadric (NaN where it was not fitted), the position noise along the
-    normal once the curvature is taken up.
+    normal once the curvature is taken up. Row r of ``normals``, ``ok``, ``idx`` and
+    ``dist`` is point r, or point ``centres[r]`` given ``centres`` (M,).
     """
     out = normals.copy()
-    height = np.full(len(points), np.nan)
+    height = np.full(len(normals), np.nan)
     rows = np.flatnonzero(ok & (dist[:, -1] > 0))
     for start in range(0, len(rows), _CHUNK):
-        centres = rows[start:start + _CHUNK]
-        at = _run(centres)  # a run of rows (every point of a clean cloud): views, not copies
+        part = rows[start:start + _CHUNK]
+        at = _run(part)  # a run of rows (every point of a clean cloud): views, not copies
         z = normals[at]
         t1, t2 = tangent_basis(z)
-        res = np.empty((len(centres), 3))
-        hgt = np.full(len(centres), np.nan)
-        good = np.empty(len(centres), dtype=bool)
-        kernels.jet_normals(points, np.ascontiguousarray(idx[at]), np.ascontiguousarray(dist[at, -1]), centres,
-                            t1, t2, z, INITIAL_JET_PIVOT, res, hgt, good, np.empty(len(centres)))
-        out[centres[good]] = res[good]
-        height[centres[good]] = hgt[good]
+        res = np.empty((len(part), 3))
+        hgt = np.full(len(part), np.nan)
+        good = np.empty(len(part), dtype=bool)
+        kernels.jet_normals(points, np.ascontiguousarray(idx[at]), np.ascontiguousarray(dist[at, -1]),
+                            part if centres is None else centres[part], t1, t2, z, INITIAL_JET_PIVOT, res, hgt,
+                            good, np.empty(len(part)))
+        out[part[good]] = res[good]
+        height[part[good]] = hgt[good]
         if progress is not None:
             progress(min(len(rows), start + _CHUNK) / max(len(rows), 1), "normals")
     return out, height

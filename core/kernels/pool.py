@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit, prange
 
 from ._base import BLOCK, OPTS
@@ -77,3 +78,64 @@ def _row_sum(v, pool, r):
         res += _at(v, pool, r, i)
         i += 1
     return res
+
+
+@njit(**OPTS, parallel=True)
+def pooled_quantiles(v, pool, q, out):
+    """out[r] = np.nanquantile(v[pool[r]], q) (numpy's linear interpolation; NaN where the
+    row has no finite value), for rows of at most :data:`MAX_POOL` neighbours: the local
+    noise of :mod:`core.local_noise`."""
+    n = pool.shape[0]
+    for blk in prange((n + BLOCK - 1) // BLOCK):
+        row = np.empty(pool.shape[1])
+        for r in range(blk * BLOCK, min(n, (blk + 1) * BLOCK)):
+            out[r] = _row_quantile(v, pool, r, q, row)
+
+
+@njit(**OPTS)
+def _row_quantile(v, pool, r, q, row):
+    """The q-quantile of the finite v[pool[r, :]] (copied into ``row``), by selection."""
+    m = 0
+    for j in range(pool.shape[1]):
+        x = v[pool[r, j]]
+        if math.isfinite(x):
+            row[m] = x
+            m += 1
+    if m == 0:
+        return math.nan
+    at = q * (m - 1)
+    lo = int(math.floor(at))
+    low = _select(row, m, lo)
+    if lo + 1 >= m:
+        return low
+    high = row[lo + 1]
+    for j in range(lo + 2, m):  # after the selection, what is above lo holds the larger values
+        high = min(high, row[j])
+    t = at - lo  # numpy's lerp: from the nearer end
+    return high - (high - low) * (1.0 - t) if t >= 0.5 else low + (high - low) * t
+
+
+@njit(**OPTS)
+def _select(a, m, t):
+    """The t-th smallest of a[:m] (Hoare's selection; a[:m] is reordered: a[t] holds it, the
+    values before it are no larger and those after it no smaller)."""
+    lo, hi = 0, m - 1
+    while lo < hi:
+        pivot = a[(lo + hi) // 2]
+        i, j = lo, hi
+        while i <= j:
+            while a[i] < pivot:
+                i += 1
+            while a[j] > pivot:
+                j -= 1
+            if i <= j:
+                a[i], a[j] = a[j], a[i]
+                i += 1
+                j -= 1
+        if t <= j:
+            hi = j
+        elif t >= i:
+            lo = i
+        else:
+            break
+    return a[t]
