@@ -139,3 +139,28 @@ def _select(a, m, t):
         else:
             break
     return a[t]
+
+
+@njit(**OPTS, parallel=True)
+def pooled_beyond(v, pool, q, low, high, neutral, out):
+    """out[r] = the q-quantile of the finite v[pool[r]] (as :func:`pooled_quantiles`) where it
+    lies below ``low`` or above ``high``, else ``neutral`` (also where the row has no finite
+    value). The quantile is selected only where a count of the row says it may lie beyond:
+    it is at least the lo-th smallest value and at most the next (lo = floor(q (m - 1)))."""
+    n = pool.shape[0]
+    for blk in prange((n + BLOCK - 1) // BLOCK):
+        row = np.empty(pool.shape[1])
+        for r in range(blk * BLOCK, min(n, (blk + 1) * BLOCK)):
+            m = below = upto = 0
+            for j in range(pool.shape[1]):
+                x = v[pool[r, j]]
+                if math.isfinite(x):
+                    m += 1
+                    below += x < low
+                    upto += x <= high
+            lo = int(math.floor(q * (m - 1))) if m else 0
+            out[r] = neutral
+            if m and (upto < lo + 2 or below > lo):
+                x = _row_quantile(v, pool, r, q, row)
+                if x < low or x > high:
+                    out[r] = x

@@ -8,7 +8,7 @@ from scipy.spatial import cKDTree
 import core
 from core import local_noise, metrics, shapes
 from core.initial_normals import noise_samples
-from core.kernels.pool import pooled_quantiles
+from core.kernels.pool import pooled_beyond, pooled_quantiles
 from core.normals import pca_normals
 from core.scale import initial_k, noise_ratio
 
@@ -113,3 +113,22 @@ def test_the_rims_of_thin_parts_are_not_taken_for_noisy_regions(name, sigma):
     s = shapes_thin.THIN_SHAPES[name](20000, seed=1)
     res = core.estimate(shapes_thin.noisy(s, sigma, 2) if sigma else s.points)
     assert res.params["initial_local"] == 0.0
+
+
+def test_pooled_beyond_is_numpys_quantile_where_it_lies_beyond():
+    """The quantile is selected only where a count says it may lie beyond the bounds:
+    the same values as numpy's wherever it does, the neutral value elsewhere."""
+    rng = np.random.default_rng(1)
+    for trial in range(12):
+        v = rng.random(3000) * rng.uniform(0.5, 2.0)
+        v[rng.random(3000) < 0.1] = np.nan
+        pool = rng.integers(0, 3000, (3000, int(rng.integers(3, 50))))
+        q = (0.25, 0.5)[trial % 2]
+        low, high = np.sort(rng.random(2))
+        pool[0] = 7  # a row without a finite value
+        v[7] = np.nan
+        out = np.empty(3000)
+        pooled_beyond(v, pool, q, low, high, -7.0, out)
+        with np.errstate(all="ignore"), pytest.warns(RuntimeWarning):
+            ref = np.nanquantile(v[pool], q, axis=1)
+        np.testing.assert_array_equal(out, np.where((ref < low) | (ref > high), ref, -7.0))
