@@ -88,7 +88,10 @@ def _add_method_arguments(e) -> None:
                    help="neighbours per point, itself included, or auto (default; chosen per point, NF/NR)")
     e.add_argument("--method", type=word, default="nr", choices=list(METHODS), help="estimator (default nr)")
     e.add_argument("--passes", type=int, default=None, help="normal refinement passes (default: method's)")
-    e.add_argument("--orientation", type=word, default="auto", choices=["auto", "propagate", "outward", "keep"])
+    e.add_argument("--orientation", type=word, default="auto", choices=["auto", "propagate", "outward", "keep"],
+                   help="normal signs: auto (default: keep the file's normals; orient estimated ones outward, or "
+                        "toward the scanners of an E57/PTX file), propagate (each part's highest point faces +z), "
+                        "outward, keep")
     e.add_argument("--viewpoint", type=_viewpoint, default=None, help="orient normals towards x,y,z")
     e.add_argument("--option", type=_parse_option, action="append",
                    help="method option key=value; values None, true/false, numbers (e.g. robust=None, degree=3)")
@@ -111,7 +114,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--version", action="version", version=f"{PROG} {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
 
-    e = sub.add_parser("estimate", help="estimate the Darboux frame of every point and write PLY, CSV, XYZ/TXT or LAS/LAZ")
+    e = sub.add_parser("estimate", help="estimate the Darboux frame of every point and write it "
+                                        f"({', '.join(f[1:] for f in (*WRITE_FORMATS, '.las', '.laz'))})")
     _add_io_arguments(e)
     _add_method_arguments(e)
     add_execution_arguments(e)
