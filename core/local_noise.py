@@ -13,10 +13,15 @@ Here each point's noise is pooled over its :data:`POOL` nearest: the lower quart
 noise ratios (:func:`core.initial_normals.noise_samples`), then the median of those over the
 same nearest, times :data:`CALIBRATION` (the median of a cloud's ratios over the median of these
 pooled values: 1.10-1.23 on tori, saddles, cubes and chirps at 0.1-1 spacing of noise): the
-noise ratio the point's region would measure alone. A point whose initial k at that noise
-differs from the cloud's by more than :data:`FACTOR` takes it, snapped onto :data:`LADDER` so
-that the points of a level share their rows' width and the fold test's typical agreement (the
-median over them); the others keep the cloud's. Three guards keep a bias from passing for a
+noise ratio the point's region would measure alone. A point whose initial k at that noise is
+more than :data:`FACTOR` times the cloud's takes it, snapped onto :data:`LADDER` so that the
+points of a level share their rows' width and the fold test's typical agreement (the median
+over them); the others keep the cloud's. Only upward: a region quieter than the cloud keeps
+the cloud's wider initial scale. Moving it down too gained 1-12 % of H on a single-view range
+scan (whose far, sparse part has the lower noise ratio) but lost 30-60 % at the quiet end of a
+torus whose noise grows from 0 to 1 spacing across it, where any smaller initial k was worse
+(levels floored at 15, 20, 28, 40: H 0.00235, 0.00230, 0.00210, 0.00189; the cloud's 60: 0.00168).
+Three guards keep a bias from passing for a
 noisy region:
 
 - a point whose own ratio would ask for more (:func:`suspects`) and whose 2-jet residual grows
@@ -27,10 +32,8 @@ noisy region:
 - a level holds at least :data:`MIN_SHARE` of the cloud.
 
 A cloud of one noise is estimated as before: on tori, saddles, cylinders, ellipsoids, spheres,
-planes, chirps, cubes and range scans at 0-1 spacing of noise, and on the thin shapes of
-:mod:`core.shapes_thin` at 0-0.3, no point moves. What moves is a cloud whose noise *ratio*
-varies: e.g. :func:`core.shapes.graded`, whose density varies 10:1 under one noise (7 % of its
-points, its error within 0.5 %).
+planes, chirps and cubes at 0-1 spacing of noise, and on the thin shapes of
+:mod:`core.shapes_thin` at 0-0.3, no point moves.
 """
 
 from __future__ import annotations
@@ -77,35 +80,34 @@ def biased(height, wide_height) -> np.ndarray:
         return ~(wide_height <= GROWTH * height)
 
 
-def pooled_noise(ratio, clean, pool, low, high) -> np.ndarray:
-    """(N,) the noise ratio of each point's region where it lies below ``low`` or above
-    ``high``: the :data:`QUANTILE` of the ``clean`` points' ``ratio`` over each row of ``pool``
-    (N, m), then the median of those over the same rows, each kept only beyond the two
-    bounds (a value between them, or a row without a clean ratio, counts as their geometric
-    mean: :func:`core.kernels.pool.pooled_beyond` selects only the rows that can lie beyond);
-    NaN where neither lies beyond. In the units of the cloud's ratio (:data:`CALIBRATION`)."""
+def pooled_noise(ratio, clean, pool, bound) -> np.ndarray:
+    """(N,) the noise ratio of each point's region where it exceeds ``bound``: the
+    :data:`QUANTILE` of the ``clean`` points' ``ratio`` over each row of ``pool`` (N, m),
+    then the median of those over the same rows, each kept only above the bound (a value
+    below it, or a row without a clean ratio, counts as 0:
+    :func:`core.kernels.pool.pooled_beyond` selects only the rows that can lie above); NaN
+    where it does not exceed it. In the units of the cloud's ratio (:data:`CALIBRATION`)."""
     pool = np.ascontiguousarray(pool)
     values = np.where(clean, ratio, np.nan) * CALIBRATION
-    neutral = np.sqrt(low * high)
     first, second = np.empty(len(pool)), np.empty(len(pool))
-    pooled_beyond(values, pool, QUANTILE, low, high, neutral, first)
-    pooled_beyond(first, pool, 0.5, low, high, neutral, second)
-    return np.where(second == neutral, np.nan, second)
+    pooled_beyond(values, pool, QUANTILE, 0.0, bound, 0.0, first)
+    pooled_beyond(first, pool, 0.5, 0.0, bound, 0.0, second)
+    return np.where(second > bound, second, np.nan)
 
 
 def local_k(ratio, clean, pool, k_cloud, k_min, k_max, n_points) -> np.ndarray | None:
     """(N,) int: the initial k of each point, ``k_cloud`` except where its region's noise
-    (:func:`pooled_noise`) asks for more than :data:`FACTOR` times more or less (then a
-    :data:`LADDER` size within ``k_min``..``k_max``); None where every point keeps ``k_cloud``."""
+    (:func:`pooled_noise`) asks for more than :data:`FACTOR` times more (then a
+    :data:`LADDER` size up to ``k_max``); None where every point keeps ``k_cloud``."""
     low, high = initial_k(0.0, k_min, k_max, n_points), initial_k(1e12, k_min, k_max, n_points)
-    bounds = ((k_cloud / (FACTOR * INITIAL_K0)) ** 2, (FACTOR * k_cloud / INITIAL_K0) ** 2)  # noise ratios
-    if _scarce(np.where(clean, ratio, np.nan) * CALIBRATION, bounds, FACTOR * low < k_cloud, high > FACTOR * k_cloud):
+    bound = (FACTOR * k_cloud / INITIAL_K0) ** 2  # the noise ratio that asks for FACTOR x k_cloud
+    if high <= FACTOR * k_cloud or _scarce(np.where(clean, ratio, np.nan) * CALIBRATION, bound):
         return None
-    noise = pooled_noise(ratio, clean, pool, *bounds)
+    noise = pooled_noise(ratio, clean, pool, bound)
     with np.errstate(invalid="ignore"):
         own = np.clip(np.rint(INITIAL_K0 * np.sqrt(noise)), low, high)  # initial_k, vectorised
     own = np.where(np.isfinite(noise), own, k_cloud).astype(np.int64)
-    moved = (own > FACTOR * k_cloud) | (FACTOR * own < k_cloud)
+    moved = own > FACTOR * k_cloud
     if moved.any():  # a region, not a scattered point or a thin band of bias: most of the pool moves too
         pool_moved = np.empty(len(moved))
         pooled_quantiles(moved.astype(np.float64), pool, 0.5, pool_moved)
@@ -122,14 +124,12 @@ def local_k(ratio, clean, pool, k_cloud, k_min, k_max, n_points) -> np.ndarray |
     return None if (out == k_cloud).all() else out
 
 
-def _scarce(values, bounds, down, up) -> bool:
-    """Whether too few ``values`` (noise ratios, NaN left out) lie beyond the ``bounds`` (in
-    the directions ``down``, ``up`` a point can move) for any region to move: a point moves
-    only where more than half of its pool has three quarters of its own pool beyond, so a
-    level of :data:`MIN_SHARE` of the points needs about MIN_SHARE / 2.5 of them beyond, more
-    where the pools overlap unevenly; fewer than MIN_SHARE / :data:`SCARCE` skip the pooling
-    (on a noise-free torus of 100k points it cost 5.8 % of the default's time)."""
+def _scarce(values, bound) -> bool:
+    """Whether too few ``values`` (noise ratios, NaN left out) exceed ``bound`` for any
+    region to move: a point moves only where more than half of its pool has three quarters
+    of its own pool above, so a level of :data:`MIN_SHARE` of the points needs about
+    MIN_SHARE / 2.5 of them above, more where the pools overlap unevenly; fewer than
+    MIN_SHARE / :data:`SCARCE` skip the pooling (on a noise-free torus of 100k points it
+    cost 5.8 % of the default's time)."""
     with np.errstate(invalid="ignore"):
-        below = np.count_nonzero(values < bounds[0]) if down else 0
-        above = np.count_nonzero(values > bounds[1]) if up else 0
-    return max(below, above) < MIN_SHARE * len(values) / SCARCE
+        return np.count_nonzero(values > bound) < MIN_SHARE * len(values) / SCARCE

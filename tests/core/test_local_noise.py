@@ -64,12 +64,12 @@ def test_a_cloud_of_one_noise_keeps_its_one_initial_scale(name, sigma):
     assert levels is None, (k_cloud, np.unique(levels, return_counts=True))
 
 
-def test_each_region_takes_the_initial_scale_of_its_own_noise(torus):
+def test_a_noisier_region_takes_the_initial_scale_of_its_own_noise(torus):
     x = torus.points[:, 0]
     k_cloud, levels = _levels(_noisy(torus, np.where(x < 0, 0.0, 1.0)))
     alone, _ = _levels(_noisy(torus, np.ones(len(x))))
     assert levels is not None
-    assert np.median(levels[x < -0.6]) == 15  # the quiet half: the smallest
+    assert (levels[x < -0.6] == k_cloud).all()  # the quiet half keeps the cloud's: only noisier regions move
     noisy = levels[x > 0.6]
     assert k_cloud < 0.7 * alone  # what the cloud's median gave the noisy half
     assert (noisy >= k_cloud).all()
@@ -97,7 +97,7 @@ def test_pooled_quantiles_are_numpys():
 def test_the_share_of_points_at_their_regions_scale_is_reported(torus):
     x = torus.points[:, 0]
     mixed = core.estimate(_noisy(torus, np.where(x < 0, 0.0, 1.0)))
-    assert 0.5 < mixed.params["initial_local"] < 1.0  # the quiet half at least, and much of the noisy one
+    assert 0.2 < mixed.params["initial_local"] < 0.5  # much of the noisy half
     assert core.estimate(_noisy(torus, np.ones(len(x)))).params["initial_local"] == 0.0
 
 
@@ -132,3 +132,13 @@ def test_pooled_beyond_is_numpys_quantile_where_it_lies_beyond():
         with np.errstate(all="ignore"), pytest.warns(RuntimeWarning):
             ref = np.nanquantile(v[pool], q, axis=1)
         np.testing.assert_array_equal(out, np.where((ref < low) | (ref > high), ref, -7.0))
+
+
+def test_a_quieter_region_keeps_the_clouds_wider_initial_scale():
+    """Noise growing from 0 to 1 spacing across a torus: its quiet end fitted on its own
+    (smaller) initial scale had a 40 % larger H error (0.00235 against 0.00168)."""
+    t = shapes.torus(30000, seed=5)
+    x = t.points[:, 0]
+    res = core.estimate(_noisy(t, np.clip((x + 3) / 6, 0, 1), seed=2))
+    quiet = (x < -2) & t.interior
+    assert _errors(res, t, quiet)["mean"] < 0.0019
