@@ -21,8 +21,8 @@ the cloud's wider initial scale. Moving it down too gained 1-12 % of H on a sing
 scan (whose far, sparse part has the lower noise ratio) but lost 30-60 % at the quiet end of a
 torus whose noise grows from 0 to 1 spacing across it, where any smaller initial k was worse
 (levels floored at 15, 20, 28, 40: H 0.00235, 0.00230, 0.00210, 0.00189; the cloud's 60: 0.00168).
-Three guards keep a bias from passing for a
-noisy region:
+
+Three guards keep a bias from passing for a noisy region:
 
 - a point whose own ratio would ask for more (:func:`suspects`) and whose 2-jet residual grows
   with the radius (:func:`biased`) is left out of the pools: the rims of thin parts and a cube's
@@ -55,21 +55,26 @@ CALIBRATION = 1.2
 #: spacing; the rims of thin plates, wedges, brackets and shells and a cube's edges, noise-free
 #: or at 0.1 spacing: median 1.6-3.7)
 GROWTH = 1.5
-#: a point takes its region's initial k where it differs from the cloud's by more than this factor
+#: a point takes its region's initial k where it is more than this factor times the cloud's
 FACTOR = 1.5
 #: the least share of the cloud's points a level other than the cloud's must hold
 MIN_SHARE = 0.01
-#: the pooling is skipped where fewer than MIN_SHARE / SCARCE of the points lie beyond (:func:`_scarce`)
+#: the pooling is skipped where fewer than MIN_SHARE / SCARCE of the points lie above its bound (:func:`_scarce`)
 SCARCE = 8
 #: the initial k a region may take (a factor ~sqrt(2) apart)
 LADDER = np.array([15, 20, 28, 40, 56, 80, 113, 160, 226, 320])
+
+
+def moving_bound(k_cloud) -> float:
+    """The noise ratio at which :func:`core.scale.initial_k` asks for :data:`FACTOR` x ``k_cloud``."""
+    return (FACTOR * k_cloud / INITIAL_K0) ** 2
 
 
 def suspects(ratio, k_cloud) -> np.ndarray:
     """(N,) bool: the points whose own noise ratio alone would ask for more than
     :data:`FACTOR` x ``k_cloud`` initial neighbours: where a bias could pass for noise."""
     with np.errstate(invalid="ignore"):
-        return CALIBRATION * ratio > (FACTOR * k_cloud / INITIAL_K0) ** 2
+        return CALIBRATION * ratio > moving_bound(k_cloud)
 
 
 def biased(height, wide_height) -> np.ndarray:
@@ -100,8 +105,8 @@ def local_k(ratio, clean, pool, k_cloud, k_min, k_max, n_points) -> np.ndarray |
     (:func:`pooled_noise`) asks for more than :data:`FACTOR` times more (then a
     :data:`LADDER` size up to ``k_max``); None where every point keeps ``k_cloud``."""
     low, high = initial_k(0.0, k_min, k_max, n_points), initial_k(1e12, k_min, k_max, n_points)
-    bound = (FACTOR * k_cloud / INITIAL_K0) ** 2  # the noise ratio that asks for FACTOR x k_cloud
-    if high <= FACTOR * k_cloud or _scarce(np.where(clean, ratio, np.nan) * CALIBRATION, bound):
+    bound = moving_bound(k_cloud)
+    if high <= FACTOR * k_cloud or _scarce(suspects(np.where(clean, ratio, np.nan), k_cloud)):
         return None
     noise = pooled_noise(ratio, clean, pool, bound)
     with np.errstate(invalid="ignore"):
@@ -124,12 +129,11 @@ def local_k(ratio, clean, pool, k_cloud, k_min, k_max, n_points) -> np.ndarray |
     return None if (out == k_cloud).all() else out
 
 
-def _scarce(values, bound) -> bool:
-    """Whether too few ``values`` (noise ratios, NaN left out) exceed ``bound`` for any
-    region to move: a point moves only where more than half of its pool has three quarters
-    of its own pool above, so a level of :data:`MIN_SHARE` of the points needs about
-    MIN_SHARE / 2.5 of them above, more where the pools overlap unevenly; fewer than
+def _scarce(above) -> bool:
+    """Whether too few points are ``above`` (N,) bool the bound (:func:`suspects` among the
+    clean) for any region to move: a point moves only where more than half of its pool has
+    three quarters of its own pool above, so a level of :data:`MIN_SHARE` of the points needs
+    about MIN_SHARE / 2.5 of them above, more where the pools overlap unevenly; fewer than
     MIN_SHARE / :data:`SCARCE` skip the pooling (on a noise-free torus of 100k points it
     cost 5.8 % of the default's time)."""
-    with np.errstate(invalid="ignore"):
-        return np.count_nonzero(values > bound) < MIN_SHARE * len(values) / SCARCE
+    return np.count_nonzero(above) < MIN_SHARE * len(above) / SCARCE
