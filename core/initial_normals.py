@@ -57,23 +57,25 @@ def _initial_normals(pts, nb, plan, outlier, report) -> tuple[Initial, np.ndarra
         if plan.initial == "jet":
             nrm, _ = jet_normals(pts, nrm, ok, idx_p, dist_p, progress=report.sub(0.37, 0.43))
         return Initial(nrm, ok), np.zeros(len(pts), dtype=bool)
-    jet = None
+    jet = ratios = None
     noise = plan.noise
     if noise is None:
         jet, ratio, clean = noise_samples(pts, nrm, ok, idx_p, dist_p, outlier)
         noise = scale.noise_ratio(np.where(clean, ratio, np.nan) if clean.any() else ratio, 1.0)
-        jet = (jet, ratio)
+        jet, ratios = (jet, ratio), (ratio, clean)
     k_init = scale.initial_k(noise, plan.k_initial, plan.k_search, plan.n_points)
     if k_init > nb.width:  # noise this large grows most jets to k_search too: search them all once, unless
         del idx_p, dist_p  # only anchors walk on (core.anchors.shares_scale; views of the narrow graph would keep it alive)
         nb.widen(k_init if anchors.shares_scale(plan) else plan.k_search)
         idx_p, dist_p = nb.take(plan.k_initial)
     small, height = _small_normals(pts, nrm, ok, idx_p, dist_p, jet, plan)
-    levels = _levels(pts, nb, plan, outlier, (idx_p, dist_p), (small, height), jet, k_init)
+    if ratios is None and plan.initial == "jet":  # the noise given: the small jets' heights measure the regions
+        ratios = noise_ratios(height, idx_p, dist_p, outlier)
+    levels = None if ratios is None else _levels(pts, nb, plan, (idx_p, dist_p), small, ratios, k_init)
     init, refused = _at_cloud_scale(pts, nb, plan, outlier, report, (ok, idx_p, noise, k_init), (small, height))
     if levels is None:
         return init, refused
-    return _at_levels(pts, nb, plan, outlier, levels, init, refused, (small, height, ok, idx_p))
+    return _at_levels(pts, nb, plan, outlier, levels, init, refused, (small, height, idx_p))
 
 
 def _at_cloud_scale(pts, nb, plan, outlier, report, cloud, smalls) -> tuple[Initial, np.ndarray]:
@@ -95,17 +97,13 @@ def _at_cloud_scale(pts, nb, plan, outlier, report, cloud, smalls) -> tuple[Init
     return Initial(nrm, ok, noise, k_init, typical), _refused(ok, np.where(folded, height, wide), plan)
 
 
-def _levels(pts, nb, plan, outlier, small_rows, smalls, jet, k_init):
-    """Each point's initial k where its region's noise asks for another than the cloud's
-    ``k_init`` (:func:`core.local_noise.local_k`, from the ratios of the 2-jets ``jet``
-    measured, else of the ``smalls`` (normals, heights) over the ``small_rows`` (idx,
-    dist) radii, without the suspects whose residual is a bias); None where none does."""
+def _levels(pts, nb, plan, small_rows, small, ratios, k_init):
+    """Each point's initial k where its region's noise asks for more than the cloud's
+    ``k_init`` (:func:`core.local_noise.local_k`) from ``ratios`` (:func:`noise_ratios`),
+    without the suspects whose residual is a bias (their jets on wider rows, in the frames
+    of the ``small`` normals); None where none does."""
     idx_p, dist_p = small_rows
-    small, height = smalls
-    if jet is None and plan.initial != "jet":
-        return None  # the noise was given and no jet measures its regions
-    with np.errstate(invalid="ignore", divide="ignore"):
-        ratio = jet[1] if jet is not None else height / dist_p[:, -1]
+    ratio, clean = ratios
     width = min(nb.width, local_noise.POOL)
     suspect = np.flatnonzero(local_noise.suspects(ratio, k_init) & np.isfinite(small[:, 0]))
     if len(suspect) and width > plan.k_initial:  # no bias in the pools: where a wider jet's residual grows
@@ -114,7 +112,6 @@ def _levels(pts, nb, plan, outlier, small_rows, smalls, jet, k_init):
                               np.ascontiguousarray(dist), centres=suspect)
         ratio = ratio.copy()
         ratio[suspect[local_noise.biased(ratio[suspect] * dist_p[suspect, -1], wide)]] = np.nan
-    clean = ~outlier[idx_p].any(axis=1)
     return local_noise.local_k(ratio, clean, nb.take_indices(width), k_init, plan.k_initial, plan.k_search,
                                plan.n_points)
 
@@ -123,14 +120,11 @@ def _at_levels(pts, nb, plan, outlier, levels, init, refused, smalls) -> tuple[I
     """``init`` and ``refused`` with the points whose region asks for another initial k
     (``levels`` (N,), :func:`_levels`) fitted on it, each level's fold test against the
     typical agreement of its own points; ``smalls`` = (the small normals, their jets'
-    heights, whether they have one, their rows)."""
-    small, height, ok0, idx_p = smalls
+    heights, their rows)."""
+    small, height, idx_p = smalls
     nrm, ok, refused = init.normals.copy(), init.has_normal.copy(), refused.copy()
-    for k in np.unique(levels[levels != init.k]):
+    for k in np.unique(levels[levels != init.k]):  # above the cloud's (core.local_noise), so above plan.k_initial
         c = np.flatnonzero(levels == k)
-        if k == plan.k_initial:  # a quiet region of a noisy cloud: the small normals
-            nrm[c], ok[c], refused[c] = small[c], ok0[c], _refused(ok0[c], height[c], plan)
-            continue
         idx, dist, clean = _level_rows(nb, c, int(k), outlier, plan)
         n_c, ok_c = np.empty((len(c), 3)), np.empty(len(c), dtype=bool)
         kernels.pca_normals_at(pts, c, idx, dist, THETA_REACH, COLLINEAR, n_c, ok_c)
@@ -235,6 +229,10 @@ def noise_samples(pts, nrm, ok, idx_p, dist_p, outlier):
     the residuals around it; the median is taken over the clean points if any). A tiled
     run gathers these over the whole cloud and fixes ``plan.noise``."""
     jet, height = jet_normals(pts, nrm, ok, idx_p, dist_p)
+    return (jet, *noise_ratios(height, idx_p, dist_p, outlier))
+
+
+def noise_ratios(height, idx_p, dist_p, outlier):
+    """``(ratio, clean)`` per point (:func:`noise_samples`) from its 2-jet's ``height``."""
     with np.errstate(invalid="ignore", divide="ignore"):
-        ratio = height / dist_p[:, -1]
-    return jet, ratio, ~outlier[idx_p].any(axis=1)
+        return height / dist_p[:, -1], ~outlier[idx_p].any(axis=1)

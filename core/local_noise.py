@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .kernels.pool import pooled_beyond, pooled_quantiles
+from .kernels.pool import pooled_above, pooled_nanmeans
 from .scale import initial_k
 from .tuning import INITIAL_K0
 
@@ -90,13 +90,13 @@ def pooled_noise(ratio, clean, pool, bound) -> np.ndarray:
     :data:`QUANTILE` of the ``clean`` points' ``ratio`` over each row of ``pool`` (N, m),
     then the median of those over the same rows, each kept only above the bound (a value
     below it, or a row without a clean ratio, counts as 0:
-    :func:`core.kernels.pool.pooled_beyond` selects only the rows that can lie above); NaN
+    :func:`core.kernels.pool.pooled_above` selects only the rows that can lie above); NaN
     where it does not exceed it. In the units of the cloud's ratio (:data:`CALIBRATION`)."""
     pool = np.ascontiguousarray(pool)
     values = np.where(clean, ratio, np.nan) * CALIBRATION
     first, second = np.empty(len(pool)), np.empty(len(pool))
-    pooled_beyond(values, pool, QUANTILE, 0.0, bound, 0.0, first)
-    pooled_beyond(first, pool, 0.5, 0.0, bound, 0.0, second)
+    pooled_above(values, pool, QUANTILE, bound, first)
+    pooled_above(first, pool, 0.5, bound, second)
     return np.where(second > bound, second, np.nan)
 
 
@@ -109,14 +109,14 @@ def local_k(ratio, clean, pool, k_cloud, k_min, k_max, n_points) -> np.ndarray |
     if high <= FACTOR * k_cloud or _scarce(suspects(np.where(clean, ratio, np.nan), k_cloud)):
         return None
     noise = pooled_noise(ratio, clean, pool, bound)
-    with np.errstate(invalid="ignore"):
-        own = np.clip(np.rint(INITIAL_K0 * np.sqrt(noise)), low, high)  # initial_k, vectorised
-    own = np.where(np.isfinite(noise), own, k_cloud).astype(np.int64)
+    above = np.isfinite(noise)
+    own = np.where(above, initial_k(np.where(above, noise, 0.0), k_min, k_max, n_points), k_cloud)
     moved = own > FACTOR * k_cloud
     if moved.any():  # a region, not a scattered point or a thin band of bias: most of the pool moves too
-        pool_moved = np.empty(len(moved))
-        pooled_quantiles(moved.astype(np.float64), pool, 0.5, pool_moved)
-        moved &= pool_moved >= 1.0
+        share, _ = np.empty(len(moved)), np.empty(len(moved))
+        flags = moved.astype(np.float64)
+        pooled_nanmeans(flags, flags, np.ascontiguousarray(pool), share, _)
+        moved &= share > 0.5
     if not moved.any():
         return None
     steps = LADDER[(LADDER >= low) & (LADDER <= high)]

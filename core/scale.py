@@ -160,12 +160,14 @@ def noise_ratio(height, h) -> float:
     return float(np.median(ratio)) if len(ratio) else 0.0
 
 
-def initial_k(noise: float, k_min: int, k_max: int, n_points: int) -> int:
+def initial_k(noise, k_min: int, k_max: int, n_points: int):
     """Initial normals' neighbours at a ``noise_ratio`` (tuning.INITIAL_K0), at most n_points / INITIAL_SHARE
-    and what every point may hold (:func:`core.neighbour_budget.whole_cap`: the initial normals fit at every point)."""
-    k = int(round(INITIAL_K0 * np.sqrt(max(noise, 0.0))))
+    and what every point may hold (:func:`core.neighbour_budget.whole_cap`: the initial normals fit at every point);
+    an int, or an int64 array for an array of (finite) noise ratios (:mod:`core.local_noise`)."""
+    k = np.rint(INITIAL_K0 * np.sqrt(np.maximum(noise, 0.0)))  # half to even, as round()
     k_max = min(k_max, n_points // INITIAL_SHARE, neighbour_budget.whole_cap(n_points, k_min, k_max))
-    return int(min(max(k, k_min), max(k_max, k_min)))
+    k = np.clip(k, k_min, max(k_max, k_min))
+    return int(k) if np.ndim(k) == 0 else k.astype(np.int64)
 
 
 # ----------------------------------------------------------------------------- jets (issue 15)

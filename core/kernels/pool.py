@@ -1,5 +1,6 @@
-"""Means over each point's neighbours of a per-point value (numba, ``nogil``): the pooled
-residual variances of :func:`core.scale.noise_variance`.
+"""Means and quantiles over each point's neighbours of a per-point value (numba, ``nogil``):
+the pooled residual variances of :func:`core.scale.noise_variance`, the local noise of
+:mod:`core.local_noise`.
 
 Numpy reference: ``np.nanmean(v[pool], axis=1)``, which gathers an (N, m) copy, a NaN
 mask and a zero-filled copy before it sums (1.3 s of a 1M-point estimate for two
@@ -80,21 +81,10 @@ def _row_sum(v, pool, r):
     return res
 
 
-@njit(**OPTS, parallel=True)
-def pooled_quantiles(v, pool, q, out):
-    """out[r] = np.nanquantile(v[pool[r]], q) (numpy's linear interpolation; NaN where the
-    row has no finite value), for rows of at most :data:`MAX_POOL` neighbours: the local
-    noise of :mod:`core.local_noise`."""
-    n = pool.shape[0]
-    for blk in prange((n + BLOCK - 1) // BLOCK):
-        row = np.empty(pool.shape[1])
-        for r in range(blk * BLOCK, min(n, (blk + 1) * BLOCK)):
-            out[r] = _row_quantile(v, pool, r, q, row)
-
-
 @njit(**OPTS)
 def _row_quantile(v, pool, r, q, row):
-    """The q-quantile of the finite v[pool[r, :]] (copied into ``row``), by selection."""
+    """The q-quantile of the finite v[pool[r, :]] (at least one; copied into ``row``), by
+    selection, as numpy's linear interpolation gives it."""
     m = 0
     for j in range(pool.shape[1]):
         x = v[pool[r, j]]
@@ -142,25 +132,23 @@ def _select(a, m, t):
 
 
 @njit(**OPTS, parallel=True)
-def pooled_beyond(v, pool, q, low, high, neutral, out):
-    """out[r] = the q-quantile of the finite v[pool[r]] (as :func:`pooled_quantiles`) where it
-    lies below ``low`` or above ``high``, else ``neutral`` (also where the row has no finite
-    value). The quantile is selected only where a count of the row says it may lie beyond:
-    it is at least the lo-th smallest value and at most the next (lo = floor(q (m - 1)))."""
+def pooled_above(v, pool, q, bound, out):
+    """out[r] = np.nanquantile(v[pool[r]], q) (numpy's linear interpolation) where it exceeds
+    ``bound``, else 0 (also where the row has no finite value): the local noise of
+    :mod:`core.local_noise`. The quantile is selected only where a count of the row says it
+    may exceed the bound: it is at most the (lo + 1)-th smallest value (lo = floor(q (m - 1)))."""
     n = pool.shape[0]
     for blk in prange((n + BLOCK - 1) // BLOCK):
         row = np.empty(pool.shape[1])
         for r in range(blk * BLOCK, min(n, (blk + 1) * BLOCK)):
-            m = below = upto = 0
+            m = upto = 0
             for j in range(pool.shape[1]):
                 x = v[pool[r, j]]
                 if math.isfinite(x):
                     m += 1
-                    below += x < low
-                    upto += x <= high
-            lo = int(math.floor(q * (m - 1))) if m else 0
-            out[r] = neutral
-            if m and (upto < lo + 2 or below > lo):
+                    upto += x <= bound
+            out[r] = 0.0
+            if m and upto < int(math.floor(q * (m - 1))) + 2:
                 x = _row_quantile(v, pool, r, q, row)
-                if x < low or x > high:
+                if x > bound:
                     out[r] = x
