@@ -12,7 +12,7 @@ import numpy as np
 
 from .fields import FIELDS, FILE_PREFIX, RGB, FieldSpec
 
-__all__ = ["keep", "colour_names", "colours_of", "specs_of", "find", "unknown_text", "point_values", "RGB_LABEL",
+__all__ = ["keep", "colour_names", "colours_of", "specs_of", "listed", "find", "unknown_text", "point_values", "RGB_LABEL",
            "MAX_CATEGORIES", "LUMA"]
 
 RGB_LABEL = "File colour (RGB)"
@@ -86,6 +86,27 @@ def specs_of(fields: dict) -> dict:
         if rgb is None or name not in rgb:
             key = FILE_PREFIX + name
             out[key] = FieldSpec(key, f"File: {name}", False, needs="file", **_categories(values))
+    return out
+
+
+def _varies(values: np.ndarray) -> bool:
+    """Whether ``values`` hold two different numbers (NaN aside)."""
+    finite = values if values.dtype.kind in "iu" else values[np.isfinite(values)]
+    return finite.size > 1 and bool(finite.min() != finite.max())
+
+
+def listed(specs: dict, fields: dict, keep: str | None = None) -> dict:
+    """Field name -> title of the fields of ``specs`` worth a row in the Field box: those
+    whose values vary. A field of one value at every point (LAS's unused flags and user
+    data, colours a format stores but the scanner left at 0) would draw the cloud in one
+    colour; CloudCompare's LAS import leaves such fields out the same way. They stay in
+    ``specs`` (the command line's ``--field`` still draws them), and ``keep`` (the field
+    shown) is listed whatever its values."""
+    out = {}
+    for key, spec in specs.items():
+        names = colour_names(fields) if key == RGB else (key[len(FILE_PREFIX):],)
+        if key == keep or any(_varies(np.asarray(fields[n])) for n in names):
+            out[key] = spec.title
     return out
 
 

@@ -75,10 +75,10 @@ class ResultPresenter:
 
     def show_source(self, source) -> None:
         """A new cloud is on screen, not estimated yet: the Field box lists its file's own
-        fields, and the one chosen, if it is one of them, is drawn now (those do not wait for
+        fields (those that vary, :func:`app.file_fields.listed`), and the one chosen, if it is one of them, is drawn now (those do not wait for
         the estimate). A command line's "file:Intensity" becomes the file's "file:intensity"."""
-        self.field_panel.set_file_fields({name: spec.title for name, spec in source.field_specs.items()})
         name = file_fields.find(self.state.field, source.field_specs) if is_file_field(self.state.field) else None
+        self.field_panel.set_file_fields(file_fields.listed(source.field_specs, source.fields, keep=name))
         if name is not None and name != self.state.field:
             self.state.set(field=name)
         self._colour_source()

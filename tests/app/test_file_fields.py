@@ -101,6 +101,22 @@ def test_file_fields_are_sequential_whatever_their_sign_and_small_integers_categ
     assert file_fields.specs_of({"k": wide})["file:k"].scale == "linear"
 
 
+def test_fields_of_one_value_are_not_listed_but_stay_drawable():
+    n = 5
+    fields = {"red": np.zeros(n, np.uint16), "green": np.zeros(n, np.uint16), "blue": np.zeros(n, np.uint16),
+              "intensity": np.arange(n, dtype=np.float32), "synthetic": np.zeros(n, np.uint8),
+              "user_data": np.full(n, 7, np.int32), "gone": np.full(n, np.nan), "one_left": np.array([np.nan] * 4 + [2.0]),
+              "sparse": np.array([np.nan, 1.0, np.nan, 3.0, np.nan]), "blue_only": np.array([0, 0, 0, 0, 1], np.uint8)}
+    specs = file_fields.specs_of(fields)
+    assert list(file_fields.listed(specs, fields)) == ["file:intensity", "file:sparse", "file:blue_only"]
+    assert file_fields.listed(specs, fields)["file:intensity"] == "File: intensity"
+    assert list(file_fields.listed(specs, fields, keep="file:synthetic")) == [
+        "file:intensity", "file:synthetic", "file:sparse", "file:blue_only"]  # the one shown stays
+    assert RGB in specs and "file:synthetic" in specs  # still drawable by name (--field)
+    fields["blue"] = np.array([0, 0, 0, 0, 65535], np.uint16)  # one colour component varying is enough
+    assert RGB in file_fields.listed(specs, fields)
+
+
 # -- the window -------------------------------------------------------------------------------------
 def test_field_box_lists_the_files_own_fields_and_rgb_draws_the_files_colours(make_window, qtbot, tmp_path):
     _, fields = _coloured_ply(tmp_path / "c.ply", n=400)
@@ -138,6 +154,23 @@ def test_16_bit_colours_are_drawn_in_8_bits(make_window, qtbot, tmp_path):
     drawn = np.asarray(window.scene._cloud.point_data["rgb"])
     want = np.column_stack([fields["red"], fields["green"], fields["blue"]]) // 257
     assert drawn.dtype == np.uint8 and np.array_equal(drawn, want[window.scene.drawn])
+
+
+def test_a_las_style_file_lists_only_the_fields_that_vary(make_window, qtbot, tmp_path):
+    points = _sphere(300)
+    zeros = np.zeros(len(points), np.uint16)  # LAS point formats carry colours many scanners leave at 0
+    fields = {"red": zeros, "green": zeros, "blue": zeros, "intensity": (points[:, 2] * 100 + 500).astype(np.uint16),
+              "synthetic": np.zeros(len(points), np.uint8), "scan_angle": np.full(len(points), -3, np.int8)}
+    core.io.write_cloud(tmp_path / "scan.ply", points, fields=fields)
+    window = make_window()
+    with wait_result(qtbot, window):
+        window.set_source(load_file(tmp_path / "scan.ply"))
+    assert [t for t in _combo_texts(window) if t.startswith("File")] == ["File: intensity"]
+    window = make_window(field="file:synthetic")  # asked for by name, it is listed and drawn
+    with wait_result(qtbot, window):
+        window.set_source(load_file(tmp_path / "scan.ply"))
+    assert [t for t in _combo_texts(window) if t.startswith("File")] == ["File: intensity", "File: synthetic"]
+    assert window.state.field == "file:synthetic" and window.shown["field"] == "file:synthetic"
 
 
 def test_a_cloud_without_fields_lists_none(make_window, qtbot, tmp_path, torus):
