@@ -22,7 +22,8 @@ from .patch import Chunk
 from .spatial_order import SpatialOrder, given_in_spatial_order
 from .wide_neighbours import search_in_spatial_order
 from .creases import crease_residuals, judge_creases as _creases
-from .tuning import JET_SCORE, OUTLIER_FLOOR, SEARCH_WIDTH
+from .off_surface import off_surface
+from .tuning import JET_SCORE, OUTLIER_FLOOR, OUTLIER_SCORE, SEARCH_WIDTH
 
 _CHUNK = 32_768
 #: a fit's chunk holds at least _CHUNK centres, more when their neighbourhoods are narrow:
@@ -98,13 +99,20 @@ def search_width(plan) -> int | None:
 
 
 def outlier_scores(pts, idx) -> np.ndarray:
-    """Distance of each point from its neighbours' plane in units of their spread; inf for
-    the points of a group smaller than a neighbourhood, apart from the rest
+    """Distance of each point from its neighbours' plane in units of their spread, raised
+    to the off-surface score where that alone flags the point (:mod:`core.off_surface`:
+    the robust planes of its own and its neighbours' rows, which outliers among the
+    neighbours or a curved surface's sag do not hide it from); inf for the points of a
+    group smaller than a neighbourhood, apart from the rest
     (:func:`core.kernels.isolated_groups`: a clump floating off the surface, whose own
-    points made up its neighbours' plane)."""
+    points made up its neighbours' plane). Below the flag the plane's score is kept: it
+    also sets which points sit out the jets (:data:`core.tuning.JET_SCORE`)."""
     idx = np.ascontiguousarray(idx)
     scores = np.full(len(pts), np.nan)
     kernels.outlier_scores(pts, idx, OUTLIER_FLOOR, scores)
+    off = off_surface(pts, idx)
+    raised = off > OUTLIER_SCORE
+    scores[raised] = np.fmax(scores[raised], off[raised])
     apart = np.zeros(len(pts), dtype=bool)
     kernels.isolated_groups(pts, idx, apart)
     scores[apart] = np.inf

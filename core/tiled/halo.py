@@ -27,11 +27,24 @@ _PROBE = 20_000
 #: the first margin is this many times (rings x the 99th percentile of the k-th distance)
 _MARGIN_SAFETY = 1.25
 _GROWTH = 1.5
+#: kNN rings beyond a point whose ``k_initial`` nearest its outlier flag reads: its own row,
+#: its neighbours' planes and their neighbours' scales (:func:`core.off_surface.off_surface`)
+FLAG_RINGS = 2
 
 
 def chain_rings(passes: int) -> int:
     """kNN rings beyond a tile whose neighbourhoods must be exact: one per fit (passes + 1)."""
     return passes + 1
+
+
+def nr_chain(passes: int, k: int, k_initial: int, robust: bool) -> tuple:
+    """The dependency chain (as :func:`auto_chain`'s) of an integer k: the fits' k nearest
+    to :func:`chain_rings`, and the outlier flags' ``k_initial`` nearest
+    :data:`FLAG_RINGS` further out from the points whose flags are read: the own points'
+    (reported), and in robust mode those of the initial normals' neighbours, a ring beyond
+    the fits' (outliers are left out of both)."""
+    flags = chain_rings(passes) + 1 if robust else 0
+    return ((chain_rings(passes), k), (flags + FLAG_RINGS, k_initial))
 
 
 def auto_chain(passes: int, k_search: int, k_initial: int, anchored: bool = False) -> tuple:
@@ -47,7 +60,8 @@ def auto_chain(passes: int, k_search: int, k_initial: int, anchored: bool = Fals
     neighbours, the jets' normals) and their k_init-NN PCA and 2-jet, which in robust mode
     skip outliers over the whole ``k_search`` list (``Neighbours.take_without``): exact
     ``k_search`` lists to ring ``passes + 1``. The outlier flags of those lists' points,
-    ring ``passes + 2``, need only their ``k_initial`` nearest (the outlier scores). Each
+    ring ``passes + 2``, need only the ``k_initial`` nearest of the points up to
+    :data:`FLAG_RINGS` further (the outlier scores). Each
     point's own-sheet order (:mod:`core.one_sheet`) reads its neighbours' normals, from their
     own-sheet rows in turn: the first :func:`core.one_sheet.sheet_width` one ring further,
     and the ``k_initial`` nearest two. With ``anchored`` fits (:mod:`core.anchors`) a point's
@@ -56,7 +70,7 @@ def auto_chain(passes: int, k_search: int, k_initial: int, anchored: bool = Fals
     be that of an anchor of the scale rule a ring further (:func:`core.anchors.shared_scale`).
     """
     hops = 2 * passes + 2 if anchored else passes
-    return ((hops + 1, k_search), (hops + 2, sheet_width(k_search)), (hops + 3, k_initial))
+    return ((hops + 1, k_search), (hops + 2, sheet_width(k_search)), (hops + 2 + FLAG_RINGS, k_initial))
 
 
 def shortfall(nb, own, chain, lo, hi) -> tuple[float, np.ndarray]:

@@ -17,8 +17,9 @@ from ..neighbours import build_neighbours
 from ..normals import pca_normals
 from ..orientation import ORIENT_K
 from ..planning import EstimatePlan
+from ..tuning import PCA_K
 from . import creases
-from .halo import chain_rings, first_margin, gather, grown, shortfall
+from .halo import first_margin, gather, grown, nr_chain, shortfall
 from .plan import TilePlan
 from .store import TileStore
 
@@ -108,7 +109,8 @@ def run_tile(root, tile: int, spec: TileSpec) -> dict:
 
 
 def _load_with_halo(store, plan, tile, spec):
-    return load_with_halo(store, plan, tile, spec.k, ((chain_rings(spec.passes), spec.k),))
+    robust = (spec.options or {}).get("robust") is not None
+    return load_with_halo(store, plan, tile, spec.k, nr_chain(spec.passes, spec.k, min(PCA_K, spec.k), robust))
 
 
 def load_with_halo(store, plan, tile, k_max, chain):

@@ -32,6 +32,7 @@ from ..stages import outlier_scores
 from ..tuning import OUTLIER_SCORE
 from .plan import TilePlan
 from .store import TileStore
+from .halo import FLAG_RINGS
 from .task import auto_plan, load_with_halo
 
 #: below this many values left, the selection reads them and partitions in memory
@@ -54,11 +55,13 @@ class Quantity:
 #: what a pre-pass round's tiles load: (k_max, dependency chain) of the plan, see
 #: :func:`core.tiled.halo.shortfall`
 _LOADS = {
-    # own rows to the initial k, on their own sheet (core.one_sheet: two more rings)
-    "before": lambda plan: (sheet_width(plan), ((1, sheet_width(plan)), (2, plan.k_initial))),
+    # own rows to the initial k, on their own sheet (core.one_sheet: two more rings), and their
+    # points' outlier flags (core.tiled.halo.FLAG_RINGS further)
+    "before": lambda plan: (sheet_width(plan), ((1, sheet_width(plan)), (1 + FLAG_RINGS, plan.k_initial))),
     # own rows to the initial k, their points' small normals and outlier flags, on their sheets
     "initial": lambda plan: (max(_k_init(plan), sheet_width(plan)),
-                             ((0, max(_k_init(plan), sheet_width(plan))), (1, sheet_width(plan)), (2, plan.k_initial))),
+                             ((0, max(_k_init(plan), sheet_width(plan))), (1, sheet_width(plan)),
+                              (1 + FLAG_RINGS, plan.k_initial))),
 }
 
 

@@ -83,14 +83,34 @@ def test_every_point_equals_the_in_memory_estimate(tmp_path, shape, kwargs):
 @pytest.mark.parametrize("rings, exact", [(2, True), (1, False)])
 def test_the_halo_check_alone_gives_exact_answers_with_the_derived_rings(tmp_path, monkeypatch, rings, exact):
     """With no head start (a zero first margin) the halo is only what the check demands:
-    passes + 1 = 2 rings for NR reproduce memory exactly, one ring too few does not."""
+    passes + 1 = 2 rings for NR reproduce memory exactly, one ring too few does not (the
+    chain of the fits alone: the flags' own rings are the next test's)."""
     pts = noise.add_noise(shapes.torus(8000, seed=0).points, 0.2, seed=2)
     mem = core.estimate(pts, k=15)
     monkeypatch.setattr(task, "first_margin", lambda *args: 0.0)
-    monkeypatch.setattr(task, "chain_rings", lambda passes: rings)
+    monkeypatch.setattr(task, "nr_chain", lambda passes, k, k_initial, robust: ((rings, k),))
     estimate_tiled(pts, tmp_path / "out.ply", k=15, tile_points=450, workers=0)
     diff, _ = _compare(tmp_path / "out.ply", mem)
     assert (diff < 1e-9) if exact else (diff > 1e-6)
+
+
+def test_outlier_flags_in_tiles_are_the_in_memory_ones(tmp_path, monkeypatch):
+    """A robust fit leaves out its neighbours' flagged outliers, and a flag reads the planes of
+    the point's neighbours and their neighbours' scales (core.off_surface): the halo holds
+    halo.FLAG_RINGS rings of k_initial lists beyond the points whose flags are read, and the
+    tiles' scores are memory's. (That fewer rings are wrong is not asserted: the halo's growth
+    overshoots.)"""
+    t = noise.add_noise(shapes.torus(8000, seed=0).points, 0.1, seed=2)
+    pts, _ = noise.add_outliers(t, 0.03, distance=(1.0, 6.0), seed=3)
+    kw = dict(k=15, passes=1, options={"robust": "tukey"})
+    mem = core.estimate(pts, **kw)
+    assert mem.outlier.sum() > 100
+    monkeypatch.setattr(task, "first_margin", lambda *args: 0.0)
+    estimate_tiled(pts, tmp_path / "out.ply", tile_points=450, workers=0, **kw)
+    score = np.asarray(read_cloud(tmp_path / "out.ply").fields["outlier_score"])
+    np.testing.assert_array_equal(score, mem.outlier_score.astype(score.dtype))  # (stored as float32)
+    diff, _ = _compare(tmp_path / "out.ply", mem)
+    assert diff < 1e-9
 
 
 def test_signs_agree_on_a_closed_surface_in_many_tiles(tmp_path):

@@ -150,9 +150,12 @@ def test_the_derived_auto_chain_is_enough(tmp_path, monkeypatch, small_candidate
 
 
 def test_the_auto_chain_covers_every_pass():
-    assert halo.auto_chain(4, 226, 15) == ((5, 226), (6, 40), (7, 15))  # own-sheet rows: two rings more (core.one_sheet)
-    assert halo.auto_chain(0, 20, 15) == ((1, 20), (2, 20), (3, 15))
-    assert halo.auto_chain(2, 226, 15, anchored=True) == ((7, 226), (8, 40), (9, 15))  # a ring more per pass, one for the scale
+    # own-sheet rows a ring more (core.one_sheet); the flags of that ring read two more (halo.FLAG_RINGS)
+    assert halo.auto_chain(4, 226, 15) == ((5, 226), (6, 40), (8, 15))
+    assert halo.auto_chain(0, 20, 15) == ((1, 20), (2, 20), (4, 15))
+    assert halo.auto_chain(2, 226, 15, anchored=True) == ((7, 226), (8, 40), (10, 15))  # a ring more per pass, one for the scale
+    assert halo.nr_chain(1, 15, 15, robust=False) == ((2, 15), (2, 15))  # the own points' flags (reported)
+    assert halo.nr_chain(1, 30, 15, robust=True) == ((2, 30), (5, 15))  # the flags the initial normals read
 
 
 @pytest.mark.parametrize("sizes", [[0], [1], [5, 0, 3], [4, 4], [3000, 1, 2500, 0, 7], [1_200_000, 900_001]])
