@@ -123,3 +123,12 @@ def test_three_percent_outliers_barely_move_the_inliers_answers():
         dirty = _errors(core.estimate(pts, passes=1), c, ~moved)
         grow.append([dirty[q] / clean[q] for q in ("gaussian", "mean", "direction_deg")])
     assert np.mean(grow, axis=0).max() < 1.07
+
+
+def test_the_score_is_invariant_under_rotation_translation_and_scale():
+    pts, _ = _with_outliers(shapes.torus(4000, seed=2), 0.1, 4, distance=(1.0, 8.0))
+    idx = _rows(pts)  # the same rows: a similarity keeps every neighbour order
+    base = off_surface(pts, idx)
+    rot = np.linalg.qr(np.random.default_rng(5).normal(size=(3, 3)))[0]
+    for moved in (pts + [5e5, 4e6, 100.0], 1e3 * pts @ rot.T, 1e-3 * pts):
+        np.testing.assert_allclose(off_surface(moved, idx), base, rtol=1e-6, atol=1e-9)
