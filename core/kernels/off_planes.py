@@ -20,7 +20,8 @@ from numba import njit, prange
 
 from ._base import BLOCK, OPTS
 from .algebra import add_outer, smallest_eigvec_sym3
-from .robust import MAD_SIGMA, TUKEY_C, root_median, select
+from .pool import linear_quantile
+from .robust import MAD_SIGMA, TUKEY_C, root_median
 
 
 @njit(**OPTS, parallel=True)
@@ -135,19 +136,4 @@ def off_planes(points, idx, planes, units, quantile, out):
                 unit = units[q]
                 d[m] = dist / unit if unit > 0.0 else (0.0 if dist == 0.0 else math.inf)
                 m += 1
-            out[i] = _quantile(d, m, quantile) if m else math.nan
-
-
-@njit(**OPTS)
-def _quantile(d, m, q):
-    """numpy's linear quantile ``q`` of d[:m] (reorders d)."""
-    pos = q * (m - 1)
-    lo = int(math.floor(pos))
-    select(d, 0, m, lo)
-    low = d[lo]
-    if lo + 1 >= m or pos == lo:
-        return low
-    high = d[lo + 1]
-    for j in range(lo + 2, m):  # after select every value past lo is >= d[lo]: the next is their least
-        high = min(high, d[j])
-    return low + (pos - lo) * (high - low)
+            out[i] = linear_quantile(d, m, quantile) if m else math.nan

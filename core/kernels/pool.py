@@ -16,6 +16,7 @@ import numpy as np
 from numba import njit, prange
 
 from ._base import BLOCK, OPTS
+from .robust import select
 
 #: the longest row whose sum :func:`_row_sum` adds in numpy's order (numpy's pairwise
 #: block; longer rows are split in halves, which the kernel does not do)
@@ -83,52 +84,32 @@ def _row_sum(v, pool, r):
 
 @njit(**OPTS)
 def _row_quantile(v, pool, r, q, row):
-    """The q-quantile of the finite v[pool[r, :]] (at least one; copied into ``row``), by
-    selection, as numpy's linear interpolation gives it."""
+    """The q-quantile of the finite v[pool[r, :]] (copied into ``row``; NaN if none), by
+    :func:`linear_quantile`."""
     m = 0
     for j in range(pool.shape[1]):
         x = v[pool[r, j]]
         if math.isfinite(x):
             row[m] = x
             m += 1
-    if m == 0:
-        return math.nan
-    at = q * (m - 1)
-    lo = int(math.floor(at))
-    low = _select(row, m, lo)
-    if lo + 1 >= m:
-        return low
-    high = row[lo + 1]
-    for j in range(lo + 2, m):  # after the selection, what is above lo holds the larger values
-        high = min(high, row[j])
-    t = at - lo  # numpy's lerp: from the nearer end
-    return high - (high - low) * (1.0 - t) if t >= 0.5 else low + (high - low) * t
+    return linear_quantile(row, m, q) if m else math.nan
 
 
 @njit(**OPTS)
-def _select(a, m, t):
-    """The t-th smallest of a[:m] (Hoare's selection; a[:m] is reordered: a[t] holds it, the
-    values before it are no larger and those after it no smaller)."""
-    lo, hi = 0, m - 1
-    while lo < hi:
-        pivot = a[(lo + hi) // 2]
-        i, j = lo, hi
-        while i <= j:
-            while a[i] < pivot:
-                i += 1
-            while a[j] > pivot:
-                j -= 1
-            if i <= j:
-                a[i], a[j] = a[j], a[i]
-                i += 1
-                j -= 1
-        if t <= j:
-            hi = j
-        elif t >= i:
-            lo = i
-        else:
-            break
-    return a[t]
+def linear_quantile(a, m, q):
+    """The q-quantile of a[:m] (m >= 1; a is reordered) by selection, as numpy's linear
+    interpolation gives it, bit for bit."""
+    at = q * (m - 1)
+    lo = int(math.floor(at))
+    select(a, 0, m, lo)
+    low = a[lo]
+    if lo + 1 >= m:
+        return low
+    high = a[lo + 1]
+    for j in range(lo + 2, m):  # after the selection, what is above lo holds the larger values
+        high = min(high, a[j])
+    t = at - lo  # numpy's lerp: from the nearer end
+    return high - (high - low) * (1.0 - t) if t >= 0.5 else low + (high - low) * t
 
 
 @njit(**OPTS, parallel=True)
