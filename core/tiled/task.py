@@ -17,7 +17,6 @@ from ..neighbours import build_neighbours
 from ..normals import pca_normals
 from ..orientation import ORIENT_K
 from ..planning import EstimatePlan
-from ..tuning import PCA_K
 from . import creases
 from .halo import first_margin, gather, grown, nr_chain, shortfall
 from .plan import TilePlan
@@ -109,8 +108,9 @@ def run_tile(root, tile: int, spec: TileSpec) -> dict:
 
 
 def _load_with_halo(store, plan, tile, spec):
-    robust = (spec.options or {}).get("robust") is not None
-    return load_with_halo(store, plan, tile, spec.k, nr_chain(spec.passes, spec.k, min(PCA_K, spec.k), robust))
+    nr = EstimatePlan.build(max(spec.k, 3), k=spec.k, method=spec.method, passes=spec.passes,
+                            options=dict(spec.options) or None)  # the outlier flags' k and mode, as estimate()'s
+    return load_with_halo(store, plan, tile, spec.k, nr_chain(nr.passes, spec.k, nr.k_initial, nr.robust))
 
 
 def load_with_halo(store, plan, tile, k_max, chain):

@@ -94,7 +94,8 @@ def test_the_halo_check_alone_gives_exact_answers_with_the_derived_rings(tmp_pat
     assert (diff < 1e-9) if exact else (diff > 1e-6)
 
 
-def test_outlier_flags_in_tiles_are_the_in_memory_ones(tmp_path, monkeypatch):
+@pytest.mark.parametrize("k", [15, 24])  # with an integer k the flags are scored on the k nearest
+def test_outlier_flags_in_tiles_are_the_in_memory_ones(tmp_path, monkeypatch, k):
     """A robust fit leaves out its neighbours' flagged outliers, and a flag reads the planes of
     the point's neighbours and their neighbours' scales (core.off_surface): the halo holds
     halo.FLAG_RINGS rings of k_initial lists beyond the points whose flags are read, and the
@@ -102,7 +103,7 @@ def test_outlier_flags_in_tiles_are_the_in_memory_ones(tmp_path, monkeypatch):
     overshoots.)"""
     t = noise.add_noise(shapes.torus(8000, seed=0).points, 0.1, seed=2)
     pts, _ = noise.add_outliers(t, 0.03, distance=(1.0, 6.0), seed=3)
-    kw = dict(k=15, passes=1, options={"robust": "tukey"})
+    kw = dict(k=k, passes=1, options={"robust": "tukey"})
     mem = core.estimate(pts, **kw)
     assert mem.outlier.sum() > 100
     monkeypatch.setattr(task, "first_margin", lambda *args: 0.0)
