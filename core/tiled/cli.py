@@ -8,6 +8,7 @@ when the output is LAS/LAZ (written in chunks, with extra-bytes dimensions).
 
 from __future__ import annotations
 
+import pathlib
 import sys
 
 from .._memory import available_memory
@@ -15,6 +16,7 @@ from ..io.las_stream import open_las
 from ..io.atomic import refuse_input_as_output
 from ..io.cloud import require_points
 from .run import bytes_per_point, estimate_tiled, parse_memory
+from .store import directory_for
 
 _LAS = (".las", ".laz")
 #: bytes per point of an in-memory k="auto" estimate (1M points measured 1.3-1.6 GB)
@@ -32,7 +34,9 @@ def add_arguments(parser) -> None:
                    help="memory budget per worker, e.g. 2GB (default 1.5GB for tiles; above half the "
                         "available memory for the whole cloud, tiles are used)")
     g.add_argument("--scheduler", default=None, metavar="ADDRESS", help="use an existing Dask scheduler")
-    g.add_argument("--work-dir", default=None, help="where tiles are kept (default: .OUTPUT.tiles next to it)")
+    g.add_argument("--work-dir", default=None, metavar="DIR",
+                   help="a folder for the tiles: they are kept in DIR/.OUTPUT.tiles, and nothing else in DIR is "
+                        "touched (default: .OUTPUT.tiles next to the output)")
 
 
 def wanted(args) -> bool:
@@ -61,6 +65,13 @@ def _in_memory_budget(memory) -> int:
     return available_memory() // 2
 
 
+def _work_dir(args):
+    """The run's own folder inside ``--work-dir`` (None: the default, next to the output)."""
+    if args.work_dir is None:
+        return None
+    return pathlib.Path(args.work_dir) / directory_for(args.output).name
+
+
 def run(args) -> int:
     """Run the estimate of ``args`` in tiles (or, for k="auto" within memory and no tile
     option, whole, into LAS/LAZ: the same answer without the tiles' halos)."""
@@ -74,7 +85,7 @@ def run(args) -> int:
         res = estimate_tiled(
             args.input, args.output, k=args.k, method=args.method, passes=args.passes, orientation=orientation,
             options=dict(args.option or []) or None, tile_points=args.tile_points, workers=args.workers,
-            memory=args.memory or "1.5GB", scheduler=args.scheduler, workdir=args.work_dir,
+            memory=args.memory or "1.5GB", scheduler=args.scheduler, workdir=_work_dir(args),
             ignore_normals=args.ignore_normals, progress=bar,
         )
     finally:

@@ -185,7 +185,9 @@ def estimate_tiled(source, output, *, normals=None, k="auto", method="nr", passe
         the tiles in this process.
     memory : budget per worker, e.g. "1.5GB" (Dask's limit for the local cluster).
     client, scheduler : an existing ``distributed.Client``, or a scheduler address.
-    workdir, keep_workdir : where the tiles are kept, and whether to keep them afterwards.
+    workdir, keep_workdir : the directory the tiles are kept in (new, empty, or an earlier run's:
+        one holding other files is refused; only what a run writes is ever deleted), and
+        whether to keep them afterwards.
     ignore_normals : estimate normals even where the file has some.
     progress : callable(fraction, stage), optional.
 

@@ -12,11 +12,14 @@ Layout of the work directory (``.<output name>.tiles`` next to the output by def
 
 Every file is written to a temporary name and renamed (atomic); a tile counts as finished
 only once its ``.done`` marker exists, so a run killed at any moment resumes by redoing
-only unfinished work. A directory whose manifest does not match the run is cleared.
+only unfinished work. A directory whose manifest does not match the run is cleared of
+what a run writes; one that holds other files and no manifest is refused, and nothing but
+what a run wrote is ever deleted (``--work-dir`` names a folder the run's own lives in).
 """
 
 from __future__ import annotations
 
+import contextlib
 import io
 import json
 import os
@@ -27,6 +30,8 @@ import numpy as np
 
 from ..io.atomic import atomic_write
 
+#: what a run writes in its work directory (all that :meth:`TileStore.remove` deletes)
+OWN = ("manifest.json", "plan.npz", "bins", "results")
 #: what a binned point can hold: coordinates, normals, viewpoint, input row
 BIN_FIELDS = {"xyz": ("<f8", 3), "n": ("<f8", 3), "view": ("<f8", 3), "index": ("<i8",)}
 
@@ -55,14 +60,29 @@ class TileStore:
         if path.exists():
             if path.read_text() == text:
                 return True
-            shutil.rmtree(self.root)
+            self.remove()
+        elif self.root.is_dir() and any(self.root.iterdir()):
+            raise ValueError(f"work directory {self.root} holds files that are not a tiled run's (no manifest.json); "
+                             "give a new or empty directory (nothing in it was changed)")
         (self.root / "bins").mkdir(parents=True, exist_ok=True)
         (self.root / "results").mkdir(exist_ok=True)
         self._write_bytes(path, text.encode())
         return False
 
     def remove(self) -> None:
-        shutil.rmtree(self.root, ignore_errors=True)
+        """Delete what a run writes here (:data:`OWN`, and temporaries of its atomic
+        writes), then the directory if that left it empty: never anything else in it."""
+        for name in OWN:
+            path = self.root / name
+            if path.is_dir() and not path.is_symlink():
+                shutil.rmtree(path, ignore_errors=True)
+            elif path.exists() or path.is_symlink():
+                path.unlink(missing_ok=True)
+        for name in OWN:
+            for temp in self.root.glob(f".{name}.*.tmp"):
+                temp.unlink(missing_ok=True)
+        with contextlib.suppress(OSError):
+            self.root.rmdir()
 
     @property
     def plan_path(self) -> pathlib.Path:

@@ -1,0 +1,64 @@
+"""A tiled run's work directory holds the run's own files and nothing it does not own is
+ever deleted: ``--work-dir DIR`` once removed DIR with everything in it (the input too)."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+
+import numpy as np
+import pytest
+
+import core
+from core import cli
+from core.tiled import estimate_tiled
+from core.tiled.store import TileStore
+
+
+def _digest(path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _folder_with_input(tmp_path):
+    data = tmp_path / "mydata"
+    data.mkdir()
+    np.savetxt(data / "scan.xyz", core.shapes.sphere(1500, seed=2).points)
+    (data / "notes.txt").write_text("precious")
+    return data, {p.name: _digest(p) for p in data.iterdir()}
+
+
+@pytest.mark.parametrize("output", ["out.ply", "out.laz"])
+def test_work_dir_keeps_every_file_it_did_not_write(tmp_path, output):
+    data, before = _folder_with_input(tmp_path)
+    argv = ["estimate", str(data / "scan.xyz"), "-o", str(tmp_path / output), "--k", "15", "--workers", "0",
+            "--tile-points", "500", "--work-dir", str(data), "-q"]
+    assert cli.main(argv) == 0
+    assert (tmp_path / output).exists()
+    assert {p.name: _digest(p) for p in data.iterdir()} == before  # the run's own folder came and went
+
+
+def test_a_work_dir_holding_other_files_is_refused_untouched(tmp_path):
+    data, before = _folder_with_input(tmp_path)
+    with pytest.raises(ValueError, match="holds files that are not a tiled run's"):
+        estimate_tiled(core.shapes.sphere(900, seed=1).points, tmp_path / "o.ply", k=15, tile_points=300,
+                       workers=0, workdir=data)
+    assert {p.name: _digest(p) for p in data.iterdir()} == before and not (tmp_path / "o.ply").exists()
+
+
+def test_another_runs_directory_is_cleared_of_its_own_files_only(tmp_path):
+    store = TileStore(tmp_path / "work")
+    assert store.open({"run": 1}) is False
+    (store.root / "results" / "tile_000000.done").touch()
+    (store.root / "keep.txt").write_text("mine")  # someone's file among the run's
+    assert TileStore(store.root).open({"run": 2}) is False  # another run: the old one's files go
+    assert (store.root / "keep.txt").read_text() == "mine" and not any(store.root.glob("results/*"))
+    assert json.loads((store.root / "manifest.json").read_text()) == {"run": 2}
+    TileStore(store.root).remove()
+    assert [p.name for p in store.root.iterdir()] == ["keep.txt"]
+
+
+def test_a_run_in_a_new_work_dir_removes_it_afterwards(tmp_path):
+    work = tmp_path / "scratch" / "tiles"
+    estimate_tiled(core.shapes.sphere(900, seed=1).points, tmp_path / "o.ply", k=15, tile_points=300, workers=0,
+                   workdir=work)
+    assert (tmp_path / "o.ply").exists() and not work.exists() and (tmp_path / "scratch").is_dir()
