@@ -27,26 +27,25 @@ RCOND = 1e-10
 #: cubic jets on 40 neighbours passed 1e-6 with |H| errors of 8 and 13 (normals right); at 1e-5 the turned cloud's
 #: errors equal the unturned one's (mean 5.3e-4, largest 0.03). Both races unchanged.
 JET_RCOND = 1e-5
-#: the smallest Cholesky pivot (equilibrated normal matrix) of a normal fit of degree 2 or 3 (k="auto"'s cubic normal
-#: field, or options={"degree": ...}); below it the point's fit falls a degree (core.kernels.lstsq.solve_determined; for
-#: the initial 2-jet normal see INITIAL_JET_PIVOT): its coefficients' variance grows as 1 / pivot, and where the
-#: neighbours lie on two to four scan lines the cubic's terms across the lines are fitted to the lines' own bend.
-#: Measured (uniform weights, 200 centres each): uniform random torus, sphere, chirp, saddle: pivots >= 1.9e-2 at 28+
-#: neighbours, 1st percentile 1.6e-3-1.5e-2 at 15-20; a sphere scanned along parallels 6-16 spacings apart: median
-#: 7e-6-1.4e-3 at 28-113. On those parallels (noise-free, k="auto") the mean H error fell 0.754 -> 0.040 (lines 10
-#: apart) and 26 -> 0.35 (16 apart); the hold-out race's geometric mean 0.456x -> 0.447x, tuning race 0/72 lost either
-#: way. 3e-3: parallels 0.092 and 0.69, races unchanged; 3e-2: 2 tuning cells lost (1.04x).
-DEGREE_PIVOT = 1e-2
-#: the same for the initial 2-jet normal of k="auto" (core.normals.jet_normals): below it the
-#: quadratic is not determined and the point keeps its PCA normal. Lower than DEGREE_PIVOT: on
-#: noisy scan lines 6 spacings apart (sphere parallels, noise 0.1) an ill-determined 2-jet still
-#: tilts the PCA plane of a noisy line the right way (mean |H error| 0.049 / 0.032 at 1e-4, 0.19 /
-#: 0.28 at 1e-2, 0.067 / 0.061 with no test); on an exact grid 5x sparser across its rows it is
-#: wrong (454 initial normals 10-63 degrees off with no test; none at 1e-4 or 1e-2; at 1e-5 the
-#: grid turned in space kept 24). Also better at 1e-4 than at 1e-2: the floor under a scanner
-#: (mean |H| within 0.2 m of the axis 2.8 -> 0.90); worse: noise-free parallels 16 spacings
-#: apart (mean |H - 1| 0.49 -> 0.84, 12 apart 0.53 -> 0.57). Both races unchanged.
-INITIAL_JET_PIVOT = 1e-4
+#: a normal fit of degree 2 or 3 (k="auto"'s cubic normal field, or options={"degree": ...}) falls a degree where the
+#: smallest eigenvalue of its normal matrix, the monomials scaled per degree so that no turn of the tangent axes changes
+#: it (core.kernels.algebra.determined), is at most this: on two to four scan lines the terms across them fit the lines'
+#: own bend. Measured (200-400 centres): uniform torus, 1st percentile 1.6e-4, 2.9e-3, 8.9e-3 at 15, 20, 28 neighbours
+#: (13 %, 0, 0 fall); sphere parallels 6-16 spacings apart, median 1e-6 to 3e-4 at 28-56 (all fall). Until 2026-12-07
+#: the smallest equilibrated Cholesky pivot in world-fixed axes (1e-2): a turned cloud fell at other points (H off by
+#: 0.09 where |H| <= 0.1) and 21-64 % of those parallels' fits passed. Parallels 6-16 apart (k="auto"), mean ||H| - 1|:
+#: noise-free 0.0008-0.0036 -> 0.0002-0.0035, noise 0.1 0.037-0.086 -> 0.006-0.026. Races: tuning 1/72 0.471x, private
+#: 1/48 1.20x 0.419x, hold-out 3/84 1.35x 0.447x (were 1.21x, 1.33x 0.445x).
+DEGREE_PIVOT = 2e-3
+#: the same for the initial 2-jet normal of k="auto" (core.normals.jet_normals): at most this and the
+#: quadratic is not determined and the point keeps its PCA normal. On an exact grid 5x sparser across
+#: its rows an undetermined 2-jet is wrong (454 initial normals 10-63 degrees off with no test): 15 %
+#: of its 15-neighbour rows there are below 3e-5 (9 % below 1e-5), uniform rows above 1e-2. Before
+#: 2026-12-07 the smallest equilibrated pivot in world-fixed axes (1e-4), measured then: better than
+#: 1e-2 on noisy parallels 6 spacings apart (mean |H error| 0.049 / 0.032 against 0.19 / 0.28) and the
+#: floor under a scanner (mean |H| within 0.2 m of the axis 2.8 -> 0.90); the scan-line tests
+#: (tests/core/test_scan_lines.py) hold with this test, and noisy parallels gain (above).
+INITIAL_JET_PIVOT = 3e-5
 #: a quiet point keeps its jet as the result only if the jet's normal is within this many
 #: degrees of its initial (2-jet) normal (core.scale.choose_model); elsewhere NR fits it. The
 #: second guard against a jet the rank test let through (a 5:1 grid's three-column fits reach

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 from ._base import OPTS
@@ -60,6 +61,9 @@ def smallest_eigvec_sym3(a00, a01, a02, a11, a12, a22):
 
 #: most monomials of the normal fit (degree 3: 1, u, v, u^2, uv, v^2, u^3, u^2 v, u v^2, v^3)
 MAX_TERMS = 10
+#: their binomial coefficients: u^a v^b times its root is an orthonormal basis of each degree
+#: for the turns of the (u, v) plane (:func:`determined`)
+_BINOMIAL = np.array([1.0, 1.0, 1.0, 1.0, 2.0, 1.0, 1.0, 3.0, 3.0, 1.0])
 
 
 @njit(**OPTS, inline="always")
@@ -99,6 +103,42 @@ def cholesky(G, p, rcond, d, L):
                 s -= L[a, e] * L[c, e]
             if a == c:
                 if not s > rcond:
+                    return False
+                L[a, a] = math.sqrt(s)
+            else:
+                L[a, c] = s / L[c, c]
+    return True
+
+
+@njit(**OPTS)
+def determined(G, degree, tau, d, L):
+    """Whether the smallest eigenvalue of the normal matrix G (lower triangle used) of a
+    polynomial of ``degree`` in (u, v) exceeds ``tau`` once the monomials are scaled as an
+    orthonormal basis of each degree under turns of the (u, v) plane (u^a v^b times the
+    square root of its binomial coefficient) and to a mean diagonal of 1 per degree: the
+    Cholesky factor of that matrix minus ``tau`` I exists (``d``, ``L``: scratch). The
+    equilibrated pivots of :func:`cholesky` depend on the tangent axes, so a cloud and the
+    same cloud turned could fit different degrees; this does not (each degree's block turns
+    by an orthogonal matrix and keeps its trace), and it also sees a dependence among
+    monomials that the order of the pivots hides."""
+    p = n_terms(degree)
+    start = 0
+    for e in range(degree + 1):
+        s = 0.0
+        for a in range(start, start + e + 1):
+            s += _BINOMIAL[a] * G[a, a]
+        if not s > 0.0:
+            return False
+        for a in range(start, start + e + 1):
+            d[a] = math.sqrt(_BINOMIAL[a] * (e + 1) / s)
+        start += e + 1
+    for a in range(p):
+        for c in range(a + 1):
+            s = G[a, c] * d[a] * d[c] - (tau if a == c else 0.0)
+            for e in range(c):
+                s -= L[a, e] * L[c, e]
+            if a == c:
+                if not s > 0.0:
                     return False
                 L[a, a] = math.sqrt(s)
             else:

@@ -8,7 +8,7 @@ import numpy as np
 from numba import njit, prange
 
 from ._base import BLOCK, OPTS
-from .algebra import chol_solve, cholesky, poly_row
+from .algebra import chol_solve, cholesky, determined, poly_row
 
 
 @njit(**OPTS, parallel=True)
@@ -21,7 +21,9 @@ def jet_normals(points, idx, h, centres, t1, t2, z, rcond, normals, height, ok, 
     units, corrected for the 6 fitted terms): the noise of the positions along the
     normal, once the quadric has taken up the curvature, and ``slope_se`` the standard
     error of the slope (c1, c2), sqrt(var c1 + var c2) from that residual: how far the jet
-    could tilt the frame's normal by noise alone. Near-singular systems leave ok False.
+    could tilt the frame's normal by noise alone. ``ok`` is False where the quadratic is not
+    determined: the smallest eigenvalue of its scaled normal matrix is at most ``rcond``
+    (:func:`~core.kernels.algebra.determined`, the same in any tangent axes).
     """
     m = len(centres)
     k = idx.shape[1]
@@ -56,7 +58,7 @@ def jet_normals(points, idx, h, centres, t1, t2, z, rcond, normals, height, ok, 
                     b[a] += row[a] * w
                     for c in range(a + 1):
                         G[a, c] += row[a] * row[c]
-            if not cholesky(G, 6, rcond, d, L):
+            if not determined(G, 2, rcond, d, L) or not cholesky(G, 6, 0.0, d, L):
                 continue
             chol_solve(L, d, 6, b, x)
             c1, c2 = x[1], x[2]

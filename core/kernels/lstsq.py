@@ -20,7 +20,7 @@ import numpy as np
 from numba import njit
 
 from ._base import OPTS
-from .algebra import MAX_TERMS, chol_solve, cholesky, n_terms
+from .algebra import MAX_TERMS, chol_solve, cholesky, determined, n_terms
 
 # rows of the per-block vector scratch of the NF kernels
 BX, BY, CX, CY, C1, C2, D, E = range(8)
@@ -310,17 +310,19 @@ def solve_coefficients(degree, rcond, vec, G, L, acc):
 
 @njit(**OPTS)
 def solve_determined(degree, rcond, pivot, vec, G, L, acc, columns):
-    """The highest degree d <= ``degree`` whose fit the sums determine, solved: every
-    Cholesky pivot of the equilibrated normal matrix above ``pivot`` for d >= 2 (``rcond``
-    for d = 1, the paper's model). The sums of degree d hold those of every lower degree
+    """The highest degree d <= ``degree`` whose fit the sums determine, solved: for d >= 2
+    the smallest eigenvalue of the scaled normal matrix above ``pivot``
+    (:func:`~core.kernels.algebra.determined`: the same in any tangent axes), for d = 1 (the
+    paper's model) every equilibrated Cholesky pivot above ``rcond``. The sums of degree d hold those of every lower degree
     (monomials are numbered by total degree, so a lower degree's normal matrix is a
     leading block), so a fit that its neighbourhood does not determine (the neighbours on
     two or three scan lines: u^3 is a combination of 1, u, u^2 on three values of u) falls
     to a lower degree without new sums. ``columns``: :func:`solve`, else
     :func:`solve_coefficients`. Returns d, or 0 when not even the linear fit is determined."""
     for d in range(degree, 0, -1):
-        threshold = pivot if d > 1 else rcond
-        if solve(d, threshold, vec, G, L, acc) if columns else solve_coefficients(d, threshold, vec, G, L, acc):
+        if d > 1 and not determined(G, d, pivot, vec[D], L):
+            continue
+        if solve(d, rcond, vec, G, L, acc) if columns else solve_coefficients(d, rcond, vec, G, L, acc):
             return d
     return 0
 
