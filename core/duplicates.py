@@ -20,10 +20,14 @@ from typing import NamedTuple
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
 
 from .kernels.repeats import any_repeated, coordinate_hashes
 from .neighbours import Neighbours
 from .tuning import NEAR_COPY, NEAR_COPY_SHARE
+
+#: where a place may hold k copies or more, its copies are told on this many times k nearest
+CLUMP_WIDER = 8
 
 __all__ = ["Merged", "NearCopies", "find_duplicates", "near_copies", "expand", "CopiesNeighbours"]
 
@@ -91,6 +95,8 @@ def near_copies(idx: np.ndarray, dist: np.ndarray, points: np.ndarray, rank=None
     of the points have such a twin. Such points are connected
     into places; a place is its first point's (lowest ``rank``, the caller's index of each
     row, default the row) coordinates. ``first`` and ``inverse`` are in rows of ``points``."""
+    if idx.shape[1] >= 2 and _clumped(dist[:, -1], points):
+        idx, dist = _wider(points, CLUMP_WIDER * idx.shape[1])
     if idx.shape[1] < 2 or np.count_nonzero(dist[:, 1] < NEAR_COPY * dist[:, -1]) < NEAR_COPY_SHARE * len(idx):
         return None  # distances ascend: the nearest tells
     close = dist[:, 1:] < NEAR_COPY * dist[:, -1:]
@@ -107,6 +113,27 @@ def near_copies(idx: np.ndarray, dist: np.ndarray, points: np.ndarray, rank=None
     place_of_label[places] = np.arange(len(places))
     first = lead_rows[places]
     return Merged(points[first], first, place_of_label[label])
+
+
+def _clumped(radius: np.ndarray, points: np.ndarray) -> bool:
+    """Whether the k nearest of some points may all be copies of them, so that the radius
+    of those k (``radius`` (N,)) cannot tell a copy from a neighbour: where a place holds k
+    copies or more. Either at least :data:`core.tuning.NEAR_COPY_SHARE` of the radii are
+    below NEAR_COPY of the typical one, or the typical radius is below the spacing of the
+    points strung along a line across the cloud (the sparsest a sampling that connects
+    them can be: a surface's spacing is ~sqrt(N) times that)."""
+    typical = float(np.median(radius))
+    extent = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
+    few = np.count_nonzero(radius < NEAR_COPY * typical) >= NEAR_COPY_SHARE * len(radius)
+    return typical < extent / len(points) or few
+
+
+def _wider(points: np.ndarray, k: int):
+    """The ``k`` nearest of every point (itself first), searched afresh: only a cloud with
+    places of many copies (:func:`_clumped`) pays for it."""
+    k = min(k, len(points))
+    dist, idx = cKDTree(points).query(points, k=k, workers=-1)
+    return idx, dist
 
 
 def expand(res, merged: Merged, points: np.ndarray, params: dict):

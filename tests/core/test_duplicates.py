@@ -148,3 +148,27 @@ def test_a_few_near_twins_are_left_alone():
     assert "duplicates" not in res.params and res.valid.all()
     clean = estimate(s.points, k=15)
     assert abs(np.median(res.mean) - np.median(clean.mean)) < 1e-3
+
+
+@pytest.mark.parametrize("k", [15, "auto"])
+@pytest.mark.parametrize("copies", [16, 40])
+def test_places_of_more_copies_than_k_are_one_place(k, copies):
+    """With k copies or more at every place (1e-7 apart) the k nearest all lie in the
+    place, and the near-copy test measured against the k-th of them: the fits ran on balls
+    of rounding, |H - 1| 6e5 on a unit sphere, every point valid. The copies are now told
+    on a wider search (core.duplicates._clumped)."""
+    places = shapes.sphere(1500, seed=4).points
+    rng = np.random.default_rng(0)
+    cloud = np.repeat(places, copies, axis=0) + rng.normal(0.0, 1e-7, (len(places) * copies, 3))
+    res = estimate(cloud, k=k)
+    assert res.params["duplicates"] == len(cloud) - len(places)
+    assert res.valid.all() and np.median(np.abs(np.abs(res.mean) - 1.0)) < 0.05
+
+
+def test_a_dense_cluster_is_not_taken_for_copies():
+    """A blob of 2 % of the points, some 500 times denser than the rest, is sampling, not
+    copies."""
+    s = shapes.sphere(5000, seed=3)
+    rng = np.random.default_rng(1)
+    blob = s.points[0] + rng.normal(0.0, 1e-4, (100, 3))
+    assert "duplicates" not in estimate(np.concatenate([s.points, blob]), k=15).params
