@@ -212,3 +212,9 @@ def finalize(raw: RawCloud, path: pathlib.Path, fmt: str, *, drop_nonfinite: boo
 def remaining_bytes(f) -> int:
     """Bytes between the position of the open binary file ``f`` and its end."""
     return os.fstat(f.fileno()).st_size - f.tell()
+
+
+def format_number(value) -> str:
+    """``value`` for a message: an integral number exactly (4294967296, not 4.29497e+09), others with %g."""
+    value = float(value)
+    return str(int(value)) if value.is_integer() and abs(value) < 1e20 else f"{value:g}"

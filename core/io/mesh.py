@@ -11,7 +11,11 @@ import numpy as np
 from .cloud import CloudFileError, RawCloud
 
 _STL_RECORD = np.dtype([("normal", "<f4", (3,)), ("vertices", "<f4", (3, 3)), ("attribute", "<u2")])
-_STL_VERTEX = re.compile(rb"vertex\s+(\S+)\s+(\S+)\s+(\S+)", re.IGNORECASE)
+#: ``vertex`` as the first word of a line (a solid named "vertex colours" is no vertex)
+_STL_VERTEX = re.compile(rb"(?<![^\r\n])[ \t]*vertex[ \t]+(\S+)[ \t]+(\S+)[ \t]+(\S+)", re.IGNORECASE)
+_STL_VERTEX_WORD = re.compile(rb"(?<![^\r\n])[ \t]*vertex(?![^ \t\r\n])", re.IGNORECASE)
+#: bytes a binary STL may have after its last triangle (some writers pad or add a newline)
+_STL_SLACK = 50
 
 
 # ---------------------------------------------------------------------------------- OBJ
@@ -98,26 +102,36 @@ def _face_normals(path, lines, f_lines, points, vn):
 
 
 def read_stl(path) -> RawCloud:
-    """The triangle corners, exact duplicates removed (first occurrence order); no normals."""
+    """The triangle corners, exact duplicates removed (first occurrence order); no normals.
+    A file whose size fits its triangle count is binary, even when its header begins with
+    "solid" (SolidWorks writes that); so is one that begins with "solid" but holds no
+    ASCII vertices, if its size allows the count."""
     size = os.path.getsize(path)
     with open(path, "rb") as f:
         head = f.read(1024)
     n = int.from_bytes(head[80:84], "little") if len(head) >= 84 else -1
-    looks_ascii = head.lstrip()[:5].lower() == b"solid" and (b"facet" in head.lower() or size != 84 + 50 * n)
-    if looks_ascii:
+    fits = n >= 0 and 0 <= size - (84 + 50 * n) < _STL_SLACK
+    corners = None
+    if head.lstrip()[:5].lower() == b"solid" and not fits:
         corners = _read_stl_ascii(path)
-    elif n < 0:
+        if not len(corners) and n > 0 and size >= 84 + 50 * n:
+            corners = None  # no ASCII vertices: a binary STL whose header begins with "solid"
+    if corners is None:
+        corners = _read_stl_binary(path, n, size)
+    corners = corners.astype(np.float64) + 0.0  # + 0.0 turns -0.0 into 0.0 so they deduplicate
+    _, first = np.unique(corners, axis=0, return_index=True)
+    return RawCloud(corners[np.sort(first)], None, {})
+
+
+def _read_stl_binary(path, n: int, size: int) -> np.ndarray:
+    if n < 0:
         raise CloudFileError(path, f"too short for a binary STL (needs at least 84 bytes, has {size})")
-    elif size < 84 + 50 * n:
+    if size < 84 + 50 * n:
         raise CloudFileError(
             path, f"truncated: the binary STL header declares {n} triangles ({84 + 50 * n} bytes) but the file "
             f"has {size} bytes"
         )
-    else:
-        corners = np.fromfile(path, dtype=_STL_RECORD, count=n, offset=84)["vertices"].reshape(-1, 3)
-    corners = corners.astype(np.float64) + 0.0  # + 0.0 turns -0.0 into 0.0 so they deduplicate
-    _, first = np.unique(corners, axis=0, return_index=True)
-    return RawCloud(corners[np.sort(first)], None, {})
+    return np.fromfile(path, dtype=_STL_RECORD, count=n, offset=84)["vertices"].reshape(-1, 3)
 
 
 def _read_stl_ascii(path) -> np.ndarray:
@@ -125,11 +139,13 @@ def _read_stl_ascii(path) -> np.ndarray:
         data = f.read()
     matches = _STL_VERTEX.findall(data)
     try:
+        if len(matches) != len(_STL_VERTEX_WORD.findall(data)):
+            raise ValueError("a vertex line without three values")
         corners = np.array(matches, dtype=np.bytes_).reshape(-1, 3).astype(np.float64)
     except ValueError:
         for lineno, line in enumerate(data.splitlines(), start=1):
-            m = _STL_VERTEX.search(line)
-            if line.strip().lower().startswith(b"vertex") and not (m and all(_is_float(t) for t in m.groups())):
+            m = _STL_VERTEX.match(line)
+            if line.split()[:1] in ([b"vertex"], [b"VERTEX"]) and not (m and all(_is_float(t) for t in m.groups())):
                 raise CloudFileError(path, f"line {lineno}: cannot parse {line.strip().decode('latin-1')!r}") from None
         raise CloudFileError(path, "cannot parse the ASCII STL vertices") from None
     if len(corners) % 3:

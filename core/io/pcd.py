@@ -1,9 +1,11 @@
 """PCL's PCD format: DATA ascii, binary and binary_compressed (LZF, decoded in Python).
 
 Fields x y z are the points, normal_x normal_y normal_z (or nx ny nz) the normals;
-a packed ``rgb``/``rgba`` field becomes uint8 fields red, green, blue; ``_`` padding is
-skipped; a field with COUNT 3 becomes name_x/_y/_z, other counts name_0, name_1, ...
-Binary data is read as little-endian; a point count that does not match the data is refused.
+a packed ``rgb``/``rgba`` field becomes uint8 fields red, green, blue (in ASCII, a TYPE F
+colour written as an integer, as PCL writes it, is that uint32; a float token keeps its
+bits); ``_`` padding is skipped; a field with COUNT 3 becomes name_x/_y/_z, other counts
+name_0, name_1, ... ASCII 8-byte integers are parsed exactly, not through float64. Binary
+data is read as little-endian; a point count that does not match the data is refused.
 """
 
 from __future__ import annotations
@@ -12,12 +14,15 @@ import warnings
 
 import numpy as np
 
-from .cloud import CloudFileError, RawCloud, check_memory, find_normals, remaining_bytes, split_components
+from .cloud import (CloudFileError, RawCloud, check_memory, find_normals, format_number, remaining_bytes,
+                    split_components)
 from .text import diagnose_lines
 
 _MAX_HEADER_LINES = 100
 _TYPES = {"F": "f", "I": "i", "U": "u"}
 _SIZES = ("1", "2", "4", "8")
+_PACKED = ("rgb", "rgba")
+_UINT32_MAX = 0xFFFFFFFF
 
 
 def read_pcd(path) -> RawCloud:
@@ -79,30 +84,143 @@ def _layout(header, path):
             raise ValueError
     except (KeyError, ValueError, TypeError, IndexError):
         raise CloudFileError(path, "the PCD header has an invalid FIELDS/SIZE/TYPE/COUNT/POINTS entry") from None
+    _check_unique(path, [name for name, _, _ in fields])
     return fields, n
+
+
+def _check_unique(path, names) -> None:
+    """Refuse a field listed twice (ASCII kept its last column, numpy's dtype refused it in binary)."""
+    seen = set()
+    for name in names:
+        if name in seen:
+            raise CloudFileError(path, f"malformed PCD header: field {name!r} occurs more than once in FIELDS")
+        seen.add(name)
 
 
 def _read_ascii(path, fields, n, n_header_lines):
     ncols = sum(count for _, _, count in fields)
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", UserWarning)
-            table = np.loadtxt(path, dtype=np.float64, comments="#", skiprows=n_header_lines,
-                               encoding="latin-1", ndmin=2)
-    except ValueError as exc:
-        head = dict(first=n_header_lines + 1, ncols=ncols, delimiter=None)
-        raise diagnose_lines(path, "latin-1", head, exc) from None
+    exact = _exact_columns(fields)
+    table, columns = _load_ascii(path, n_header_lines, ncols, exact)
     if len(table) and table.shape[1] != ncols:
         raise CloudFileError(path, f"the data lines have {table.shape[1]} columns but the header declares {ncols}")
     if len(table) != n:
         problem = "truncated: " if len(table) < n else ""
         raise CloudFileError(path, f"{problem}the header declares {n} points but {len(table)} data lines follow")
+    if columns is None:  # a token loadtxt's integer parse refused: parse the exact columns from their text
+        columns = _exact_from_text(path, n_header_lines, fields, exact, table)
     props, col = {}, 0
     for name, dtype, count in fields:
-        block = _ascii_block(path, table[:, col : col + count], name, np.dtype(dtype))
+        if col in exact:
+            block = np.column_stack([columns[c] for c in range(col, col + count)])
+            block = _colour(path, block, name) if dtype == "<f4" else block
+        else:
+            block = _ascii_block(path, table[:, col : col + count], name, np.dtype(dtype))
         props[name] = block[:, 0] if count == 1 else block
         col += count
     return props
+
+
+def _exact_columns(fields) -> dict:
+    """{column: loadtxt dtype} of the columns not read through float64: 8-byte integers, and
+    packed colours (a uint32 when PCL wrote one)."""
+    exact, col = {}, 0
+    for name, dtype, count in fields:
+        if np.dtype(dtype).kind in "iu" and np.dtype(dtype).itemsize == 8:
+            exact.update((c, dtype) for c in range(col, col + count))
+        elif name in _PACKED and dtype == "<f4" and count == 1:
+            exact[col] = "<u8"
+        col += count
+    return exact
+
+
+def _loadtxt(path, skip, dtype, **options):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        return np.loadtxt(path, dtype=dtype, comments="#", skiprows=skip, encoding="latin-1", **options)
+
+
+def _load_ascii(path, skip, ncols, exact):
+    """The data as a float64 table, and {column: values} of the ``exact`` columns when one
+    pass with them parsed as integers succeeds (None: read them from their text)."""
+    if exact:
+        dtype = np.dtype([(str(c), exact.get(c, "<f8")) for c in range(ncols)])
+        try:
+            data = _loadtxt(path, skip, dtype, ndmin=1)
+        except ValueError:
+            pass  # a float colour, a bad token or line: read as float64, then each exact column
+        else:
+            table = np.column_stack([data[str(c)].astype(np.float64) for c in range(ncols)]).reshape(-1, ncols)
+            return table, {c: data[str(c)] for c in exact}
+    try:
+        return _loadtxt(path, skip, np.float64, ndmin=2), None
+    except ValueError as exc:
+        head = dict(first=skip + 1, ncols=ncols, delimiter=None)
+        raise diagnose_lines(path, "latin-1", head, exc) from None
+
+
+def _exact_from_text(path, skip, fields, exact, table) -> dict:
+    """The exact columns parsed from their tokens: integers exactly, colours as integers or
+    float bits (the text is read again only for colours with integral values >= 1)."""
+    declared = [(name, np.dtype(dtype)) for name, dtype, count in fields for _ in range(count)]
+    columns = {}
+    for c in exact:
+        name, dtype = declared[c]
+        values = table[:, c]
+        if dtype.kind == "f" and not (np.isfinite(values) & (values >= 1) & (values == np.round(values))).any():
+            columns[c] = _ascii_block(path, values[:, None], name, dtype)[:, 0].view("<u4")  # float tokens only
+    text = sorted(set(exact) - set(columns))
+    tokens = _loadtxt(path, skip, str, usecols=text, ndmin=2) if text else None
+    for j, c in enumerate(text):
+        name, dtype = declared[c]
+        parse = _packed_colour if dtype.kind == "f" else _exact_integers
+        columns[c] = parse(path, tokens[:, j], name, dtype)
+    return columns
+
+
+def _exact_integers(path, tokens, name, dtype):
+    """8-byte integer tokens parsed exactly; integral floats ("5.0") up to 2**53 are taken."""
+    try:
+        return tokens.astype(dtype)
+    except (ValueError, OverflowError):
+        pass
+    info, values = np.iinfo(dtype), []
+    for row, token in enumerate(tokens.tolist()):
+        value = _integer(token)
+        if value is None or not info.min <= value <= info.max:
+            raise CloudFileError(path, f"point {row}: field {name!r} (TYPE {dtype.kind.upper()} SIZE 8) has the value "
+                                       f"{token}, not an integer in [{info.min}, {info.max}]")
+        values.append(value)
+    return np.array(values, dtype=dtype)
+
+
+def _integer(token: str):
+    """The integer ``token`` spells (an integral float only up to 2**53, where it is exact), or None."""
+    try:
+        return int(token)
+    except ValueError:
+        value = float(token)  # the float64 pass parsed every token
+    return int(value) if value.is_integer() and abs(value) <= 2**53 else None
+
+
+def _packed_colour(path, tokens, name, dtype):
+    """A colour field's tokens as uint32: an integer token is the colour (PCL's writeASCII
+    writes it so), a float token holds it in its bits (as a binary PCD does)."""
+    digits = np.char.isdecimal(tokens)
+    floats = np.where(digits, "0", tokens).astype(np.float64)
+    values = _ascii_block(path, floats[:, None], name, dtype)[:, 0].view("<u4").astype(np.uint64)
+    values[digits] = [min(int(token), _UINT32_MAX + 1) for token in tokens[digits].tolist()]  # 2**64 fits no uint64
+    return _colour(path, values, name, tokens)
+
+
+def _colour(path, values, name, tokens=None):
+    """Packed colours as uint32; an integer beyond 32 bits is refused."""
+    bad = values.reshape(-1) > _UINT32_MAX
+    if bad.any():
+        row = int(np.flatnonzero(bad)[0])
+        value = values.reshape(-1)[row] if tokens is None else tokens[row]
+        raise CloudFileError(path, f"point {row}: field {name!r} (a packed colour, TYPE F SIZE 4) has the integer "
+                                   f"value {value}, not a colour in [0, {_UINT32_MAX}]")
+    return values.astype("<u4")
 
 
 def _ascii_block(path, values, name, dtype):
@@ -126,7 +244,7 @@ def _ascii_block(path, values, name, dtype):
             value = values[row][bad[row]][0]
             raise CloudFileError(
                 path, f"point {row}: field {name!r} (TYPE {dtype.kind.upper()} SIZE {dtype.itemsize}) has the value "
-                f"{value:g}, not an integer in [{info.min}, {info.max}]",
+                f"{format_number(value)}, not an integer in [{info.min}, {info.max}]",
             )
     return values.astype(dtype)
 

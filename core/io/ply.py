@@ -4,7 +4,8 @@ The header is parsed by plyfile. Vertex data made only of scalar properties is t
 with numpy directly (plyfile reads ascii rows, and binary elements with list properties
 such as faces, one row at a time in Python); anything else falls back to plyfile's element
 reader. Faces and other elements are not returned, but their rows are counted: a body
-that holds more or fewer rows than the header declares is refused. Non-ASCII bytes are
+that holds more or fewer rows than the header declares is refused (in ASCII, so is a row
+that does not fit its element's properties: core.io.ply_ascii). Non-ASCII bytes are
 allowed in ``comment`` and ``obj_info`` lines only. ASCII float coordinates keep their
 float64 parse; x, y, z, nx, ny, nz in exact case win over other spellings.
 """
@@ -14,16 +15,13 @@ from __future__ import annotations
 import io
 import re
 import sys
-import warnings
 
 import numpy as np
 from plyfile import PlyData, PlyElement, PlyListProperty, PlyParseError
 
 from .cloud import NORMAL_NAMES, CloudFileError, RawCloud, remaining_bytes
+from .ply_ascii import check_ascii_rows, declared as _declared, plural as _plural, read_ascii_vertex
 
-#: numpy type code -> the PLY type name, for messages
-_PLY_NAMES = {"i1": "char", "u1": "uchar", "i2": "short", "u2": "ushort", "i4": "int", "u4": "uint",
-              "f4": "float", "f8": "double"}
 _PLY_DTYPES = {np.dtype(t) for t in ("i1", "u1", "i2", "u2", "i4", "u4", "f4", "f8")}
 #: how far to look for ``end_header`` before handing the file to plyfile as it is
 _HEADER_SCAN = 1 << 20
@@ -43,7 +41,7 @@ def read_ply(path) -> RawCloud:
         start = f.tell()
         _check_declared_size(header, remaining_bytes(f), path)
         if header.text:
-            _check_ascii_rows(f, header, path)
+            check_ascii_rows(f, header, path)
         else:
             _check_binary_layout(path, header, start)
         props = _read_vertex_fast(f, header, names.index("vertex"), path)
@@ -93,10 +91,6 @@ def _min_row_bytes(element, header) -> int:
     return size
 
 
-def _plural(name: str) -> str:
-    return {"vertex": "vertices", "face": "faces", "edge": "edges"}.get(name, f"{name!r} rows")
-
-
 def _check_declared_size(header, have: int, path) -> None:
     """Refuse element counts the file cannot hold, before anything is allocated for them."""
     for element in header.elements:
@@ -106,38 +100,6 @@ def _check_declared_size(header, have: int, path) -> None:
                 path, f"truncated: the header declares {element.count} {_plural(element.name)} (at least "
                 f"{need} bytes) but only {have} bytes follow the header",
             )
-
-
-def _declared(elements) -> str:
-    """The counts the header declares, as "8 vertices and 20 faces"."""
-    return " and ".join(f"{el.count} {_plural(el.name)}" for el in elements)
-
-
-def _check_ascii_rows(f, header, path) -> None:
-    """Refuse an ASCII body with more or fewer non-blank lines (one per row) than the header
-    declares rows; a short body is named by the first element short of its rows."""
-    start, elements, declared = f.tell(), header.elements, sum(el.count for el in header.elements)
-    found = left = _nonblank_lines(f)
-    if found > declared:
-        rows = "vertex rows" if len(elements) == 1 else f"data lines (one per row: {declared} declared)"
-        raise CloudFileError(path, f"the header declares {_declared(elements)} but {found} {rows} follow")
-    for element in (el for el in elements if el.properties):  # rows of no properties may be blank lines
-        if left < element.count:
-            lines = f" ({found} data lines for {_declared(elements)}, one per row)" if len(elements) > 1 else ""
-            raise CloudFileError(path, f"truncated: the header declares {element.count} {_plural(element.name)} "
-                                       f"but only {left} {element.name} rows follow{lines}")
-        left -= element.count
-    f.seek(start)
-
-
-def _nonblank_lines(f) -> int:
-    """Lines with more than whitespace from the position of ``f`` to its end."""
-    count, tail = 0, b""
-    for block in iter(lambda: f.read(1 << 20), b""):
-        lines = (tail + block).replace(b"\r", b"\n").split(b"\n")
-        tail = lines.pop()
-        count += sum(1 for line in lines if line.strip())
-    return count + bool(tail.strip())
 
 
 def _check_binary_layout(path, header, start: int) -> None:
@@ -272,7 +234,7 @@ def _read_vertex_fast(f, header, index, path):
     if any(isinstance(p, PlyListProperty) for el in elements[: index + 1] for p in el.properties):
         return None
     if header.text:
-        return _read_ascii_vertex(f, vertex, path) if index == 0 else None
+        return read_ascii_vertex(f, vertex, path) if index == 0 else None
     order = header.byte_order
     skip = sum(el.count * el.dtype(order).itemsize for el in elements[:index])
     dtype = vertex.dtype(order)
@@ -287,52 +249,20 @@ def _read_vertex_fast(f, header, index, path):
     return {name: data[name] for name in dtype.names}
 
 
-def _read_ascii_vertex(f, vertex, path):
-    text = io.TextIOWrapper(f, encoding="latin-1", newline=None)
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", UserWarning)  # "input contained no data"
-            table = np.loadtxt(text, dtype=np.float64, comments=None, max_rows=vertex.count, ndmin=2)
-    except ValueError:
-        return None  # let plyfile locate and name the bad row
-    finally:
-        text.detach()
-    if len(table) < vertex.count:
-        raise CloudFileError(
-            path, f"truncated: the header declares {vertex.count} vertices but only {len(table)} vertex rows follow"
-        )
-    if table.shape[1] != len(vertex.properties):
-        return None
-    return {p.name: _ascii_column(table[:, i], p, path) for i, p in enumerate(vertex.properties)}
-
-
-def _ascii_column(values: np.ndarray, prop, path) -> np.ndarray:
-    """An ASCII column in the declared type; integers out of range or with a fraction are refused
-    (a cast would wrap 300 to 44 in a uchar). Float coordinates keep the float64 parse: the
-    text has their precision (float32 rounds UTM northings to 0.5 m)."""
-    dtype = np.dtype(prop.dtype())
-    if dtype.kind == "f" and prop.name.lower() in ("x", "y", "z"):
-        return values
-    if dtype.kind in "iu":
-        info = np.iinfo(dtype)
-        bad = (values < info.min) | (values > info.max) | (values != np.round(values))
-        if bad.any():
-            row = int(np.flatnonzero(bad)[0])
-            raise CloudFileError(
-                path, f"vertex {row}: property {prop.name!r} ({_PLY_NAMES.get(prop.val_dtype, prop.val_dtype)}) has the value {values[row]:g}, "
-                f"not an integer in [{info.min}, {info.max}]",
-            )
-    return values.astype(dtype, copy=False)
-
-
 def _read_vertex_plyfile(f, header, start: int, path):
     """The vertex properties read by plyfile's element reader, every element in turn from ``start``."""
     f.seek(start)
     stream = io.TextIOWrapper(f, "ascii") if header.text else f
+    name = None
     try:
-        for element in header.elements:
-            element._read(stream, header.text, header.byte_order, "c")  # what PlyData.read does
+        with np.errstate(over="raise"):  # an ASCII 1e300 in a float became inf with numpy's warning
+            for element in header.elements:
+                name = element.name
+                element._read(stream, header.text, header.byte_order, "c")  # what PlyData.read does
         vertex = header["vertex"]
+    except FloatingPointError:
+        raise CloudFileError(path, f"malformed PLY data: element {name!r} holds a value beyond the range of "
+                                   "its property's type") from None
     except UnicodeDecodeError:
         raise CloudFileError(path, "malformed PLY data: non-ASCII bytes in the ASCII body") from None
     except PlyParseError as exc:
@@ -340,6 +270,9 @@ def _read_vertex_plyfile(f, header, start: int, path):
         raise CloudFileError(path, f"{problem}: {exc}") from None
     except (ValueError, OverflowError) as exc:  # OverflowError: an integer out of its type's range
         raise CloudFileError(path, f"malformed PLY data: {exc}") from None
+    finally:
+        if stream is not f:
+            stream.detach()  # f stays open for its ``with``; the wrapper is not left to be collected
     return {p.name: vertex.data[p.name] for p in vertex.properties if not isinstance(p, PlyListProperty)}
 
 

@@ -49,13 +49,15 @@ def read_text(path, fmt: str) -> RawCloud:
 
 
 def _encoding(path) -> str:
-    """UTF-8 (with a BOM) or UTF-16 (with a BOM) as marked; otherwise UTF-8 if the file is
+    """UTF-8, UTF-32 or UTF-16 (with a BOM) as marked; otherwise UTF-8 if the file is
     valid UTF-8, else latin-1, which never fails to decode and reads ASCII numbers right.
     NUL bytes without a BOM are refused."""
     with open(path, "rb") as f:
         start = f.read(4096)
     if start.startswith(b"\xef\xbb\xbf"):
         return "utf-8-sig"
+    if start.startswith((b"\xff\xfe\x00\x00", b"\x00\x00\xfe\xff")):  # before UTF-16: FF FE begins both
+        return "utf-32"
     if start.startswith((b"\xff\xfe", b"\xfe\xff")):
         return "utf-16"
     if b"\0" in start:
