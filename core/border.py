@@ -133,7 +133,8 @@ def read_again(points, normals, nb, border):
     if not len(todo):
         return border
     nrm = np.ascontiguousarray(normals, dtype=np.float64)
-    spans = plane_spread.spans_plane(points, nrm, nb, np.full(len(todo), BORDER_K), LINE_SPREAD, todo)
+    k = min(BORDER_K, len(points))  # as border_of: a cloud of fewer points reads all of them
+    spans = plane_spread.spans_plane(points, nrm, nb, np.full(len(todo), k), LINE_SPREAD, todo)
     border = border.copy()
     confirmed(points, nrm, nb, border, todo[spans])
     return across_lines(points, nrm, nb, border, todo[~spans])

@@ -172,3 +172,14 @@ def test_a_dense_cluster_is_not_taken_for_copies():
     rng = np.random.default_rng(1)
     blob = s.points[0] + rng.normal(0.0, 1e-4, (100, 3))
     assert "duplicates" not in estimate(np.concatenate([s.points, blob]), k=15).params
+
+
+@pytest.mark.parametrize("places, copies", [(16, 2), (20, 15), (25, 5)])
+def test_fewer_places_than_the_border_test_reads_are_estimated(places, copies):
+    """16-29 places with copies: the border test's second reading asked the places' graph
+    for its 30 nearest and raised "k=30 exceeds the cached neighbourhood size"."""
+    rng = np.random.default_rng(0)
+    u, v = rng.uniform(-1, 1, (2, places))
+    cloud = np.repeat(np.column_stack([u, v, 0.3 * u * u - 0.2 * v * v]), copies, axis=0)
+    res = estimate(cloud, k=15)
+    assert res.params["duplicates"] == places * (copies - 1) and len(res.border) == len(cloud)
