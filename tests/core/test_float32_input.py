@@ -48,9 +48,23 @@ def test_float32_fine_for_its_spacing_is_not_flagged(sphere):
     """A 100 m sphere 1 km from the origin: float32's step (6e-5) is far below the spacing."""
     pts = (sphere.points * 100 + [1000.0, 2000.0, 50.0]).astype(np.float32)
     assert degenerate.reason(pts.astype(np.float64), 3) is None
-    # borderline: at 1e5, float32's step 0.0078 is ~1/5 of the unit sphere's spacing
+    # at 1e5, float32's step 0.0078 is ~1/5 of the unit sphere's spacing: rounding the fits take as noise
     near = (sphere.points + [1e5, 0, 0]).astype(np.float32).astype(np.float64)
-    assert "float32" in degenerate.reason(near, 3)
+    assert degenerate.reason(near, 3) is None
+    # at 4e6 it is 0.5, 8x the spacing: the sphere is sliced into planes
+    far = (sphere.points + [4e6, 0, 0]).astype(np.float32).astype(np.float64)
+    assert "float32" in degenerate.reason(far, 3)
+
+
+@pytest.mark.parametrize("offset", [0.0, 1e6, 9e6, 1.2e7, 2e7])
+def test_a_whole_millimetre_cloud_is_estimated_wherever_it_lies(offset):
+    """Whole numbers in [2^23, 2^24) are float32 values with float32's step 1, so a cloud in
+    whole millimetres 9-17 km from the origin was refused as float32-rounded (the same cloud
+    1-8 km out was estimated): a grid of its own is never nearer than its step."""
+    torus = shapes.torus(6000, seed=0)
+    mm = np.round(torus.points * 40.0) + offset  # R = 80 mm, spacing ~3 mm, whole millimetres
+    res = core.estimate(mm, k=15)
+    assert "degenerate" not in res.params and res.valid.mean() > 0.99
 
 
 def test_arguments_are_still_checked_first(sphere):
