@@ -38,7 +38,7 @@ def plan_tiles(source, store: TileStore, tile_points: int, progress, min_k: int 
             parts.append(pts[first::stride].copy())  # a view would keep each whole chunk alive (1.2 GB at 50M)
             _check_finite(source, start, pts)
             if f is not None:
-                _records(dtype, start, pts, nrm, view).tofile(f)
+                _append(_records(dtype, start, pts, nrm, view), f, spill)
             seen = start + len(pts)
             progress(seen / max(source.count, seen), "sampling")
     if spill:
@@ -74,7 +74,7 @@ def bin_points(source, store: TileStore, plan: TilePlan, progress) -> list:
         cuts = np.searchsorted(tile[order], np.arange(plan.n_tiles + 1))
         for t in np.flatnonzero(np.diff(cuts)):  # appended chunk by chunk: any number of tiles
             with open(store.bin_path(t), "ab") as f:
-                rec[order[cuts[t]:cuts[t + 1]]].tofile(f)
+                _append(rec[order[cuts[t]:cuts[t + 1]]], f, store.bin_path(t))
         counts += np.diff(cuts)
         progress((start + len(pts)) / plan.n_points, "binning")
     if counts.sum() != plan.n_points:
@@ -83,6 +83,19 @@ def bin_points(source, store: TileStore, plan: TilePlan, progress) -> list:
     store.mark_binned(counts)
     store.spill_path.unlink(missing_ok=True)
     return counts.tolist()
+
+
+def _append(records: np.ndarray, f, path) -> None:
+    """``records`` written at the end of the open file ``f`` (``path``); a short write (numpy
+    says only "N requested and M written") is an OSError that names the file and the likely
+    cause."""
+    try:
+        records.tofile(f)
+    except OSError as e:
+        short = OSError(f"{path}: cannot be written ({e.strerror or e}); the disk of the work directory may be "
+                        "full: give --work-dir on a disk with room")
+        short.errno = e.errno
+        raise short from e
 
 
 def _records(dtype, start, pts, nrm, view) -> np.ndarray:

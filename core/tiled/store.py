@@ -31,7 +31,7 @@ import numpy as np
 from ..io.atomic import atomic_write
 
 #: what a run writes in its work directory (all that :meth:`TileStore.remove` deletes)
-OWN = ("manifest.json", "plan.npz", "bins", "results")
+OWN = ("manifest.json", "plan.npz", "plan.tmp.npz", "bins", "results")
 #: what a binned point can hold: coordinates, normals, viewpoint, input row
 BIN_FIELDS = {"xyz": ("<f8", 3), "n": ("<f8", 3), "view": ("<f8", 3), "index": ("<i8",)}
 

@@ -62,3 +62,19 @@ def test_a_run_in_a_new_work_dir_removes_it_afterwards(tmp_path):
     estimate_tiled(core.shapes.sphere(900, seed=1).points, tmp_path / "o.ply", k=15, tile_points=300, workers=0,
                    workdir=work)
     assert (tmp_path / "o.ply").exists() and not work.exists() and (tmp_path / "scratch").is_dir()
+
+
+def test_a_full_disk_is_named_with_the_file(tmp_path, monkeypatch):
+    """numpy's short write says only "20000 requested and 1920 written"."""
+    from core.tiled import binning
+
+    class Short(np.ndarray):
+        def tofile(self, f):
+            raise OSError("20000 requested and 1920 written")
+
+    records = binning._records
+    monkeypatch.setattr(binning, "_records", lambda *args: records(*args).view(Short))
+    with pytest.raises(OSError, match=r"tile_\d+\.bin: cannot be written \(20000 requested.*may be full"):
+        estimate_tiled(core.shapes.sphere(900, seed=1).points, tmp_path / "o.ply", k=15, tile_points=300,
+                       workers=0, workdir=tmp_path / "work")
+    assert not (tmp_path / "work").exists()
