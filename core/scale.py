@@ -92,11 +92,8 @@ _CHUNK = 32_768
 
 
 def candidates(n_points: int) -> tuple[int, ...]:
-    """The candidate k that a cloud of ``n_points`` allows (and the memory budget, :mod:`core.neighbour_budget`):
-    none above half the cloud. A wider neighbourhood reaches round a small closed object: a
-    30-point sphere took 20 of them and gave H 1.7 (k = 10 or 15: 1.00), a 20-point one every
-    point a saddle. A cloud too small for the first candidate takes half of itself (at least
-    8, at most all of it)."""
+    """The candidate k that a cloud of ``n_points`` allows (and the memory budget, :mod:`core.neighbour_budget`),
+    none above half the cloud (a 30-point sphere took 20 and gave H 1.7; k = 15: 1.00), else half of it (>= 8)."""
     half = n_points // 2
     ks = neighbour_budget.affordable(tuple(k for k in AUTO_KS if k <= half), n_points, AUTO_KS[0])
     return ks or (min(n_points, max(half, 8)),)
