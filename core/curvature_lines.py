@@ -15,7 +15,9 @@ from scipy.spatial import cKDTree
 
 from ._progress import Progress
 from ._validate import check_choice, check_result
+from .duplicates import find_duplicates
 from .point_types import curvature_scale
+from .tuning import NEAR_COPY
 
 #: neighbours interpolating the field at a point of a line (6: the first ring of a sample)
 FIELD_NEIGHBOURS = 6
@@ -47,13 +49,19 @@ class _Field:
         ok = res.valid & np.isfinite(res.k1) & np.isfinite(res.k2)
         if not ok.any():
             raise ValueError("res has no valid point: no principal directions to trace")
+        ok = np.flatnonzero(ok)
+        # one copy of each repeated point (a cloud stored twice): the spacing is between
+        # distinct points, and the neighbours interpolating the field are distinct
+        merged = find_duplicates(np.ascontiguousarray(res.points[ok], dtype=np.float64))
+        ok = ok if merged is None else ok[merged.first]
+        if len(ok) < 2:
+            raise ValueError("res has fewer than two distinct valid points: no line to trace")
         self.pts = res.points[ok]
         self.dirs = (res.e1 if which == "e1" else res.e2)[ok]
         self.nrm, self.e1, self.e2 = res.normals[ok], res.e1[ok], res.e2[ok]
         self.k1, self.k2 = res.k1[ok], res.k2[ok]
         self.tree = cKDTree(self.pts)
-        d, _ = self.tree.query(self.pts, k=2)
-        self.spacing = float(np.mean(d[:, 1]))
+        self.spacing = _spacing(self.tree, self.pts)
         self.aniso = (self.k1 - self.k2) / curvature_scale(res)
 
     def sample(self, x, ref):
@@ -88,6 +96,20 @@ class _Field:
         h = np.einsum("lkj,lkj->lk", t, n)
         target = -0.5 * (self.k1[idx] * u * u + self.k2[idx] * v * v)
         return x + np.einsum("lk,lkj->lj", w * (target - h), n)
+
+
+def _spacing(tree, pts) -> float:
+    """Mean distance from a point to its nearest neighbour that is not a near copy of it
+    (closer than NEAR_COPY x the median FIELD_NEIGHBOURS-th neighbour distance: a point
+    written twice 1e-6 apart made the spacing, and the step, a millionth of the true one)."""
+    d, _ = tree.query(pts, k=min(FIELD_NEIGHBOURS + 1, len(pts)))
+    d = d[:, 1:]
+    far = d > NEAR_COPY * np.median(d[:, -1])
+    nearest = d[np.arange(len(d)), far.argmax(axis=1)][far.any(axis=1)]
+    spacing = float(np.mean(nearest)) if nearest.size else 0.0
+    if not (np.isfinite(spacing) and spacing > 0):
+        raise ValueError("res has no two valid points apart: no spacing to step by")
+    return spacing
 
 
 def _trace(field, seeds, start_dirs, h, max_steps, report):

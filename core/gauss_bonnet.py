@@ -17,6 +17,7 @@ from scipy.spatial import cKDTree
 
 from ._progress import Progress
 from ._validate import as_normals, as_points, check_int, check_result
+from .duplicates import find_duplicates
 
 #: neighbours around each point whose bisectors bound its cell. Random (Poisson) samples have
 #: 6 Voronoi neighbours on average, but a cell can be cut by a far one: against scipy's exact
@@ -136,12 +137,20 @@ def point_areas(points, normals, *, k: int = VORONOI_NEIGHBOURS, progress=None):
     boundary : (N,) bool, points with an empty angular sector wider than 120 degrees around
         them (the boundary of an open surface); their cells are clipped to their neighbours'
         extent.
+    Copies of one point share its cell's area equally (all points at one place: no area).
     """
     pts, _ = as_points(points)
     nrm = as_normals(normals, len(pts))
     k = check_int(k, name="k", low=4)
+    merged = find_duplicates(pts)  # copies of a point (a cloud stored twice) share its one cell
+    if merged is not None and len(merged.first) == 1:  # one place: no cell, no area (no curvature either)
+        return np.zeros(len(pts)), np.ones(len(pts), dtype=bool)
+    if merged is not None:
+        counts = np.bincount(merged.inverse)
+        areas, boundary = point_areas(merged.points, nrm[merged.first], k=k, progress=progress)
+        return areas[merged.inverse] / counts[merged.inverse], boundary[merged.inverse]
     if len(pts) < k + 1:
-        raise ValueError(f"points: point_areas needs more than k={k} points, got {len(pts)}")
+        raise ValueError(f"points: point_areas needs more than k={k} distinct points, got {len(pts)}")
     report = Progress(progress)
     _, idx = cKDTree(pts).query(pts, k=k + 1, workers=-1)
     idx = idx.astype(np.int64)

@@ -7,8 +7,9 @@ thread through a queued signal; a result of an older request is dropped.
 
 from __future__ import annotations
 
+import logging
 import threading
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from PySide6.QtCore import QObject, Signal
@@ -16,22 +17,29 @@ from scipy.spatial import cKDTree
 
 import core
 from core.curvature_lines import SEED_SPACING
+from core.duplicates import find_duplicates
+from core.gauss_bonnet import VORONOI_NEIGHBOURS
 
 from ..estimator import SHUTDOWN_WAIT_S
 
 __all__ = ["CloudMaths", "cloud_maths", "CloudMathsWorker"]
 
+LOG = logging.getLogger(__name__)
+
 @dataclass(frozen=True)
 class CloudMaths:
     """What the teaching overlays need about the whole cloud (numpy only): the lines of
     curvature on the surface, with the normal of each vertex's nearest point to lift them
-    over the point sprites when drawn (their size is the view's: app/framing.overlay_lift)."""
+    over the point sprites when drawn (their size is the view's: app/framing.overlay_lift).
+    A part that could not be computed is None (``lines``: empty) and ``notes[part]`` says why
+    (parts: "types", "gauss_bonnet", "lines")."""
 
     scale: float
-    types: np.ndarray
+    types: np.ndarray | None
     lines: dict  # "e1" / "e2" -> list of (m, 3) polylines
-    gauss_bonnet: core.GaussBonnet
+    gauss_bonnet: core.GaussBonnet | None
     line_normals: dict  # "e1" / "e2" -> list of (m, 3) unit normals, one per vertex
+    notes: dict = field(default_factory=dict)
 
     def lifted(self, key: str, lift: float) -> list:
         """The lines of ``key`` moved ``lift`` (world units) along their vertices' normals."""
@@ -56,20 +64,51 @@ LINE_SEEDS = 200
 def cloud_maths(res, *, separation: float | None = None, progress=None) -> CloudMaths:
     """Point types, lines of curvature (both families) and Gauss-Bonnet of one result (any
     thread). ``separation``: seed separation in spacings (default: about LINE_SEEDS seeds);
-    ``progress``: :func:`core.curvature_lines`'s (returning False cancels the tracing)."""
+    ``progress``: :func:`core.curvature_lines`'s (returning False cancels the tracing). A
+    part that fails is left out with a note; the others are kept."""
     if separation is None:
         separation = max(SEED_SPACING, float(np.sqrt(len(res.points) / LINE_SEEDS)))
+    notes = {}
     scale = core.curvature_scale(res)
-    types = core.point_types(res, scale=scale if np.isfinite(scale) else None)  # NaN: no valid point
-    gb = core.gauss_bonnet(res, progress=progress)
+    types = _attempt(notes, "types", lambda: core.point_types(res, scale=scale if np.isfinite(scale) else None))
+    gb = _gauss_bonnet(res, notes, progress)
     lines, normals = {}, {}
     for direction in ("e1", "e2"):
-        try:
-            lines[direction] = core.curvature_lines(res, direction=direction, separation=separation, progress=progress)
-        except ValueError:  # no valid point
-            lines[direction] = []
-        normals[direction] = _vertex_normals(lines[direction], res)
-    return CloudMaths(scale=scale, types=types, lines=lines, gauss_bonnet=gb, line_normals=normals)
+        traced = _attempt(notes, "lines", lambda d=direction: _lines(res, d, separation, progress))
+        lines[direction], normals[direction] = traced or ([], [])
+    return CloudMaths(scale=scale, types=types, lines=lines, gauss_bonnet=gb, line_normals=normals, notes=notes)
+
+
+def _attempt(notes: dict, part: str, compute):
+    """``compute()``, or None with ``notes[part]`` saying why it failed (a cancel propagates)."""
+    try:
+        return compute()
+    except core.Cancelled:
+        raise
+    except Exception as exc:  # noqa: BLE001 - told in the panel; the other parts still show
+        LOG.warning("teach: %s failed", part, exc_info=True)
+        notes.setdefault(part, f"{type(exc).__name__}: {exc}")
+        return None
+
+
+def _gauss_bonnet(res, notes: dict, progress):
+    """Gauss-Bonnet, or None with a note: its Voronoi cells need more than
+    VORONOI_NEIGHBOURS distinct points."""
+    merged = find_duplicates(np.ascontiguousarray(res.points, dtype=np.float64))
+    distinct = len(res.points) if merged is None else len(merged.first)
+    if distinct <= VORONOI_NEIGHBOURS:
+        notes["gauss_bonnet"] = (f"unavailable for so few points: its per-point areas need more than "
+                                 f"{VORONOI_NEIGHBOURS} distinct points, this cloud has {distinct}")
+        return None
+    return _attempt(notes, "gauss_bonnet", lambda: core.gauss_bonnet(res, progress=progress))
+
+
+def _lines(res, direction: str, separation: float, progress):
+    """One family of lines of curvature and their vertices' normals (none without a valid point)."""
+    if not (res.valid & np.isfinite(res.k1) & np.isfinite(res.k2)).any():
+        return [], []
+    lines = core.curvature_lines(res, direction=direction, separation=separation, progress=progress)
+    return lines, _vertex_normals(lines, res)
 
 
 class CloudMathsWorker(QObject):

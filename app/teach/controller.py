@@ -60,6 +60,7 @@ class TeachController(QObject):
         self.layer = OverlayLayer(window.plotter)
         self.worker = CloudMathsWorker(self)
         self.maths = None
+        self.failure = None  # why the current result's cloud-wide maths gave nothing
         self.fit = None
         self._result = None
         self._gen = 0
@@ -92,7 +93,7 @@ class TeachController(QObject):
             return
         if res is not self._result:
             self._result = res
-            self.maths = None
+            self.maths, self.failure = None, None
             self._gen = self.worker.submit(res)
         self._draw_local()
         self._draw_cloud()
@@ -106,9 +107,7 @@ class TeachController(QObject):
             self._draw_cloud()  # the lines float over the sprites' tops: bigger sprites, higher lines
             self.window.render_all()
         elif name == "source":
-            self._result, self.maths, self.fit = None, None, None
-            self.layer.clear()
-            self._set_legend(False)
+            self._forget()
 
     def _on_setting(self, name: str) -> None:
         if self._closed:
@@ -138,12 +137,24 @@ class TeachController(QObject):
 
     def _on_failed(self, gen: int, message: str) -> None:
         if gen == self._gen and not self._closed:
+            self.failure = message
+            self.panel.cloud_label.setText(cloud_text(None, message))
             self.window.notifier.error(f"Teach: the cloud-wide maths failed: {message}")
             self.ready.emit()
 
+    def _forget(self) -> None:
+        """A new cloud: nothing of the previous one stays on screen or in the panel."""
+        self._result, self.maths, self.failure, self.fit = None, None, None, None
+        self.layer.clear()
+        self._set_legend(False)
+        self.panel.cloud_label.setText("")
+        self.panel.point_label.setText(point_text(None, self.settings.theta, None, None))
+        self.panel.euler.show_fit(None, self.settings.theta)
+        self.panel.gauss_map.show_map(None, None)
+
     def is_ready(self) -> bool:
-        """True when the current result's cloud-wide maths are drawn."""
-        return self.maths is not None and self._result is self.result
+        """True when the current result's cloud-wide maths are drawn, or have failed."""
+        return (self.maths is not None or self.failure is not None) and self._result is self.result
 
     # -- the picked point ---------------------------------------------------------
     def _fit(self):
@@ -212,13 +223,13 @@ class TeachController(QObject):
     # -- the whole cloud ----------------------------------------------------------
     def _draw_cloud(self) -> None:
         maths, res, on = self.maths, self.result, self.settings.overlays
-        self.panel.cloud_label.setText(cloud_text(maths))
+        self.panel.cloud_label.setText(cloud_text(maths, self.failure))
         lift = self.window.scene.overlay_lift()
         for key in ("e1", "e2"):
             mesh = lines_mesh(maths.lifted(key, lift)) if maths is not None and "lines" in on else None
             style = dict(color=self._colour(key), line_width=2.5, render_lines_as_tubes=False)
             self.layer.show(f"lines-{key}", mesh, style)
-        if maths is not None and "types" in on and res is not None:
+        if maths is not None and maths.types is not None and "types" in on and res is not None:
             self._draw_types(res, maths.types)
         else:
             self.layer.remove("types")

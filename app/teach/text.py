@@ -32,16 +32,39 @@ def point_text(fit, theta_deg: float, res, index) -> str:
             f"{fit.gauss_map_ratio():.3g} ≈ |K|")
 
 
-def cloud_text(maths) -> str:
+def cloud_text(maths, failure: str | None = None) -> str:
+    """Gauss-Bonnet, the point types and the lines in words; ``failure``: why the cloud-wide
+    maths gave nothing (None while they run)."""
+    if maths is None and failure:
+        return ("<b>Gauss–Bonnet, lines of curvature and point types could not be computed</b>: "
+                + html.escape(failure))
     if maths is None:
         return "<i>Gauss–Bonnet, lines of curvature and point types: computing…</i>"
-    gb = maths.gauss_bonnet
-    text = (f"<b>Gauss–Bonnet</b>: ∫K dA = {gb.total:.4g} over an area of {gb.area:.4g}")
+    notes = maths.notes
+    return "<br>".join((_gauss_bonnet_text(maths.gauss_bonnet, notes.get("gauss_bonnet")),
+                        _types_text(maths.types, notes.get("types")),
+                        _lines_text(maths.lines, notes.get("lines"))))
+
+
+def _gauss_bonnet_text(gb, note) -> str:
+    if gb is None:
+        return f"<b>Gauss–Bonnet</b>: {html.escape(note or 'not computed')}."
+    text = f"<b>Gauss–Bonnet</b>: ∫K dA = {gb.total:.4g} over an area of {gb.area:.4g}"
     if gb.closed:
-        text += f"; χ = ∫K dA / 2π = <b>{gb.chi:.3f}</b> (sphere 2, torus 0)"
-    else:
-        text += f"; the cloud has a boundary ({int(gb.boundary.sum())} points): χ needs a closed surface"
-    shares = ", ".join(f"{name} {np.mean(maths.types == i):.0%}" for i, name in enumerate(core.TYPE_NAMES)
-                       if np.any(maths.types == i))
-    lines = sum(len(v) for v in maths.lines.values())
-    return text + f"<br>Point types: {shares}.<br>{lines} lines of curvature traced."
+        return text + f"; χ = ∫K dA / 2π = <b>{gb.chi:.3f}</b> (sphere 2, torus 0)"
+    return text + f"; the cloud has a boundary ({int(gb.boundary.sum())} points): χ needs a closed surface"
+
+
+def _types_text(types, note) -> str:
+    if types is None:
+        return f"Point types could not be computed: {html.escape(note or 'unknown error')}."
+    shares = ", ".join(f"{name} {np.mean(types == i):.0%}" for i, name in enumerate(core.TYPE_NAMES)
+                       if np.any(types == i))
+    return f"Point types: {shares or 'none (no valid point)'}."
+
+
+def _lines_text(lines, note) -> str:
+    count = sum(len(v) for v in lines.values())
+    if note:
+        return f"{count} lines of curvature traced; tracing failed: {html.escape(note)}."
+    return f"{count} lines of curvature traced."
