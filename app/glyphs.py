@@ -2,7 +2,8 @@
 shared by every drawing of a frame: glyphs, the picked frame, lines of curvature, plots.
 
 Principal directions have no sign, so a direction d at p is drawn as the segment
-p - d*L/2 .. p + d*L/2 (a "±" glyph), never as an arrow.
+p - d*L/2 .. p + d*L/2 (a "±" glyph), never as an arrow. A normal has one (the cloud's
+orientation): it is drawn outward, p .. p + n*L (``centred=False``).
 """
 
 from __future__ import annotations
@@ -55,8 +56,10 @@ def subsample(n: int, density: float, *, seed: int = 0) -> np.ndarray:
     return np.sort(order[:m])
 
 
-def segments(points: np.ndarray, directions: np.ndarray, index: np.ndarray, length: float):
-    """Vertices and VTK line connectivity for ± segments of total ``length``.
+def segments(points: np.ndarray, directions: np.ndarray, index: np.ndarray, length: float, *,
+             centred: bool = True):
+    """Vertices and VTK line connectivity for ± segments of total ``length`` (``centred``),
+    or for segments from each point along its direction.
 
     Rows whose direction is not finite (invalid estimates) are skipped.
 
@@ -71,11 +74,11 @@ def segments(points: np.ndarray, directions: np.ndarray, index: np.ndarray, leng
     p, d = p[ok], d[ok]
     norm = np.linalg.norm(d, axis=1, keepdims=True)
     norm[norm == 0] = 1.0
-    half = 0.5 * float(length) * d / norm
+    along = float(length) * d / norm
     m = len(p)
     vertices = np.empty((2 * m, 3))
-    vertices[0::2] = p - half
-    vertices[1::2] = p + half
+    vertices[0::2] = p - 0.5 * along if centred else p
+    vertices[1::2] = p + 0.5 * along if centred else p + along
     lines = np.empty((m, 3), dtype=np.int64)
     lines[:, 0] = 2
     lines[:, 1] = np.arange(0, 2 * m, 2)

@@ -227,7 +227,7 @@ class ResultPresenter:
             for kind, key, arr in (("e1", "show_e1", res.e1), ("e2", "show_e2", res.e2),
                                    ("normals", "show_normals", res.normals)):
                 scene.set_glyphs(kind, arr if s.get(key) else None, density=s.glyph_density,
-                                 length=s.glyph_length, normals=None if kind == "normals" else res.normals)
+                                 length=s.glyph_length, normals=res.normals)
 
     def pick(self) -> None:
         out, index = self.output, self.state.picked

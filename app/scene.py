@@ -257,7 +257,8 @@ class CloudScene(Picking):
         """± segments along ``directions`` at a ``density`` fraction of the glyph positions
         (at most :data:`app.glyphs.GLYPH_POINTS`, spread evenly: the cloud's
         ``geometry.glyph_order``), or remove them. ``length`` is in mean point spacings. With
-        ``normals``, tangent glyphs are lifted (:meth:`overlay_lift`) over the point sprites.
+        ``normals``, glyphs are lifted (:meth:`overlay_lift`) over the point sprites; the
+        normals' own glyphs start there and point outward (centred, the sprite hid them).
         """
         name = f"glyph-{kind}"
         if directions is None or self.points is None or density <= 0:
@@ -271,7 +272,8 @@ class CloudScene(Picking):
         base = self.points[index]
         if normals is not None:
             base = base + np.nan_to_num(np.asarray(normals, dtype=float)[index]) * self.overlay_lift()
-        vertices, lines = glyphs.segments(base, np.asarray(directions)[index], slice(None), length * self.spacing)
+        vertices, lines = glyphs.segments(base, np.asarray(directions)[index], slice(None), length * self.spacing,
+                                          centred=kind != "normals")
         if len(vertices) == 0:
             self.set_glyphs(kind, None, density=0, length=0)
             return

@@ -14,9 +14,13 @@ from app.source import CloudSource, make_shape
 
 
 def _glyph_centres(window, kind: str) -> np.ndarray:
-    """Centres of the drawn ± segments of one glyph kind."""
+    """The points the glyphs of one kind stand on: the centres of the ± segments; a normal's
+    segment rises from its point's sprite top, ``overlay_lift`` along it (app.scene.set_glyphs)."""
     mesh = window.plotter.actors[f"glyph-{kind}"].mapper.dataset
     v = np.asarray(mesh.points)
+    if kind == "normals":
+        d = v[1::2] - v[0::2]
+        return v[0::2] - window.scene.overlay_lift() * d / np.linalg.norm(d, axis=1, keepdims=True)
     return 0.5 * (v[0::2] + v[1::2])
 
 
@@ -33,7 +37,7 @@ def test_glyphs_are_drawn_at_a_budget_of_evenly_spread_positions(make_window, qt
     for kind in ("e1", "e2", "normals"):
         n_cells = window.plotter.actors[f"glyph-{kind}"].mapper.dataset.n_cells
         assert n_cells == 400, kind  # the slider's 100 % is the budget, not every point
-    # normals are not lifted: their centres are the chosen points
+    # each normal stands on a chosen point
     tree = cKDTree(torus.points)
     dist, full = tree.query(_glyph_centres(window, "normals"))
     assert dist.max() < 1e-9 and len(set(full)) == 400
