@@ -10,7 +10,6 @@ import argparse
 import math
 import signal
 import sys
-from pathlib import Path
 
 from PySide6.QtCore import QSettings, QTimer
 from PySide6.QtWidgets import QApplication
@@ -208,8 +207,10 @@ class _Screenshot:
     """``--screenshot``: save the window once the first full result is drawn, then close."""
 
     def __init__(self, window, args, outcome: dict, pick):
+        from .actions import SCREENSHOT_SUFFIX, with_default_suffix  # the window is up: its modules are loaded
+
         self.window, self.outcome, self.pick = window, outcome, pick
-        self.target, self.whole = Path(args.screenshot), not args.view_only
+        self.target, self.whole = with_default_suffix(args.screenshot, SCREENSHOT_SUFFIX), not args.view_only
         self.done = False
         self.field = window.state.field  # as given (the state falls back to H where it is not drawn)
         window.loader.loaded.connect(self.on_loaded)

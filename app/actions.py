@@ -7,6 +7,7 @@ and the cloud is swapped in when it arrives.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 from PySide6.QtGui import QAction, QKeySequence
@@ -21,7 +22,10 @@ from .presenter import result_parameters
 from .text import safe_text
 from .widgets import RecentFilesMenu, ShapeDialog
 
-__all__ = ["DockToggle", "WindowActions", "read_filter", "write_filter"]
+__all__ = ["DockToggle", "WindowActions", "read_filter", "write_filter", "with_default_suffix"]
+
+#: what a screenshot and an export are written as when their name has no suffix
+SCREENSHOT_SUFFIX, EXPORT_SUFFIX = ".png", ".ply"
 
 
 class DockToggle(QAction):
@@ -52,6 +56,19 @@ class DockToggle(QAction):
 def write_filter() -> str:
     return ";;".join(f"{desc} (*{ext if ext.startswith('.') else '.' + ext})"
                      for ext, desc in core.io.WRITE_FORMATS.items())
+
+
+def with_default_suffix(path, suffix: str) -> Path:
+    """``path`` with ``suffix`` added when its name has none (as Qt applications do); an
+    existing directory is left as it is (its error names it)."""
+    path = Path(path)
+    return path if path.suffix or path.is_dir() else path.with_name(path.name + suffix)
+
+
+def filter_suffix(name_filter: str, default: str) -> str:
+    """The first suffix of a dialog's name filter, "PNG (*.png)" -> ".png"."""
+    found = re.search(r"\(\*(\.\w+)", name_filter or "")
+    return found.group(1) if found else default
 
 
 def read_filter() -> str:
@@ -178,8 +195,9 @@ class WindowActions:
             self.load_shape(dialog.shape, dialog.count)
 
     # -- export ---------------------------------------------------------------------
-    def export_result(self, path) -> Path | None:
-        """Write the last full result to ``path`` (File > Export).
+    def export_result(self, path, default_suffix: str = EXPORT_SUFFIX) -> Path | None:
+        """Write the last full result to ``path`` (File > Export), ``default_suffix`` added to
+        a name without one.
 
         While a preview is on screen (its full result still computing) the preview is not
         written: it is an approximation on a subsample, like a display-only state in
@@ -192,6 +210,7 @@ class WindowActions:
                                   + (" (a preview is not exported)." if self.presenter.preview is not None else "."))
             return None
         source = self.state.source
+        path = with_default_suffix(path, default_suffix)
         try:  # never over the file the cloud came from (a symlink or hard link to it included), as the CLI
             refuse_input_as_output([source.path] if source is not None and source.path is not None else [], path)
             written = core.io.write_result(path, out.result)
@@ -209,13 +228,15 @@ class WindowActions:
     def export_dialog(self) -> None:
         start = Path(self.settings.value("last_dir", str(Path.home())))
         stem = Path(self.state.source.name).stem.split(" ")[0] if self.state.source else "result"
-        path, _ = QFileDialog.getSaveFileName(self, "Export result", str(start / f"{stem}-curvature.ply"),
-                                              write_filter())
+        path, chosen = QFileDialog.getSaveFileName(self, "Export result", str(start / f"{stem}-curvature.ply"),
+                                                   write_filter())
         if path:
-            self.export_result(path)
+            self.export_result(path, filter_suffix(chosen, EXPORT_SUFFIX))
 
     def save_screenshot(self, path, *, whole_window: bool = False) -> bool:
-        """Save a PNG of the 3D view(s), or of the whole window (``grab`` renders the 3D views)."""
+        """Save a PNG of the 3D view(s), or of the whole window (``grab`` renders the 3D views);
+        a name without a suffix gets ".png"."""
+        path = with_default_suffix(path, SCREENSHOT_SUFFIX)
         self.histogram.flush()  # a draw still waiting for its own turn (app/widgets/histogram.py)
         widget = self if whole_window else self.splitter
         ok = widget.grab().save(str(path))
