@@ -49,6 +49,9 @@ SAMPLE = 65536
 #: axes), mean |H R - 1| of k="auto": step 1x spacing 0.002 / 0.004, 2x 0.004 / 0.013, 3x
 #: 0.007 / 0.029, 4x 0.013 / 0.095, 8x 0.16 / 1.1 (k = 15: 0.07 / 0.11 at 1x, 0.11 / 0.22 at 2x)
 FLOAT32_STEP_SHARE = 2.0
+#: ... or when it is at least half the spacing and rounding left fewer places than this share
+#: of the points (every axis coarse: the places are then a step apart, their spacing says nothing)
+FLOAT32_COLLAPSED = 0.5
 #: float32's step is not compared with the spacing (no neighbour search, ~0.3 s at 1M points)
 #: when it is below 1/FLOAT32_PLAUSIBLE of the cloud's extent / sqrt(N), the spacing of an
 #: even surface sampling: the flag would then need a median nearest distance 100x below
@@ -101,12 +104,19 @@ def _float32_grid(points: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> str | N
     if step * FLOAT32_PLAUSIBLE < float(np.linalg.norm(hi - lo)) / np.sqrt(len(points)):
         return None
     spacing = _median_spacing(points)
-    if step <= FLOAT32_STEP_SHARE * spacing:
+    if step <= FLOAT32_STEP_SHARE * spacing and not (step >= 0.5 * spacing and _collapsed(sample)):
         return None
     return (f"the coordinates are float32 values: their step {step:.3g} at coordinates up to {top.max():.6g} is "
             f"{step / spacing:.2g}x the median distance between nearest points ({spacing:.3g}): rounding to "
             "float32 moved the points by a large share of their spacing (too coarse to resolve in float32); "
             "re-centre the cloud before converting it to float32, or keep float64 coordinates")
+
+
+def _collapsed(sample: np.ndarray) -> bool:
+    """Whether rounding put most points on top of others (fewer places than half the
+    points): then the nearest distinct places are a step apart whatever the spacing was,
+    and only the copies tell (an object far smaller than float32's step in every axis)."""
+    return len(np.unique(sample, axis=0)) < FLOAT32_COLLAPSED * len(sample)
 
 
 def _float32_step(sample: np.ndarray, top: np.ndarray) -> float:

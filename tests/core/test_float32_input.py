@@ -86,3 +86,11 @@ def test_binary_float_ply_at_utm_is_flagged_by_the_cli(sphere, tmp_path, capsys)
     assert main(["estimate", str(path), "-o", str(tmp_path / "out.ply"), "--k", "15"]) == 0
     text = capsys.readouterr().out
     assert "invalid points: 3000" in text and "no estimate: the coordinates are float32 values" in text
+
+
+def test_a_cloud_rounded_onto_a_few_places_in_every_axis_is_flagged(sphere):
+    """Far from the origin in every axis float32's step (1 at 1e7) is coarser than the whole
+    unit sphere: its places are a step apart, as a whole-number grid's are, and only the
+    copies (3000 points on a few dozen places) tell that rounding made them."""
+    pts = (sphere.points + 1e7).astype(np.float32).astype(np.float64)
+    assert "float32" in degenerate.reason(pts, 3)

@@ -21,7 +21,7 @@ _DEGENERATE = {
     "one place": lambda: np.ones((500, 3)),
     "a line": lambda: np.c_[np.linspace(0.0, 1.0, 3000), np.zeros(3000), np.zeros(3000)],
     "huge coordinates": lambda: _RNG.normal(size=(3000, 3)) * 1e160,
-    "a float32 grid": lambda: (np.float32(5e6) + _RNG.normal(size=(3000, 3)).astype(np.float32)).astype(np.float64),
+    "a float32 grid": lambda: (np.float32(5e7) + _RNG.normal(size=(3000, 3)).astype(np.float32)).astype(np.float64),
 }
 
 
