@@ -79,6 +79,11 @@ def _guarded(fn, root, tile, spec, label):
         raise ValueError(f"{label}: tile {tile} failed: {type(exc).__name__}: {exc}") from exc
 
 
+#: what a tile's KilledWorker most often means
+_KILLED = ("; the workers running it died, most often of the memory limit: lower --tile-points or raise "
+           "--memory")
+
+
 def _on_dask(fn, root, tiles, sizes, spec, clock, *, client, scheduler, workers, memory, label):
     from distributed import Client, LocalCluster, as_completed
 
@@ -100,11 +105,12 @@ def _on_dask(fn, root, tiles, sizes, spec, clock, *, client, scheduler, workers,
                for t in tiles}
     out = []
     try:
-        for fut in as_completed(futures):
+        for fut in as_completed(futures, loop=client.loop):  # this client's: a scheduler's is not the default
             t = futures[fut]
             if fut.status == "error":
                 exc = fut.exception()
-                raise ValueError(f"{label}: tile {t} failed: {type(exc).__name__}: {exc}")
+                hint = _KILLED if type(exc).__name__ == "KilledWorker" else ""
+                raise ValueError(f"{label}: tile {t} failed: {type(exc).__name__}: {exc}{hint}")
             out.append(fut.result())
             clock.done(sizes[t])
     finally:
