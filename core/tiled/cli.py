@@ -86,7 +86,7 @@ def run(args) -> int:
             args.input, args.output, k=args.k, method=args.method, passes=args.passes, orientation=orientation,
             options=dict(args.option or []) or None, tile_points=args.tile_points, workers=args.workers,
             memory=args.memory or "1.5GB", scheduler=args.scheduler, workdir=_work_dir(args),
-            ignore_normals=args.ignore_normals, progress=bar,
+            ignore_normals=args.ignore_normals, drop_nonfinite=args.drop_nonfinite, progress=bar,
         )
     finally:
         bar.close()

@@ -107,14 +107,14 @@ def default_tile_points(k: int, memory) -> int:
 
 
 def _prepare(source, normals, k, *, method, passes, orientation, options, tile_points, workers, memory,
-             ignore_normals):
+             ignore_normals, drop_nonfinite=False):
     """Validate the arguments (cheap checks before the file is opened) and resolve defaults."""
     budget = parse_memory(memory)
     if tile_points is not None:
         tile_points = check_int(tile_points, name="tile_points", low=100, high=10**10)
     if workers is not None:
         check_int(workers, name="workers", low=0, high=4096)
-    src = open_source(source, normals, use_normals=not ignore_normals)
+    src = open_source(source, normals, use_normals=not ignore_normals, drop_nonfinite=drop_nonfinite)
     spec, rule = _spec(k, method, passes, orientation, options, src.has_normals, in_process=workers == 0,
                        views=src.has_views)
     if spec.k == "auto":
@@ -153,7 +153,7 @@ def _tile_points(k, budget, count, workers) -> int:
 def estimate_tiled(source, output, *, normals=None, k="auto", method="nr", passes=None, orientation="auto",
                    options=None, tile_points=None, workers=None, memory=DEFAULT_MEMORY, client=None,
                    scheduler=None, workdir=None, keep_workdir=False, ignore_normals=False,
-                   progress=None) -> TiledRun:
+                   drop_nonfinite=False, progress=None) -> TiledRun:
     """Estimate a cloud of any size in spatial tiles with halos, on Dask, into a file.
 
     Every point gets the answer of :func:`core.estimate` on the whole cloud (the same
@@ -189,6 +189,8 @@ def estimate_tiled(source, output, *, normals=None, k="auto", method="nr", passe
         one holding other files is refused; only what a run writes is ever deleted), and
         whether to keep them afterwards.
     ignore_normals : estimate normals even where the file has some.
+    drop_nonfinite : drop points with NaN/inf coordinates (a file read whole, or an array), as
+        :func:`core.estimate` does; the output then holds the others.
     progress : callable(fraction, stage), optional.
 
     Returns
@@ -200,7 +202,8 @@ def estimate_tiled(source, output, *, normals=None, k="auto", method="nr", passe
     report = Progress(progress)
     src, spec, rule, budget, tile_points = _prepare(
         source, normals, k, method=method, passes=passes, orientation=orientation, options=options,
-        tile_points=tile_points, workers=workers, memory=memory, ignore_normals=ignore_normals)
+        tile_points=tile_points, workers=workers, memory=memory, ignore_normals=ignore_normals,
+        drop_nonfinite=drop_nonfinite)
     output = _output(output)
     own_client = engine.connect(scheduler) if client is None and scheduler is not None else None
     try:  # a scheduler that cannot be reached is told before the input is binned

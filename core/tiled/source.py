@@ -79,11 +79,14 @@ class Source:
             yield start, self._points[start:stop], nrm, view
 
 
-def open_source(source, normals=None, *, use_normals: bool = True) -> Source:
+def open_source(source, normals=None, *, use_normals: bool = True, drop_nonfinite: bool = False) -> Source:
     """A :class:`Source` from a path (LAS/LAZ streamed) or an (N, 3) array (+ normals);
-    ``use_normals=False`` ignores normals stored in the file."""
+    ``use_normals=False`` ignores normals stored in the file; ``drop_nonfinite`` drops the
+    points with NaN/inf coordinates of a cloud read whole or given as an array."""
     if isinstance(source, (str, os.PathLike)):
         path = os.fspath(source)
+        if not os.path.isfile(path):  # as read_cloud says it (a missing file of several is one bad input)
+            read_cloud(path)
         stat = os.stat(path)
         identity = (os.path.abspath(path), stat.st_size, stat.st_mtime_ns)
         if path.lower().endswith(_STREAMED):
@@ -92,9 +95,11 @@ def open_source(source, normals=None, *, use_normals: bool = True) -> Source:
                           offsets=info.offsets, _path=path)
         if path.lower().endswith(_E57):
             return Source(path, _e57_count(path), False, identity, has_views=True, _path=path)
-        cloud = read_cloud(path)
+        cloud = read_cloud(path, drop_nonfinite=drop_nonfinite)
         return _from_arrays(path, cloud.points, cloud.normals if use_normals else None, identity, cloud.viewpoints)
-    pts, _ = as_points(source)
+    pts, kept = as_points(source, drop_nonfinite=drop_nonfinite)
+    if normals is not None and not kept.all():  # the dropped points' normals go with them
+        normals = np.asarray(normals)[kept]
     nrm = None if normals is None else as_normals(normals, len(pts))
     digest = hashlib.blake2b(pts.tobytes(), digest_size=16).hexdigest()
     return _from_arrays("array", pts, nrm, ("array", len(pts), digest))

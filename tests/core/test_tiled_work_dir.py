@@ -78,3 +78,28 @@ def test_a_full_disk_is_named_with_the_file(tmp_path, monkeypatch):
         estimate_tiled(core.shapes.sphere(900, seed=1).points, tmp_path / "o.ply", k=15, tile_points=300,
                        workers=0, workdir=tmp_path / "work")
     assert not (tmp_path / "work").exists()
+
+
+def test_tiles_drop_nonfinite_points_when_asked(tmp_path):
+    """--drop-nonfinite was not passed to the tiles: a file with 3 NaN rows was refused
+    ("pass drop_nonfinite=True") with the flag given."""
+    pts = core.shapes.sphere(1200, seed=3).points
+    pts[[5, 50, 500]] = np.nan
+    np.savetxt(tmp_path / "nan.xyz", pts)
+    argv = ["estimate", str(tmp_path / "nan.xyz"), "-o", str(tmp_path / "o.ply"), "--k", "15", "--workers", "0",
+            "--tile-points", "400", "--drop-nonfinite", "-q"]
+    with pytest.warns(UserWarning):
+        assert cli.main(argv) == 0
+    assert len(core.io.read_cloud(tmp_path / "o.ply").points) == 1197
+    run = estimate_tiled(pts, tmp_path / "a.ply", k=15, tile_points=400, workers=0, drop_nonfinite=True)
+    assert run.n_points == 1197
+
+
+def test_a_missing_input_among_several_is_told_and_the_others_estimated(tmp_path, capsys):
+    np.savetxt(tmp_path / "a.xyz", core.shapes.sphere(900, seed=1).points)
+    np.savetxt(tmp_path / "b.xyz", core.shapes.sphere(900, seed=2).points)
+    argv = ["estimate", str(tmp_path / "a.xyz"), str(tmp_path / "missing.xyz"), str(tmp_path / "b.xyz"),
+            "-o", str(tmp_path / "{stem}_out.ply"), "--k", "15", "--workers", "0", "--tile-points", "300", "-q"]
+    assert cli.main(argv) == 2
+    assert "missing.xyz: no such file" in capsys.readouterr().err
+    assert (tmp_path / "a_out.ply").exists() and (tmp_path / "b_out.ply").exists()
