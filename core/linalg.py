@@ -4,13 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .kernels.frame import intrinsic_frames
 from .tuning import RCOND
-
-#: neighbours whose offsets turn a tangent frame with the cloud (:func:`turning_basis`): the
-#: fewest any fit of degree 2-3 uses (k="auto"'s smallest candidate is 20), so every chunk,
-#: tile and thread count turns a point's frame alike
-TURN_K = 15
 
 
 def tangent_basis(n: np.ndarray):
@@ -21,21 +15,6 @@ def tangent_basis(n: np.ndarray):
     b = n[:, 0] * n[:, 1] * a
     t1 = np.stack([1.0 + sign * n[:, 0] ** 2 * a, sign * b, -sign * n[:, 0]], axis=1)
     t2 = np.stack([b, sign + n[:, 1] ** 2 * a, -n[:, 1]], axis=1)
-    return t1, t2
-
-
-def turning_basis(points, centres, n, idx, k0: int = TURN_K):
-    """(t1, t2) of :func:`tangent_basis` turned about each unit normal ``n`` (M, 3) so that t1
-    points along the offsets from ``points[centres]`` to their first ``k0`` neighbours
-    (``idx`` (M, >= 1), the point first) projected on the tangent plane
-    (:func:`core.kernels.frame.intrinsic_frames`): a frame that turns with the cloud. A fit
-    whose determinacy is judged on the equilibrated pivots of its monomials' normal matrix
-    (the 2-jet's :data:`core.tuning.INITIAL_JET_PIVOT`, NF's :data:`core.tuning.DEGREE_PIVOT`)
-    then decides alike for a rotated cloud; in the world-fixed basis it did not."""
-    n = np.ascontiguousarray(n, dtype=np.float64)
-    t1, t2 = tangent_basis(n)
-    first = np.ascontiguousarray(idx[:, :min(k0, idx.shape[1])])
-    intrinsic_frames(points, np.asarray(centres, dtype=np.int64), n, first, t1, t2)
     return t1, t2
 
 

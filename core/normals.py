@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import kernels
-from .linalg import turning_basis
+from .linalg import tangent_basis
 from .orientation import orient_normals  # noqa: F401  (moved: orientation lives in core.orientation)
 from .tuning import COLLINEAR, INITIAL_JET_PIVOT, RCOND, THETA_REACH
 
@@ -43,8 +43,7 @@ def _run(centres):
 
 
 def jet_normals(points, normals, ok, idx, dist, *, centres=None, progress=None):
-    """Normals of the osculating 2-jet (Cazals & Pouget 2005) fitted in the PCA frames
-    (tangent axes turned with the cloud: :func:`core.linalg.turning_basis`).
+    """Normals of the osculating 2-jet (Cazals & Pouget 2005) fitted in the PCA frames.
 
     A full quadric with constant and linear terms follows a curved patch where a plane
     (PCA) cannot: noise-free, the normal error on the torus drops from ~0.7 to ~0.15
@@ -63,13 +62,13 @@ def jet_normals(points, normals, ok, idx, dist, *, centres=None, progress=None):
         part = rows[start:start + _CHUNK]
         at = _run(part)  # a run of rows (every point of a clean cloud): views, not copies
         z = normals[at]
-        rows_at, at_points = np.ascontiguousarray(idx[at]), part if centres is None else centres[part]
-        t1, t2 = turning_basis(points, at_points, z, rows_at)
+        t1, t2 = tangent_basis(z)
         res = np.empty((len(part), 3))
         hgt = np.full(len(part), np.nan)
         good = np.empty(len(part), dtype=bool)
-        kernels.jet_normals(points, rows_at, np.ascontiguousarray(dist[at, -1]), at_points, t1, t2, z,
-                            INITIAL_JET_PIVOT, res, hgt, good, np.empty(len(part)))
+        kernels.jet_normals(points, np.ascontiguousarray(idx[at]), np.ascontiguousarray(dist[at, -1]),
+                            part if centres is None else centres[part], t1, t2, z, INITIAL_JET_PIVOT, res, hgt,
+                            good, np.empty(len(part)))
         out[part[good]] = res[good]
         height[part[good]] = hgt[good]
         if progress is not None:

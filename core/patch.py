@@ -9,7 +9,6 @@ import numpy as np
 
 from .kernels import Frames
 from .kernels.frame import intrinsic_frames, local_frames
-from .linalg import TURN_K
 
 
 @dataclass(frozen=True, eq=False)
@@ -50,11 +49,11 @@ class Chunk:
             rows = np.asarray(rows, dtype=np.int64)
         return cls(points, normals, np.ascontiguousarray(idx), h, centres, t1, t2, z, kc, rows)
 
-    def turning(self, k0: int = TURN_K) -> "Chunk":
+    def turning(self, k0: int) -> "Chunk":
         """This chunk in tangent frames that turn with the cloud, t1 along its first ``k0``
         neighbours' offsets (:func:`core.kernels.frame.intrinsic_frames`): for rules that
-        compare fitted entries one by one, or test a fit's equilibrated pivots, which in
-        frames fixed to the world's axes give a rotated cloud other answers."""
+        compare fitted entries one by one, which in frames fixed to the world's axes give
+        a rotated cloud other answers."""
         k0 = min(k0, self.idx.shape[1])
         first = self.idx[:, :k0] if self.rows is None else self.idx[self.rows, :k0]
         t1, t2 = self.t1.copy(), self.t2.copy()

@@ -30,7 +30,7 @@ import numpy as np
 
 from . import kernels
 from .kernels.spread import curve_shares, plane_spread, weighted_plane_spread
-from .linalg import turning_basis
+from .linalg import tangent_basis
 from .tuning import COLLINEAR, FOLD_FLAT, INITIAL_JET_PIVOT, THETA_REACH, THIN_SPREAD
 
 
@@ -234,7 +234,7 @@ def _jets(pts, centres, idx, dist, frame, has, pivot=INITIAL_JET_PIVOT):
     tilts the frame's normal beyond what its residual explains (:data:`JET_SIGNIFICANCE`
     standard errors of its slope): the frame is biased, not the jet noisy."""
     frame = np.where(has[:, None], frame, (0.0, 0.0, 1.0))  # any frame: a row without a normal is not kept
-    t1, t2 = turning_basis(pts, centres, frame, idx)
+    t1, t2 = tangent_basis(frame)
     m = len(centres)
     found, height, good, se = np.empty((m, 3)), np.empty(m), np.empty(m, dtype=bool), np.empty(m)
     kernels.jet_normals(pts, idx, np.ascontiguousarray(dist[:, -1]), centres, t1, t2, frame, pivot,

@@ -319,12 +319,7 @@ class _Fitter(NamedTuple):
 
 
 def _fit_chunk(chunk, method, opts, out: Fit, kept=None) -> None:
-    """Fit ``chunk`` into ``out``; ``kept`` keeps the anchors' fits, with their polynomials (NF's).
-    A normal fit of degree 2-3 runs in frames that turn with the cloud: whether it falls a
-    degree is judged on its equilibrated pivots (:data:`core.tuning.DEGREE_PIVOT`), which
-    depend on the tangent axes."""
-    if opts.get("degree", 1) > 1:
-        chunk = chunk.turning()
+    """Fit ``chunk`` into ``out``; ``kept`` keeps the anchors' fits, with their polynomials (NF's)."""
     mu, W, ok, diag = method.fit(chunk, **opts) if kept is None else method.fit(chunk, **opts, coefficients=True)
     frame = darboux_frame(chunk.t1, chunk.t2, chunk.z, mu, W / chunk.h[:, None, None])
     good = ok & frame.ok

@@ -34,7 +34,7 @@ JET_RCOND = 1e-5
 #: (13 %, 0, 0 fall); sphere parallels 6-16 spacings apart, median 1e-6 to 3e-4 at 28-56 (all fall). Until 2026-12-07
 #: the smallest equilibrated Cholesky pivot in world-fixed axes (1e-2): a turned cloud fell at other points (H off by
 #: 0.09 where |H| <= 0.1) and 21-64 % of those parallels' fits passed. Parallels 6-16 apart (k="auto"), mean ||H| - 1|:
-#: noise-free 0.0008-0.0036 -> 0.0002-0.0035, noise 0.1 0.037-0.086 -> 0.006-0.026. Races: tuning 1/72 0.471x, private
+#: noise-free 0.0008-0.0036 -> 0.0004-0.0034, noise 0.1 0.037-0.086 -> 0.006-0.026. Races: tuning 1/72 0.471x, private
 #: 1/48 1.20x 0.419x, hold-out 3/84 1.35x 0.447x (were 1.21x, 1.33x 0.445x).
 DEGREE_PIVOT = 2e-3
 #: the same for the initial 2-jet normal of k="auto" (core.normals.jet_normals): at most this and the
