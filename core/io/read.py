@@ -97,6 +97,15 @@ def describe(path: str | os.PathLike, *, format: str | None = None) -> dict:
 
 
 def _path_and_format(path, format):
+    path = readable_file(path)
+    fmt = resolve_format(path, format, READ_FORMATS, "reading")
+    if path.stat().st_size == 0:
+        raise CloudFileError(path, "is empty (0 bytes)")
+    return path, fmt
+
+
+def readable_file(path):
+    """``path`` as a Path, refused (:class:`CloudFileError`) unless it names a regular file."""
     path = file_path(path)
     if not path.exists():
         raise CloudFileError(path, "no such file")
@@ -105,10 +114,7 @@ def _path_and_format(path, format):
     if not path.is_file():  # a FIFO or device has no size to check: it was reported "empty (0 bytes)"
         raise CloudFileError(path, "is not a regular file (a pipe or device); save it to a file first, or pipe it "
                                    "to darboux-cli's standard input (-)")
-    fmt = resolve_format(path, format, READ_FORMATS, "reading")
-    if path.stat().st_size == 0:
-        raise CloudFileError(path, "is empty (0 bytes)")
-    return path, fmt
+    return path
 
 
 #: the extra that installs the optional package a format needs

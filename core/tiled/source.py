@@ -13,6 +13,7 @@ import numpy as np
 
 from .._validate import as_normals, as_points
 from ..io import read_cloud
+from ..io.read import readable_file
 from ..io.e57 import E57Scans
 from ..io.las_stream import CHUNK, iter_las, iter_records, open_las
 
@@ -85,8 +86,7 @@ def open_source(source, normals=None, *, use_normals: bool = True, drop_nonfinit
     points with NaN/inf coordinates of a cloud read whole or given as an array."""
     if isinstance(source, (str, os.PathLike)):
         path = os.fspath(source)
-        if not os.path.isfile(path):  # as read_cloud says it (a missing file of several is one bad input)
-            read_cloud(path)
+        readable_file(path)  # a missing file is a bad input (CloudFileError), as read_cloud says it
         stat = os.stat(path)
         identity = (os.path.abspath(path), stat.st_size, stat.st_mtime_ns)
         if path.lower().endswith(_STREAMED):
