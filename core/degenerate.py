@@ -11,6 +11,7 @@ from dataclasses import replace
 import numpy as np
 
 from ._validate import check_int
+from .duplicates import find_duplicates
 from .kernels.bounds import bounds
 from .methods import check_options, get_method
 from .neighbours import Neighbours
@@ -116,7 +117,8 @@ def _collapsed(sample: np.ndarray) -> bool:
     """Whether rounding put most points on top of others (fewer places than half the
     points): then the nearest distinct places are a step apart whatever the spacing was,
     and only the copies tell (an object far smaller than float32's step in every axis)."""
-    return len(np.unique(sample, axis=0)) < FLOAT32_COLLAPSED * len(sample)
+    merged = find_duplicates(np.ascontiguousarray(sample))
+    return merged is not None and len(merged.first) < FLOAT32_COLLAPSED * len(sample)
 
 
 def _float32_step(sample: np.ndarray, top: np.ndarray) -> float:
