@@ -15,6 +15,7 @@ from . import degenerate, interop, one_sheet, stage_cache
 from .plain_rows import PlainNeighbours
 from ._progress import Progress
 from ._validate import MIN_POINTS, as_normals, as_points, masked_as_nan, word
+from .frame import signed_directions
 from .duplicates import CopiesNeighbours, Merged, NearCopies, expand, find_duplicates, near_copies
 from .planning import PER_POINT, EstimatePlan, per_point_views
 from .result import CurvatureResult
@@ -350,8 +351,9 @@ def _result(pts, kept, plan, *, stages, neighbours, repaired) -> CurvatureResult
     )
     fitted = np.where(fit.degree > 0, fit.degree.astype(np.int64), plan.options.get("degree", -1))  # a fit may fall a degree
     degree = np.where(kc.on_jet, JET_DEGREE if kc.jet_degree is None else kc.jet_degree, fitted)
+    e1, e2 = signed_directions(fit.e1, fit.e2)
     return CurvatureResult(
-        points=pts, normals=fit.normals, k1=fit.k1, k2=fit.k2, e1=fit.e1, e2=fit.e2, valid=fit.valid, k_point=kc.k_point, degree_point=degree, outlier_score=marks.outlier_score,
+        points=pts, normals=fit.normals, k1=fit.k1, k2=fit.k2, e1=e1, e2=e2, valid=fit.valid, k_point=kc.k_point, degree_point=degree, outlier_score=marks.outlier_score,
         crease=marks.crease, _border=marks.border, orientation_confidence=marks.orientation_confidence,
         _crease_residual=marks.crease_residual,
         method=plan.method.name, k=plan.k, passes=plan.passes, params=params, neighbours=neighbours,

@@ -77,6 +77,24 @@ def turned_over(normal, k1, k2, e1, e2, flip):
             np.where(col, e2, e1), np.where(col, e1, e2))
 
 
+#: the world direction that fixes the principal directions' signs (generic, so that no axis-aligned
+#: sampling puts whole rows of points on the tie e1 . DIRECTION_SIGN = 0)
+DIRECTION_SIGN = np.array([0.5773, 0.6236, 0.5270]) / np.linalg.norm([0.5773, 0.6236, 0.5270])
+
+
+def signed_directions(e1, e2):
+    """``e1, e2`` both negated where ``e1 . DIRECTION_SIGN < 0`` (e1 x e2 = n still holds).
+
+    A principal direction's sign is arbitrary; the fit's own sign depends on its tangent
+    frame and on which way the normal was turned when (:func:`turned_over`), so the same
+    surface read in tiles or in memory, or refined in another number of passes, would
+    show e1 both ways. One world rule makes the field reproducible and its glyphs coherent.
+    NaN rows stay NaN.
+    """
+    flip = (e1 @ DIRECTION_SIGN < 0)[:, None]
+    return np.where(flip, -e1, e1), np.where(flip, -e2, e2)
+
+
 def height_field_derivatives(fu, fv, fuu, fuv, fvv):
     """(mu, W) of the graph z = f(u, v) at the origin, with the upward normal.
 

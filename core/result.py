@@ -21,7 +21,8 @@ class CurvatureResult:
     points, normals : (N, 3) arrays; normals are the (refined) unit normals.
     k1, k2 : (N,) principal curvatures, k1 >= k2, eigenvalues of dn (k = +1/R on a
         sphere with outward normals).
-    e1, e2 : (N, 3) unit principal directions (sign is arbitrary), orthogonal to the normal.
+    e1, e2 : (N, 3) unit principal directions, orthogonal to the normal, e1 x e2 = n; signed by
+        one world rule (:func:`core.frame.signed_directions`).
     valid : (N,) bool. Where False the neighbourhood was degenerate (duplicates,
         collinear, rank-deficient fit): k1, k2, e1, e2 are NaN there, never a made-up value.
     k_point : (N,) int, neighbourhood size used at each point (varies with ``k="auto"``).

@@ -15,6 +15,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from ..anisotropy import striped
+from ..frame import signed_directions
 from ..io import write_result
 from ..io.atomic import atomic_write
 from ..io.cloud import CloudFileError
@@ -78,8 +79,8 @@ def _gather(store, n_tiles, signs, start, stop) -> dict:
         out["xyz"][at], out["n"][at] = part["xyz"], part["n"] * sign[:, None]
         out["k1"][at] = np.where(flip, -part["k2"], part["k1"])  # flipping the normal: k1, k2 -> -k2, -k1
         out["k2"][at] = np.where(flip, -part["k1"], part["k2"])
-        out["e1"][at] = np.where(flip[:, None], part["e2"], part["e1"])  # ... and e1 <-> e2
-        out["e2"][at] = np.where(flip[:, None], part["e1"], part["e2"])
+        e1 = np.where(flip[:, None], part["e2"], part["e1"])  # ... and e1 <-> e2
+        out["e1"][at], out["e2"][at] = signed_directions(e1, np.where(flip[:, None], part["e1"], part["e2"]))
         out["valid"][at], out["k"][at] = part["valid"], part["k"]
         for name in ROW_FLAGS:
             out[name][at] = part[name]
