@@ -20,9 +20,10 @@ from .plan import SAMPLE, TilePlan, make_plan
 from .store import TileStore, bin_dtype
 
 
-def plan_tiles(source, store: TileStore, tile_points: int, progress, min_k: int = 1) -> TilePlan:
+def plan_tiles(source, store: TileStore, tile_points, progress, min_k: int = 1) -> TilePlan:
     """Load the saved plan, or sample every n-th point of ``source`` and make one (spilling
-    the records of a file for :func:`bin_points`). A cloud no estimate can be made on
+    the records of a file for :func:`bin_points`); ``tile_points``: an int, or a function of
+    (sample, point count) giving it. A cloud no estimate can be made on
     (fewer than ``min_k`` points, all at one place, ...) is refused first
     (:mod:`core.tiled.wholechecks`)."""
     if store.plan_path.exists():
@@ -45,6 +46,8 @@ def plan_tiles(source, store: TileStore, tile_points: int, progress, min_k: int 
         spill.replace(store.spill_path)
     sample = np.concatenate(parts)
     wholechecks.refuse_degenerate(sample, min_k, source.name)
+    if callable(tile_points):  # sized on the sample (core.tiled.sizing)
+        tile_points = tile_points(sample, seen)
     plan = make_plan(sample, seen, tile_points, wholechecks.distinct_count(sample, seen))  # E57: seen, once read
     tmp = store.plan_path.with_name("plan.tmp.npz")
     plan.save(tmp)

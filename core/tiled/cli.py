@@ -8,14 +8,17 @@ when the output is LAS/LAZ (written in chunks, with extra-bytes dimensions).
 
 from __future__ import annotations
 
+import contextlib
 import pathlib
 import sys
+import warnings
 
 from .._memory import available_memory
 from ..io.las_stream import open_las
 from ..io.atomic import refuse_input_as_output
 from ..io.cloud import require_points
 from .run import bytes_per_point, estimate_tiled, parse_memory
+from .sizing import HaloTooWide
 from .store import directory_for
 
 _LAS = (".las", ".laz")
@@ -82,12 +85,13 @@ def run(args) -> int:
         return _whole_to_las(args, orientation)  # fits in memory: no tiles needed, the same answer
     bar = _Bar(not args.quiet and (sys.stderr.isatty() or args.progress))
     try:
-        res = estimate_tiled(
-            args.input, args.output, k=args.k, method=args.method, passes=args.passes, orientation=orientation,
-            options=dict(args.option or []) or None, tile_points=args.tile_points, workers=args.workers,
-            memory=args.memory or "1.5GB", scheduler=args.scheduler, workdir=_work_dir(args),
-            ignore_normals=args.ignore_normals, drop_nonfinite=args.drop_nonfinite, progress=bar,
-        )
+        with _told_plainly(args.quiet):
+            res = estimate_tiled(
+                args.input, args.output, k=args.k, method=args.method, passes=args.passes, orientation=orientation,
+                options=dict(args.option or []) or None, tile_points=args.tile_points, workers=args.workers,
+                memory=args.memory or "1.5GB", scheduler=args.scheduler, workdir=_work_dir(args),
+                ignore_normals=args.ignore_normals, drop_nonfinite=args.drop_nonfinite, progress=bar,
+            )
     finally:
         bar.close()
     if not args.quiet:
@@ -127,6 +131,24 @@ def _whole_to_las(args, orientation) -> int:
     if not args.quiet:
         print(f"{_label(args)}: {len(res)} points, method {res.method}, k {res.k}\nwrote {args.output}")
     return 0
+
+
+@contextlib.contextmanager
+def _told_plainly(quiet: bool):
+    """The tile sizing's :class:`~core.tiled.sizing.HaloTooWide` as one line on stderr
+    ("note: ..."), not a Python warning with its source line."""
+    shown = warnings.showwarning
+
+    def show(message, category, *args, **kwargs):
+        if not issubclass(category, HaloTooWide):
+            return shown(message, category, *args, **kwargs)
+        if not quiet:
+            sys.stderr.write(f"\nnote: {message}\n")
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("always", HaloTooWide)
+        warnings.showwarning = show
+        yield
 
 
 def _label(args) -> str:

@@ -7,6 +7,7 @@ import os
 import pathlib
 import time
 import dataclasses
+import functools
 from dataclasses import dataclass, field
 
 import numba
@@ -19,6 +20,7 @@ from ..planning import PER_POINT, orientation_mode
 from ..io.atomic import refuse_input_as_output
 from ..tuning import DRIFT_POOL, DRIFT_SHARE, MAX_PASSES
 from . import assemble, binning, creases, engine, signs
+from .sizing import choose_tile_points
 from .source import open_source
 from .store import TileStore, directory_for
 from . import wholecloud, wholechecks
@@ -29,11 +31,9 @@ from .task import TileSpec, auto_plan
 #: plus the cached neighbours (int32 index + float64 distance = 12 bytes per neighbour,
 #: twice while they are sorted); 3M points at k = 15 measured 1.75 GB (580 B/point)
 BASE_BYTES, BYTES_PER_NEIGHBOUR = 250, 24
-#: at least this many tiles per worker (when tiles keep MIN_TILE_POINTS): every core
-#: busy, and a slow tile does not leave the others idle at the end
-TILES_PER_WORKER = 3
-MIN_TILE_POINTS = 50_000
-#: what a halo adds to a tile of ~1M points at k = 15 (measured 5-15 %), with room to spare
+#: what a halo adds to a tile of ~1M points at k = 15 (measured 5-15 %), with room to spare: the
+#: size :func:`default_tile_points` gives without seeing the cloud (a run measures its halos on
+#: the cloud's sample, :mod:`core.tiled.sizing`)
 HALO_ALLOWANCE = 1.5
 #: what a worker process holds before any tile: Python, numpy, scipy, numba's compiled
 #: kernels, Dask (measured 210 MB after a first estimate), with room to spare
@@ -120,8 +120,7 @@ def _prepare(source, normals, k, *, method, passes, orientation, options, tile_p
     if spec.k == "auto":
         spec = dataclasses.replace(spec, n_points=max(src.count, 3))
         spec = dataclasses.replace(spec, passes=auto_plan(spec).passes)  # checks method and options first
-    tile_points = tile_points or _tile_points(_memory_k(spec), budget, src.count, workers)
-    return src, spec, rule, budget, tile_points
+    return src, spec, rule, budget, tile_points or _sizer(spec, budget, src.count, workers)
 
 
 def _auto_rules(spec):
@@ -143,11 +142,13 @@ def _memory_k(spec) -> int:
     return plan.k_search + AUTO_PASS_NEIGHBOURS * plan.passes
 
 
-def _tile_points(k, budget, count, workers) -> int:
-    """Tiles that fit the budget and keep every worker busy (TILES_PER_WORKER each)."""
-    n_workers = workers or os.cpu_count() or 1
-    busy = max(MIN_TILE_POINTS, -(-count // (TILES_PER_WORKER * n_workers)))
-    return min(default_tile_points(k, budget), busy)
+def _sizer(spec, budget, count, workers):
+    """The tile size as the sample will tell it (:func:`core.tiled.sizing.choose_tile_points`):
+    tiles whose halos fit the budget, for the fewest work on the workers."""
+    bpp = bytes_per_point(_memory_k(spec))
+    room = max(1, int(FILL * budget - RUNTIME_BYTES))
+    return functools.partial(choose_tile_points, spec=spec, workers=workers or os.cpu_count() or 1, room=room,
+                             bytes_per_point=bpp, least_tiles=max(1, -(-count * bpp // room)))
 
 
 def estimate_tiled(source, output, *, normals=None, k="auto", method="nr", passes=None, orientation="auto",
@@ -210,7 +211,7 @@ def estimate_tiled(source, output, *, normals=None, k="auto", method="nr", passe
         store = TileStore(workdir or directory_for(output))
         same_run = {**spec.__dict__, "threads": None}  # any number of workers may resume a run
         resumed = store.open({"input": list(map(str, src.identity)), "spec": repr(same_run), "rule": rule,
-                              "tile_points": tile_points, "version": _VERSION, "auto": _auto_rules(spec)})
+                              "tile_points": tile_points if isinstance(tile_points, int) else ("sized", budget), "version": _VERSION, "auto": _auto_rules(spec)})
         cpu = _StageCPU()
         with _kept_only_to_resume(store):
             plan, sizes = _binned(src, store, tile_points, report, cpu, _min_k(spec))
