@@ -33,6 +33,10 @@ WRITE_FORMATS = {
 }
 
 
+#: extensions of compressed files, refused with a word on decompressing them
+_COMPRESSED = (".gz", ".zip", ".bz2", ".xz", ".zst", ".7z", ".tgz")
+
+
 def resolve_format(path, format, table: dict, action: str) -> str:
     """The short format name (``"ply"``) from ``format`` if given, else from the extension."""
     allowed = ", ".join(table)
@@ -40,6 +44,8 @@ def resolve_format(path, format, table: dict, action: str) -> str:
         ext = path.suffix.lower()
         if ext not in table:
             what = f"unknown file extension {ext!r}" if ext else "no file extension"
+            if ext in _COMPRESSED:
+                what = f"a compressed file ({ext}); decompress it first and read the file inside, or:"
             raise CloudFileError(path, f"{what} for {action}; supported: {allowed} (or pass format=)")
         return ext[1:]
     if not isinstance(format, str) or "." + format.lower().lstrip(".") not in table:

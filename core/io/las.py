@@ -124,10 +124,40 @@ def check_record_counts(path) -> None:
                                        f"the {size}-byte file")
         if head[24:26] >= bytes([1, 4]) and len(head) >= 247:
             _check_evlrs(path, f, *struct.unpack_from("<QI", head, 235), offset, size)
+        _check_point_count(path, head, offset, size)
         vlrs = _read_vlrs(f, header_size, n_vlrs)
         _check_extra_bytes(path, vlrs.get(_EXTRA_BYTES, b""))
         _check_laz_sizes(path, f, head, size, vlrs.get(_LASZIP))
         _check_laz_layers(path, f, vlrs.get(_LASZIP), offset, size)
+
+
+def _check_point_count(path, head: bytes, offset: int, size: int) -> None:
+    """The header's point count against the records the file holds: laspy reads a LAS 1.4
+    file's 64-bit count only (0 with a legacy count read no points), and only the points a
+    header declares (more records after them were dropped without a word)."""
+    legacy, minor, record = struct.unpack_from("<I", head, 107)[0], head[25], struct.unpack_from("<H", head, 105)[0]
+    count = struct.unpack_from("<Q", head, 247)[0] if minor >= 4 and len(head) >= 255 else legacy
+    if count == 0 and legacy > 0:
+        raise CloudFileError(path, f"inconsistent LAS 1.4 header: its point count (byte 247) is 0 but its legacy "
+                                   f"point count (byte 107) is {legacy}; rewrite the file with a LAS tool (e.g. "
+                                   "`pdal translate` or `las2las`) to set the count")
+    if head[104] & 0xC0 or record == 0:  # LAZ: the count is checked while decompressing
+        return
+    ends = [size] + [start for start in _later_records(head, minor) if start >= offset + count * record]
+    held = (min(ends) - offset) // record
+    if held > count:
+        raise CloudFileError(path, f"the header declares {count} points but the point data holds {held} records of "
+                                   f"{record} bytes; the header's point count is wrong (the file was not finished, "
+                                   "or was joined to another): rewrite it with a LAS tool to count every point")
+
+
+def _later_records(head: bytes, minor: int) -> list:
+    """Where records after the point data start: the waveform data (LAS 1.3+) and the extended
+    variable-length records (1.4), where the header gives them (0: none)."""
+    starts = [struct.unpack_from("<Q", head, 227)[0]] if minor >= 3 and len(head) >= 235 else []
+    if minor >= 4 and len(head) >= 247 and struct.unpack_from("<I", head, 243)[0]:
+        starts.append(struct.unpack_from("<Q", head, 235)[0])
+    return [start for start in starts if start]
 
 
 def _check_evlrs(path, f, start: int, count: int, offset: int, size: int) -> None:

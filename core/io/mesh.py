@@ -114,7 +114,7 @@ def read_stl(path) -> RawCloud:
     corners = None
     if head.lstrip()[:5].lower() == b"solid" and not fits:
         corners = _read_stl_ascii(path)
-        if not len(corners) and n > 0 and size >= 84 + 50 * n:
+        if not len(corners) and n >= 0 and size >= 84 + 50 * n:
             corners = None  # no ASCII vertices: a binary STL whose header begins with "solid"
     if corners is None:
         corners = _read_stl_binary(path, n, size)
@@ -131,7 +131,18 @@ def _read_stl_binary(path, n: int, size: int) -> np.ndarray:
             path, f"truncated: the binary STL header declares {n} triangles ({84 + 50 * n} bytes) but the file "
             f"has {size} bytes"
         )
+    if size - (84 + 50 * n) >= _STL_SLACK and _stl_tail_holds_data(path, 84 + 50 * n):
+        raise CloudFileError(
+            path, f"the binary STL header declares {n} triangles ({84 + 50 * n} bytes) but the file has {size} bytes, "
+            f"room for {(size - 84) // 50}; the triangle count (bytes 80-83) does not match the data"
+        )
     return np.fromfile(path, dtype=_STL_RECORD, count=n, offset=84)["vertices"].reshape(-1, 3)
+
+
+def _stl_tail_holds_data(path, start: int) -> bool:
+    """Whether the bytes after the declared triangles are more than zero padding: triangles
+    after a wrong count (0, or a writer's partial count) were dropped without a word."""
+    return bool(np.memmap(path, dtype=np.uint8, mode="r", offset=start).any())
 
 
 def _read_stl_ascii(path) -> np.ndarray:

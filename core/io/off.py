@@ -30,13 +30,26 @@ def read_off(path) -> RawCloud:
     size = os.path.getsize(path)
     with open(path, "rb") as f:
         lines = _content(f)
-        flags, count = _header(path, lines)
+        flags, count, faces = _header(path, lines)
         if count * _MIN_LINE > size:
             raise CloudFileError(path, f"declares {count} vertices but its {size} bytes hold at most "
                                        f"{size // _MIN_LINE}")
         check_memory(path, count * 8 * 16, f"declares {count} vertices: reading them needs")
         table = _vertices(path, lines, count)
+        _check_after_vertices(path, next(lines, None), count, faces)
     return _raw(path, flags, table)
+
+
+def _check_after_vertices(path, line, count: int, faces: int) -> None:
+    """Refuse a line after the vertices that is not a face (``n i1 ... in``): the counts
+    are wrong, and the vertices after the count were dropped without a word."""
+    tokens = [] if line is None else line.split()
+    n = int(tokens[0]) if tokens and tokens[0].isdigit() else 0
+    face = faces > 0 and 0 < n < len(tokens) and all(t.isdigit() for t in tokens[1 : n + 1])
+    if line is not None and not face:
+        raise CloudFileError(path, f"declares {count} vertices and {faces} faces, but the line after the vertices, "
+                                   f"{line[:60].decode('latin-1')!r}, is not a face (n i1 ... in); the vertex count "
+                                   "does not match the data")
 
 
 def _content(f):
@@ -47,8 +60,8 @@ def _content(f):
             yield line
 
 
-def _header(path, lines) -> tuple[dict, int]:
-    """The keyword's flags and the vertex count, from the first content lines."""
+def _header(path, lines) -> tuple[dict, int, int]:
+    """The keyword's flags, the vertex and face counts, from the first content lines."""
     first = next(lines, b"").removeprefix(b"\xef\xbb\xbf")
     if first[:3] == b"off":  # a lower-case plain keyword, as some writers spell it
         first = b"OFF" + first[3:]
@@ -72,7 +85,7 @@ def _header(path, lines) -> tuple[dict, int]:
     if not 2 <= len(counts) <= 3 or min(counts) < 0:
         raise CloudFileError(path, f"the counts after the keyword must be 3 integers, vertices faces edges, none "
                                    f"negative; found {' '.join(map(str, counts))!r}")
-    return flags, counts[0]
+    return flags, counts[0], counts[1]
 
 
 def _integers(path, tokens, what) -> list[int]:

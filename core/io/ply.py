@@ -27,6 +27,9 @@ _PLY_DTYPES = {np.dtype(t) for t in ("i1", "u1", "i2", "u2", "i4", "u4", "f4", "
 _HEADER_SCAN = 1 << 20
 _END_HEADER = re.compile(rb"(?:^|[\r\n])end_header(?:\r\n|\r|\n)")
 _ASCII_ONLY = bytes(range(128)) + b"?" * 128
+#: ``obj_info`` starting a header line: plyfile refuses one after an ``element`` line, and a
+#: comment is what it is (read as one, it may stand anywhere)
+_OBJ_INFO = re.compile(rb"(?<![^\r\n])obj_info(?=[ \t\r\n])")
 
 
 def read_ply(path) -> RawCloud:
@@ -52,7 +55,7 @@ def read_ply(path) -> RawCloud:
 
 def _parse_header(f, path):
     """plyfile's header parser on the header, with non-ASCII bytes in ``comment`` and
-    ``obj_info`` lines read as '?'; non-ASCII bytes on another line are refused by line number."""
+    ``obj_info`` lines read as '?' (``obj_info`` lines as comments); non-ASCII bytes on another line are refused by line number."""
     raw = f.read(_HEADER_SCAN)
     end = _END_HEADER.search(raw)
     if end is None:  # no end_header near the start: plyfile says what is wrong
@@ -65,7 +68,7 @@ def _parse_header(f, path):
                 raise CloudFileError(path, f"not a valid PLY header: line {lineno} "
                                            f"({line.decode('utf-8', 'replace')[:60]!r}) has non-ASCII bytes; "
                                            "only comment and obj_info lines may")
-        stream = io.BytesIO(raw.translate(_ASCII_ONLY))
+        stream = io.BytesIO(_OBJ_INFO.sub(b"comment ", raw.translate(_ASCII_ONLY)))  # same length: offsets hold
     try:
         header = PlyData._parse_header(stream)  # plyfile's own header parser, without the data
     except PlyParseError as exc:
@@ -94,8 +97,8 @@ def _min_row_bytes(element, header) -> int:
 def _check_declared_size(header, have: int, path) -> None:
     """Refuse element counts the file cannot hold, before anything is allocated for them."""
     for element in header.elements:
-        need = element.count * _min_row_bytes(element, header)
-        if need > have:
+        need = element.count * _min_row_bytes(element, header) - bool(header.text and element.count)
+        if need > have:  # (an ASCII file's last line may end without a newline)
             raise CloudFileError(
                 path, f"truncated: the header declares {element.count} {_plural(element.name)} (at least "
                 f"{need} bytes) but only {have} bytes follow the header",

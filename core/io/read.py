@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import pathlib
 import struct
@@ -9,6 +10,7 @@ import struct
 import numpy as np
 
 from . import e57, las, mesh, off, pcd, ply, ptx, text, vtk
+from .sniff import content_hint
 from .._validate import check_bool
 from .cloud import Cloud, CloudFileError, RawCloud, file_path, finalize
 from .formats import READ_FORMATS, resolve_format
@@ -58,7 +60,8 @@ def read_cloud(path: str | os.PathLike, *, format: str | None = None, drop_nonfi
     """
     drop_nonfinite = check_bool(drop_nonfinite, name="drop_nonfinite")
     path, fmt = _path_and_format(path, format)
-    return finalize(_read_raw(path, fmt), path, fmt, drop_nonfinite=drop_nonfinite)
+    with _hinted(path, fmt):
+        return finalize(_read_raw(path, fmt), path, fmt, drop_nonfinite=drop_nonfinite)
 
 
 def describe(path: str | os.PathLike, *, format: str | None = None) -> dict:
@@ -74,10 +77,11 @@ def describe(path: str | os.PathLike, *, format: str | None = None) -> dict:
     a file without them).
     """
     path, fmt = _path_and_format(path, format)
-    raw = _read_raw(path, fmt)
-    points = np.asarray(raw.points, dtype=np.float64).reshape(-1, 3)
-    if len(points) == 0:
-        raise CloudFileError(path, "contains no points")
+    with _hinted(path, fmt):
+        raw = _read_raw(path, fmt)
+        points = np.asarray(raw.points, dtype=np.float64).reshape(-1, 3)
+        if len(points) == 0:
+            raise CloudFileError(path, "contains no points")
     finite = points[np.isfinite(points).all(axis=1)]
     low = finite.min(axis=0) if len(finite) else None
     high = finite.max(axis=0) if len(finite) else None
@@ -119,6 +123,18 @@ def readable_file(path):
 
 #: the extra that installs the optional package a format needs
 _EXTRAS = {"las": "las", "laz": "las", "vtk": "viewer", "vtp": "viewer"}  # E57 names its own (core.io.e57)
+
+
+@contextlib.contextmanager
+def _hinted(path, fmt):
+    """A refusal in the block says when the file is compressed or its content another format."""
+    try:
+        yield
+    except CloudFileError as exc:
+        hint = content_hint(path, fmt)
+        if not hint or hint in exc.problem:
+            raise
+        raise CloudFileError(exc.path, exc.problem + hint) from exc.__cause__
 
 
 def _read_raw(path, fmt) -> RawCloud:

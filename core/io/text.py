@@ -34,6 +34,9 @@ _UNIT_SHARE = 0.99
 _UNIT_TOL = 0.01
 #: where headerless normals may start: x y z nx ny nz ..., x y z r g b nx ny nz (CloudCompare)
 _NORMAL_STARTS = (3, 6)
+#: tokens that mark a missing value (R, pandas, SQL, spreadsheets): a row of them is data, not a header
+_MISSING = frozenset(("na", "n/a", "nan", "null", "none", "nil", "-", "--", "?", "missing", "#n/a"))
+_ANY_SEPARATOR = re.compile(r"[\s,;]+")
 
 
 def read_text(path, fmt: str) -> RawCloud:
@@ -139,15 +142,26 @@ def _header_line(path, lineno: int, text: str, tokens: list[str]) -> tuple[bool,
 
 def _refuse_data_like(path, header, ncols: int | None) -> None:
     """Refuse a header line with the data's column count (``None``, no data line: 3 or more)
-    made mostly of number-like tokens ("1.5 2.5 3.5e", "1.5D+00 ...", "0x1.8p+0 ..."): a data
-    line the parser cannot take, named as on any later line."""
+    made mostly of number-like tokens ("1.5 2.5 3.5e", "1.5D+00 ...", "0x1.8p+0 ...") or
+    missing-value marks ("NA,NA,NA", "1,null,2"), or one that begins with a whole row of
+    numbers ("1 2 3 a"): a data line the parser cannot take, named as on any later line."""
     for is_comment, text, lineno in header:
-        tokens = _split(text, _guess_delimiter(text))
-        numberish = sum(bool(_is_number(t) or _NUMBERISH.fullmatch(t)) for t in tokens)
-        shaped = len(tokens) == ncols if ncols is not None else len(tokens) >= 3
-        if not is_comment and shaped and 2 * numberish > len(tokens):
-            bad = next(t for t in tokens if not _is_number(t))
-            raise CloudFileError(path, f"line {lineno}: cannot parse {bad!r} as a number")
+        bad = None if is_comment else _data_like(text, ncols)
+        if bad is not None:
+            hint = " (a missing value; every data line needs a number in each column)" if bad.lower() in _MISSING else ""
+            raise CloudFileError(path, f"line {lineno}: cannot parse {bad!r} as a number{hint}")
+
+
+def _data_like(text: str, ncols: int | None) -> str | None:
+    """The first token that is not a number, when the line ``text`` is a data line (see
+    :func:`_refuse_data_like`); None for a header line."""
+    tokens = _split(text, _guess_delimiter(text))
+    words = _ANY_SEPARATOR.split(text)
+    if ncols is not None and len(words) > ncols and all(_is_number(t) for t in words[:ncols]):
+        return next(t for t in words if not _is_number(t))
+    numberish = sum(bool(_is_number(t) or _NUMBERISH.fullmatch(t) or t.lower() in _MISSING) for t in tokens)
+    shaped = len(tokens) == ncols if ncols is not None else len(tokens) >= 3
+    return next(t for t in tokens if not _is_number(t)) if shaped and 2 * numberish > len(tokens) else None
 
 
 def _scan_head(path, encoding) -> dict:
@@ -160,7 +174,7 @@ def _scan_head(path, encoding) -> dict:
                 _refuse_data_like(path, header, None)
                 raise CloudFileError(path, f"no numeric data in the first {_MAX_HEADER_LINES} lines")
             text = line.strip()
-            if not text:
+            if not text.strip(',;"'):  # blank, or ",,," (a spreadsheet's empty row): not a header
                 continue
             if text.startswith(("#", "//")):
                 header.append((True, text.lstrip("#/ \t"), lineno))
@@ -188,17 +202,17 @@ def _scan_head(path, encoding) -> dict:
 
 
 def _header_names(header, ncols):
-    """Column names from the last header line if it has one name per column."""
-    if not header:
-        return None
-    is_comment, text, _ = header[-1]
-    names = _split(text, _guess_delimiter(text))
-    lower = [n.lower() for n in names]
-    if len(names) != ncols or len(set(lower)) != ncols:
-        return None
-    if is_comment and not {"x", "y", "z"} <= set(lower):
-        return None  # a comment that merely happens to have ncols words
-    return names
+    """Column names: the last header line with one name per column naming x, y and z (a
+    units line or comment after it does not hide it), else the last line if it has one
+    name per column and is not a comment."""
+    for i, (is_comment, text, _) in enumerate(reversed(header)):
+        names = _split(text, _guess_delimiter(text))
+        lower = [n.lower() for n in names]
+        if len(names) != ncols or len(set(lower)) != ncols:
+            continue
+        if {"x", "y", "z"} <= set(lower) or (i == 0 and not is_comment):
+            return names
+    return None
 
 
 def _load_table(path, encoding, head) -> np.ndarray:
@@ -302,12 +316,15 @@ def write_text(f, columns, *, delimiter: str, header: bool) -> None:
     """Write ``columns`` (list of (name, (N,) array)) as delimited lines.
 
     ``header=True`` writes a first line of names (CSV style); otherwise a ``# names``
-    comment line is written only when there are columns beyond x y z [nx ny nz].
+    comment line is written only when there are columns beyond x y z [nx ny nz], or normals
+    the reader would not take for normals without it (not unit length, or none finite).
     """
     names = [name for name, _ in columns]
+    plain = names == ["x", "y", "z"] or (names == ["x", "y", "z", "nx", "ny", "nz"] and
+                                         _unit_rows(np.column_stack([v for _, v in columns[3:]]).astype(np.float64)))
     if header:
         f.write((delimiter.join(names) + "\n").encode())
-    elif names not in (["x", "y", "z"], ["x", "y", "z", "nx", "ny", "nz"]):
+    elif not plain:
         f.write(("# " + delimiter.join(names) + "\n").encode())
     formats, dtypes = zip(*(_row_format(values) for _, values in columns))
     line = delimiter.join(formats) + "\n"
