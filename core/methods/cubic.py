@@ -7,6 +7,7 @@ import numpy as np
 from ..frame import quadratic_form
 from ..linalg import weighted_lstsq
 from ._result import MethodFit
+from ._sanity import judged
 from .quadric import normal_rows
 
 CF_DOC = (
@@ -23,10 +24,11 @@ def _normal_design(u, v):
     return ax, ay
 
 
-def _solve(A, y, wt):
+def _solve(A, y, wt, first=0):
+    """The fit; rows from ``first`` on are normal rows, judged by their slope residual."""
     x, ok = weighted_lstsq(A, y, wt)
     mu, W = quadratic_form(x[:, 0], x[:, 1], x[:, 2])
-    return MethodFit(mu, W, ok)
+    return MethodFit(mu, W, judged(ok, W, (A[:, first:], y[:, first:], wt[:, first:], x)))
 
 
 def fit_points_normals(chunk):
@@ -38,7 +40,7 @@ def fit_points_normals(chunk):
     A = np.concatenate([ap, ax, ay], axis=1)
     y = np.concatenate([patch.w, sx, sy], axis=1)
     wt = np.concatenate([np.ones_like(u), patch.weight, patch.weight], axis=1)
-    return _solve(A, y, wt)
+    return _solve(A, y, wt, u.shape[1])
 
 
 def fit_normals(chunk):

@@ -7,6 +7,7 @@ import numpy as np
 from ..frame import quadratic_form
 from ..linalg import weighted_lstsq
 from ._result import MethodFit
+from ._sanity import judged
 
 QP_DOC = "Quadric fitted to points: a/2·u² + b·uv + c/2·v² = w (eq. 7), dn = -Hess."
 QN_DOC = (
@@ -20,14 +21,15 @@ def fit_points(chunk):
     A = np.stack([0.5 * u * u, u * v, 0.5 * v * v], axis=2)
     x, ok = weighted_lstsq(A, patch.w)
     mu, W = quadratic_form(x[:, 0], x[:, 1], x[:, 2])
-    return MethodFit(mu, W, ok)
+    return MethodFit(mu, W, judged(ok, W))
 
 
 def normal_rows(patch):
     """Design rows and targets of the normal equations shared by QN, CN and CF. A
     neighbour's normal in the tangent plane (Z = 0: at its smallest k on a grid) gives an
     inf or NaN target: the point's curvatures come out non-finite and the frame flags it
-    invalid (:func:`core.frame.darboux_frame`)."""
+    invalid (:func:`core.frame.darboux_frame`); targets near it, huge slopes: flagged by
+    :func:`core.methods._sanity.judged`."""
     with np.errstate(divide="ignore", invalid="ignore"):
         return -patch.X / patch.Z, -patch.Y / patch.Z
 
@@ -42,4 +44,4 @@ def fit_normals(chunk):
     wt = np.concatenate([patch.weight, patch.weight], axis=1)
     x, ok = weighted_lstsq(A, y, wt)
     mu, W = quadratic_form(x[:, 0], x[:, 1], x[:, 2])
-    return MethodFit(mu, W, ok)
+    return MethodFit(mu, W, judged(ok, W, (A, y, wt, x)))

