@@ -12,6 +12,7 @@ from pathlib import Path
 
 from PySide6.QtGui import QAction, QKeySequence
 from PySide6.QtWidgets import QFileDialog, QMenu, QMenuBar, QMessageBox
+from pyvistaqt import QtInteractor
 
 import core.io
 import core.shapes
@@ -239,6 +240,8 @@ class WindowActions:
         path = with_default_suffix(path, SCREENSHOT_SUFFIX)
         self.histogram.flush()  # a draw still waiting for its own turn (app/widgets/histogram.py)
         widget = self if whole_window else self.splitter
+        for view in self.splitter.findChildren(QtInteractor):  # (a repaint held by the compare's relayout)
+            view.setUpdatesEnabled(True)
         ok = widget.grab().save(str(path))
         if not ok:
             self.notifier.error(f"Could not write the screenshot {path}")

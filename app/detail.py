@@ -41,6 +41,9 @@ def visible_subset(points: np.ndarray, matrix: np.ndarray, order: np.ndarray, bu
 
 
 def _clip_matrix(renderer) -> np.ndarray:
+    # the range a render would set: the one left may be another view's (a linked camera
+    # reset by the compare view's props) or a moved camera's, whose planes cut the cloud
+    renderer.ResetCameraClippingRange()
     cam = renderer.GetActiveCamera()
     vtk_m = cam.GetCompositeProjectionTransformMatrix(renderer.GetTiledAspectRatio(), -1.0, 1.0)
     return np.array([[vtk_m.GetElement(i, j) for j in range(4)] for i in range(4)])

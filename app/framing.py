@@ -67,6 +67,10 @@ def look_from(renderer, centre: np.ndarray, radius: float, view: str) -> None:
     cam.SetViewUp(*up)
 
 
+#: Pixels: a view narrower or lower than this is not framed for (:func:`narrowest`).
+MIN_VIEW_PX = 48
+
+
 def projection(renderer, points: np.ndarray):
     """Display coordinates (x, y in pixels, origin bottom-left) and depth of points."""
     cam = renderer.GetActiveCamera()
@@ -104,12 +108,15 @@ def free_region(renderer, inset: float = 0.0) -> tuple[float, float, float, floa
 
 def narrowest(renderers):
     """Of renderers sharing one camera, the one whose free region is narrowest for its
-    height: a cloud framed there fits in the others, centred too (every free region is)."""
+    height: a cloud framed there fits in the others, centred too (every free region is).
+    Views squeezed below :data:`MIN_VIEW_PX` do not count (the first one does if all are):
+    a compare view a splitter left 0 px wide framed the cloud off the main view."""
     def aspect(renderer):
         x0, y0, x1, y1 = free_region(renderer)
         return (x1 - x0) / max(y1 - y0, 1.0)
 
-    return min(renderers, key=aspect)
+    usable = [r for r in renderers if min(_viewport_px(r)[2:]) >= MIN_VIEW_PX] or list(renderers)[:1]
+    return min(usable, key=aspect)
 
 
 def fit_to_region(renderer, sample: np.ndarray, region=None, steps: int = 4) -> None:

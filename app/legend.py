@@ -14,7 +14,8 @@ import pyvista as pv
 from . import glyphs
 from .framing import BAR_BOTTOM, BAR_HEIGHT, BAR_LEFT, BAR_MAX_PX, BAR_WIDTH
 
-__all__ = ["update_legend", "place_legend", "KINDS", "add_bar", "label_categories", "band_map"]
+__all__ = ["update_legend", "place_legend", "KINDS", "add_bar", "label_categories", "band_map", "plate",
+           "PLATE_OPACITY"]
 
 #: Glyph kinds, bottom row first.
 KINDS = ("normals", "e2", "e1")
@@ -22,6 +23,51 @@ KINDS = ("normals", "e2", "e1")
 LEFT = 0.012
 #: Pixels: a row, the room the bar's title takes above it, half a tick label left of the bar.
 ROW_PX, TITLE_PX, TICK_PX = 20.0, 26.0, 30.0
+
+
+#: Text over the cloud (caption, colour bar, legend) sits on a plate of the view's background
+#: this opaque: zoomed in, the point sprites and glyph segments filled the view behind it and
+#: the thin text over them could not be read.
+PLATE_OPACITY = 0.8
+
+
+def plate(prop, background) -> None:
+    """Put the text of the vtkTextProperty ``prop`` on a plate of colour ``background``."""
+    prop.SetBackgroundColor(pv.Color(background).float_rgb)
+    prop.SetBackgroundOpacity(PLATE_OPACITY)
+
+
+def plate_bar(bar, background) -> None:
+    """A plate behind the whole colour bar: its title, the bar and its tick labels."""
+    bar.SetDrawBackground(True)
+    bar.GetBackgroundProperty().SetColor(pv.Color(background).float_rgb)
+    bar.GetBackgroundProperty().SetOpacity(PLATE_OPACITY)
+    plate(bar.GetLabelTextProperty(), background)  # (the end labels reach past the plate)
+
+
+def restyle(bar, texts, theme) -> None:
+    """The colours of ``theme`` (:class:`app.theme.Theme`) on a colour bar and text actors."""
+    for text in filter(None, texts):
+        text.prop.color = theme.text
+        plate(text.prop, theme.background)
+    if bar is not None:
+        for prop in (bar.GetTitleTextProperty(), bar.GetLabelTextProperty()):
+            prop.SetColor(pv.Color(theme.text).float_rgb)
+        plate_bar(bar, theme.background)
+
+
+#: Colour of the points with no value (invalid, border): a grey unlike any of the map's,
+#: shaded as the sprites are. The mid grey (#b0b0b0) of before was 126 against the 171 that a
+#: value at the centre of the diverging map (its near-white, H = 0) is drawn in: a flat part
+#: and the invalid points looked alike. The dark grey stands apart from the light centre and
+#: the coloured ends; magma (errors, black at 0) keeps the mid grey, which it has not.
+NAN_COLOURS = {"magma": "#b0b0b0"}
+NAN_DEFAULT = "#3c3c3c"
+
+
+def nan_colour(cmap: str) -> str:
+    """The colour points without a value are drawn in over the map ``cmap``."""
+    return NAN_COLOURS.get(str(cmap), NAN_DEFAULT)
 
 
 def band_map(cmap: str, bands: int):
@@ -34,9 +80,9 @@ def band_map(cmap: str, bands: int):
     return ListedColormap(list(matplotlib.colormaps[cmap].colors[:bands]), name=f"{cmap}_{bands}")
 
 
-def update_legend(plotter, shown, colours: dict) -> tuple | None:
-    """A row for each glyph kind in ``shown`` (colours: kind -> colour), then place them
-    (:func:`place_legend`; its window size is returned)."""
+def update_legend(plotter, shown, colours: dict, background="white") -> tuple | None:
+    """A row for each glyph kind in ``shown`` (colours: kind -> colour), on plates of
+    ``background``, then place them (:func:`place_legend`; its window size is returned)."""
     labels = dict(zip(("e1", "e2", "normals"), (text for text, _ in glyphs.LEGEND)))
     for kind in KINDS:
         name = f"glyph-legend-{kind}"
@@ -47,6 +93,7 @@ def update_legend(plotter, shown, colours: dict) -> tuple | None:
                                  color=colours[kind], name=name, render=False)
         actor.prop.font_size = 13
         actor.prop.bold = True
+        plate(actor.prop, background)
     return place_legend(plotter)
 
 
@@ -73,8 +120,9 @@ def place_legend(plotter) -> tuple | None:
     return tuple(window.GetSize())
 
 
-def add_bar(plotter, lut, title: str, colour):
-    """The horizontal colour bar of ``lut`` along the bottom of the view (once per scene)."""
+def add_bar(plotter, lut, title: str, colour, background="white"):
+    """The horizontal colour bar of ``lut`` along the bottom of the view (once per scene),
+    on a plate of ``background``."""
     bar = plotter.add_scalar_bar(
         title=title or " ", lookup_table=lut, vertical=False, position_x=BAR_LEFT, position_y=BAR_BOTTOM,
         width=BAR_WIDTH, height=BAR_HEIGHT, title_font_size=14, label_font_size=12, n_labels=3, fmt="%.3g",
@@ -83,6 +131,7 @@ def add_bar(plotter, lut, title: str, colour):
     bar.SetMaximumHeightInPixels(90)
     # tick labels below the bar, the title above it: the title no longer sits on the middle tick label
     bar.SetTextPositionToPrecedeScalarBar()
+    plate_bar(bar, background)
     return bar
 
 

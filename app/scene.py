@@ -23,15 +23,13 @@ __all__ = ["CloudScene", "GLYPH_COLOURS", "FRAME_COLOURS", "MULTI_SAMPLES", "mak
 #: Colours of the ± glyphs and of the picked frame: the same everywhere (app/glyphs.py).
 FRAME_COLOURS = glyphs.FRAME_COLOURS
 GLYPH_COLOURS = {"e1": FRAME_COLOURS["e1"], "e2": FRAME_COLOURS["e2"], "normals": FRAME_COLOURS["n"]}
-NAN_COLOUR = "#b0b0b0"
+NAN_COLOUR = legend.NAN_DEFAULT
 TEXT_COLOUR = "#222222"
 #: Samples per pixel of the 3D views' frame buffer: one. pyvista's default of 8 made every
 #: llvmpipe frame cost 1.7-1.9x (bunny and a 100k-sphere still frame of 1M, 760x850 and
 #: 1100x850, 2 and 8 samples alike; measured in one run, app.bench), and a frame that renders
-#: on the GUI thread is what the GUI stall is made of. It smoothed only true edges: the seams
-#: where two point spheres cut each other, glyph segments, the colour bar's ends. A sphere's
-#: outline is cut out per pixel by the fragment shader (an impostor), which multisampling
-#: does not resolve.
+#: on the GUI thread is what the GUI stall is made of. It smoothed only true edges (sphere
+#: seams, glyphs, the bar's ends), not a sphere's outline, cut out per pixel (an impostor).
 MULTI_SAMPLES = 0
 
 
@@ -160,20 +158,29 @@ class CloudScene(Picking):
         self.drawn, self._visible = drawn, visible
         self._sprite_spacing = self.geometry.spacing * np.sqrt(max(visible, 1) / max(len(drawn), 1))
 
+    def set_budget(self, budget: int) -> None:
+        """Draw at most ``budget`` points in a still frame (zoomed in: those in view, app.detail)."""
+        if budget != self.lod.budget:
+            whole = self._cloud is not None and self.geometry.n_points <= min(budget, self.lod.budget)
+            self.lod.budget = int(budget)
+            if self._cloud is not None and not whole:  # (every point drawn under both budgets: nothing to redo)
+                self._draw(self.geometry.subset(self.lod.budget), self.geometry.n_points)
+                self.detail.request()
+
     def _show_detail(self, drawn: np.ndarray, visible: int) -> None:
-        """The visible points the camera's stop selected (app/detail.py): draw them
-        (rendered now, unless the moving stand-in is on screen: its end renders)."""
+        """The visible points the camera's stop selected (app/detail.py): draw them, painted in a
+        later pass (a ``render()`` drew the view twice) unless the stand-in is on (its end renders)."""
         self._draw(drawn, visible)
         if not self.lod.active:
-            self.plotter.render()
+            self.plotter.update()
 
     def _add_bar(self) -> None:  # once per scene
         if self._bar is None:
-            self._bar = legend.add_bar(self.plotter, self._lut, self._bar_title, self.theme.text)
+            self._bar = legend.add_bar(self.plotter, self._lut, self._bar_title, self.theme.text, self.theme.background)
 
     def set_values(self, values: np.ndarray, *, title: str, cmap: str, clim: tuple[float, float], log: bool = False,
                    bands: int = 0):
-        """Colour the cloud by ``values`` (NaN drawn in a neutral grey), on a log scale if ``log``;
+        """Colour the cloud by ``values`` (NaN in a grey no colour of the map is), on a log scale if ``log``;
         ``bands`` colours, one an integer, with a label each (a categorical field), or a smooth map."""
         if self._cloud is None:
             return
@@ -185,7 +192,7 @@ class CloudScene(Picking):
                 or self._lut.n_values != (bands or 256)):
             self._lut.n_values = bands or 256  # (before the map, which is sampled at that many values)
             self._lut.cmap = want
-            self._lut.nan_color = NAN_COLOUR
+        self._lut.nan_color = legend.nan_colour(cmap)
         if self._bar is not None:
             legend.label_categories(self._bar, clim, bands)
         log = bool(log) and clim[0] > 0
@@ -220,6 +227,7 @@ class CloudScene(Picking):
                                                font_size=7, color=self.theme.text, name="colour-note", render=False)
             self._note.prop.font_size = 14  # the bar's title size, centred under the view as the bar's is
             self._note.prop.SetJustificationToCentered()
+            legend.plate(self._note.prop, self.theme.background)
         elif self._note is not None:
             self.plotter.remove_actor(self._note, render=False)
             self._note = None
@@ -294,7 +302,7 @@ class CloudScene(Picking):
     def _glyph_legend(self) -> None:
         """A legend of the glyphs shown, in the lower-left corner (app/legend.py)."""
         shown = [kind for kind in legend.KINDS if f"glyph-{kind}" in self._glyph_names]
-        self._legend_size = legend.update_legend(self.plotter, shown, GLYPH_COLOURS)
+        self._legend_size = legend.update_legend(self.plotter, shown, GLYPH_COLOURS, self.theme.background)
 
     def radius(self) -> float:
         """Half the diagonal of the cloud's bounding box."""
@@ -309,18 +317,15 @@ class CloudScene(Picking):
         actor.prop.font_size = 13
         actor.prop.SetVerticalJustificationToTop()
         actor.prop.SetLineSpacing(1.15)
+        legend.plate(actor.prop, self.theme.background)
         self._title_actor = actor
 
     def set_theme(self, theme: Theme) -> None:
         """Background and text colours (light or dark palette)."""
         self.theme = theme
         self.plotter.set_background(theme.background)
-        for text in (self._title_actor, self._note):
-            if text is not None:
-                text.prop.color = theme.text
-        if self._bar is not None:
-            for prop in (self._bar.GetTitleTextProperty(), self._bar.GetLabelTextProperty()):
-                prop.SetColor(pv.Color(theme.text).float_rgb)
+        legend.restyle(self._bar, (self._title_actor, self._note), theme)
+        self._glyph_legend()
 
     def set_eye_dome(self, on: bool) -> None:
         """Eye-dome lighting: depth-edge shading that shows the shape of flat-shaded scans."""

@@ -37,6 +37,7 @@ from .scene import CloudScene, make_plotter
 from .source import CloudSource
 from .state import ViewerState
 from .status import WindowStatus
+from .views import WindowViews
 from .teach import install_teach
 from .theme import current_theme
 from .widgets import CompareView, ElidedLabel, EstimateProgress
@@ -53,7 +54,7 @@ _DISPLAY_KEYS = {"field", "clim_auto", "clim", "clip_percent"}
 _GLYPH_KEYS = {"show_e1", "show_e2", "show_normals", "glyph_density", "glyph_length"}
 
 
-class MainWindow(WindowActions, WindowStatus, QMainWindow):
+class MainWindow(WindowActions, WindowStatus, WindowViews, QMainWindow):
     """Darboux viewer window.
 
     Parameters
@@ -110,7 +111,7 @@ class MainWindow(WindowActions, WindowStatus, QMainWindow):
                                          histogram=self.histogram, inspector=self.inspector,
                                          notify=self.notifier.warning)
         # a changed histogram draws in a pass of the event loop after the 3D frame, not with it
-        self._frame_due = False
+        self._frame_due = self._compare_due = False
         self.histogram.frame_due = lambda: self._frame_due
         self._frame_tag = self.plotter.render_window.AddObserver("EndEvent", self._frame_done)
         self._build_status()
@@ -248,13 +249,9 @@ class MainWindow(WindowActions, WindowStatus, QMainWindow):
     def _on_result(self, out: EstimateOutput) -> None:
         if self._closed or out.request.source is not self.state.source:
             return
-        if out.compare is not None:
-            self._show_compare()
-        elif self.compare is not None and self.compare.isVisible():
-            self.compare.hide()
-            self.presenter.compare_scene = None
-            self.scene.linked = []
+        self._sync_compare(out.compare is not None)
         self.presenter.show(out)
+        self._refit()
         self._clear_message(out.gen)
         self._show_status()
         self.render_all()
@@ -271,65 +268,8 @@ class MainWindow(WindowActions, WindowStatus, QMainWindow):
     def _on_busy(self, _busy: int) -> None:
         self.progress.set_busy(self.estimator.busy or self.loader.pending is not None)
 
-    def _show_compare(self) -> None:
-        """Create (once) and show the second view beside the main one."""
-        if self.compare is None:
-            self.compare = CompareView(self)
-            self.compare.scene.point_size = self.state.point_size
-            self.compare.scene.set_theme(self.scene.theme)
-            self.compare.hide()
-            self.splitter.addWidget(self.compare)
-            self.compare.link_to(self.plotter)
-        self.presenter.compare_scene = self.compare.scene
-        self.scene.linked = [self.compare.plotter]  # fits frame the narrower of the two views
-        if not self.compare.isVisible():
-            self.compare.show()
-            half = max(self.splitter.width() // 2, 200)
-            self.splitter.setSizes([half, half])
-            QTimer.singleShot(0, self.fit_view)  # the views got narrower: refit once laid out
-
-    def fit_view(self) -> None:
-        """F: frame the whole cloud, keeping the direction."""
-        if not self._closed:
-            self.scene.fit_view()
-            self.render_all()
-
-    def reset_view(self) -> None:
-        """R: back to the preset direction of this cloud."""
-        if not self._closed:
-            self.scene.reset_camera(self.scene.view)
-            self.render_all()
-
     def _on_pick(self, index: int) -> None:
         self.state.set(picked=int(index))
-
-    def render_all(self) -> None:
-        """Schedule one repaint of the 3D view(s), after the current pass of the event loop.
-
-        Deferred (a 0 ms timer): the step that asked (a new result swapped in, ~10-70 ms
-        of GUI thread at 1M points) and the frame (~50-100 ms with llvmpipe) are then two
-        turns of the event loop, with input and timers served between them, instead of
-        one stall of their sum. Requests before it make one repaint.
-        """
-        if not self._closed:
-            self._frame_due = True
-            self._render_timer.start()
-
-    def _frame_done(self, *_args) -> None:
-        self._frame_due = False
-        self.histogram.after_frame()
-
-    def _repaint(self) -> None:
-        """``update()``, not ``render()``: the interactor widget renders VTK in its own
-        ``paintGL``, and a ``render()`` schedules that paint as well, so each explicit
-        render drew the whole cloud twice (0.4 s each for the bunny with llvmpipe).
-        Qt also merges several updates before the next paint into one.
-        """
-        if self._closed:
-            return
-        self.plotter.update()
-        if self.compare is not None and self.compare.isVisible():
-            self.compare.plotter.update()
 
     # -- closing --------------------------------------------------------------------------------
     def closeEvent(self, event) -> None:  # noqa: N802

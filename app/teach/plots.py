@@ -12,6 +12,8 @@ from pathlib import Path
 import numpy as np
 from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
 from matplotlib.figure import Figure
+from PySide6.QtCore import QSize
+from PySide6.QtWidgets import QSizePolicy
 
 from ..glyphs import FRAME_COLOURS
 from .overlays import MEASURED_COLOUR, THETA_COLOUR
@@ -52,8 +54,9 @@ def draw_euler(fig: Figure, fit, theta_deg: float) -> None:
     ax.set_ylabel("normal curvature k_n")
     ax.set_title(f"point {fit.index} ({fit.kind}):  k_n({theta_deg:.0f}°) = {kt:.3g}", fontsize=10)
     ax.grid(alpha=0.25)
-    fig.legend(*ax.get_legend_handles_labels(), fontsize=7, loc="lower center", ncol=2, frameon=False)
-    fig.tight_layout(rect=(0, 0.16, 1, 1))
+    # laid out again at every draw (a canvas resized with its dock keeps the legend inside)
+    fig.set_layout_engine("constrained", h_pad=0.02, w_pad=0.02)
+    fig.legend(*ax.get_legend_handles_labels(), fontsize=7, loc="outside lower center", ncol=2, frameon=False)
 
 
 def draw_gauss_map(fig: Figure, normals, colours, highlight=None, picked=None) -> None:
@@ -106,10 +109,21 @@ def save_figure(fig: Figure, path, *, dpi: int = 300) -> Path:
     return path
 
 
+#: The plots' smallest height (px): the Euler plot's axes, title, labels and legend.
+MIN_HEIGHT = 240
+
+
 class _Canvas(FigureCanvasQTAgg):
+    """A figure that takes the height its slot has. Its minimum is a size *hint*: a
+    minimum height alone (280, before) is not seen by the tab widget holding it, whose page
+    then gave it less and cut off its bottom, the Euler plot's legend (1440x900 window)."""
+
     def __init__(self, size=(4.2, 3.4)):
         super().__init__(Figure(figsize=size, dpi=90))
-        self.setMinimumHeight(280)
+        self.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Expanding)
+
+    def minimumSizeHint(self) -> QSize:  # noqa: N802 - Qt's name
+        return QSize(200, MIN_HEIGHT)
 
 
 class EulerPlot(_Canvas):

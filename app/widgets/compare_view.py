@@ -14,10 +14,18 @@ def _pose(camera) -> tuple:
             camera.GetViewAngle(), camera.GetParallelScale())
 
 
+def _update(plotter) -> None:
+    if not getattr(plotter, "_closed", False):  # (closed: its render window is gone)
+        plotter.update()
+
+
 class CameraLink:
-    """Share one vtkCamera between two plotters and re-render the other one when
-    either view moves (GUI thread; the re-render is deferred to the event loop, and
-    only happens when the pose actually changed, so the two never ping-pong)."""
+    """Share one vtkCamera between two plotters and repaint the other one when
+    either view moves (GUI thread; the repaint is deferred to the event loop, and
+    only happens when the pose actually changed, so the two never ping-pong).
+
+    The repaint is ``update()``, not ``render()``: a render draws the view twice (VTK's
+    render, then the paint it schedules), and updates asked before the paint make one."""
 
     def __init__(self, main, other):
         self.main, self.other = main, other
@@ -33,7 +41,7 @@ class CameraLink:
         pose = _pose(self.main.renderer.camera)
         if pose != self._pose:
             self._pose = pose
-            QTimer.singleShot(0, target.render)
+            QTimer.singleShot(0, lambda: _update(target))
 
     def unlink(self) -> None:
         for window, tag in self._tags:
@@ -48,6 +56,7 @@ class CompareView(QWidget):
         super().__init__(parent)
         self.plotter = make_plotter(self)
         self.plotter.setAcceptDrops(False)  # drops go to the main window
+        self.plotter.setMinimumSize(240, 240)  # (without, a small window's splitter left it 0 px wide)
         self.scene = CloudScene(self.plotter)
         self.link: CameraLink | None = None
         layout = QVBoxLayout(self)
