@@ -96,8 +96,9 @@ def orient(points, normals, idx, mode="outward", *, ok=None, rank=None, trust=Fa
         viewpoint that every normal is made to face, or (N, 3) viewpoints, one per point.
     ok : (N,) bool, rows that have a normal (default: finite rows).
     rank : (N,) int, optional, each point's index in the caller's order when the points
-        are passed in another (:mod:`core.spatial_order`): equally strong edges are taken
-        in that order, so the signs do not depend on the order in memory.
+        are passed in another (:mod:`core.spatial_order`): where the signs are decided
+        here, equally strong edges are taken in the order of the points' coordinates
+        (:func:`geometric_rank`), and of ``rank`` only between points at one place.
     trust : scale each edge's evidence by its points' flatness (:func:`_evidence`,
         :data:`core.tuning.FOLD_TRUST`): what ``k="auto"``'s wide initial normals need at a
         rim 2 spacings high; on the k = 15 normals it cost the 3-spacing plate and the bowl
@@ -116,8 +117,13 @@ def orient(points, normals, idx, mode="outward", *, ok=None, rank=None, trust=Fa
     n = len(pts)
     labels = np.where(ok, 0, -1)
     rank = np.arange(n) if rank is None else np.asarray(rank, dtype=np.int64)
+    if isinstance(mode, str) and mode != "keep":  # the signs are decided here: ties go by place, not index
+        rank = geometric_rank(pts, rank)
     spread = np.empty(n)
-    ev, first = _evidence(pts, nrm, graph, ok, rank, trust=trust, spread=spread)
+    # Hoppe's term weighted by the raw chord offsets (as resettle's) on the integer-k normals: a thin rim's
+    # inflated gate had it vote the two faces apart (1:1:0.1 ellipsoid, k = 15); k="auto" (``trust``)
+    # keeps the gated weight (raw there cost the 2-5 spacing wedge 0.05 % of its face share at seed 4)
+    ev, first = _evidence(pts, nrm, graph, ok, rank, trust=trust, raw_weight=not trust, spread=spread)
     sign = np.ones(n)
     if not isinstance(mode, str):
         sign[np.einsum("ij,ij->i", nrm, np.asarray(mode, dtype=float) - pts) < 0] = -1.0
@@ -139,6 +145,25 @@ def orient(points, normals, idx, mode="outward", *, ok=None, rank=None, trust=Fa
     if isinstance(mode, str) and mode != "keep":
         _settle(ev, graph, ok, sign, confidence)
     return Orientation(nrm * sign[:, None], confidence, labels)
+
+
+def geometric_rank(points, rank) -> np.ndarray:
+    """(N,) each point's place in the order of its coordinates (by x, then y, then z; points
+    at one place by ``rank``). :func:`orient` takes equally strong edges (the counting sort's
+    levels of :data:`SORT_LEVELS`), the first copy of an edge, the seam sums and the parts'
+    samples in this order, so the signs do not depend on the order of the points: in the
+    caller's order a thin ellipsoid (axes 1:1:0.1, 3000 points, k = 15) turned 62 points of
+    its rim inward, or a whole face, as the points were permuted. A lexicographic order, as
+    against an index, is the same on any subset (a tile orders its points as the cloud
+    does). One argsort of x (0.1 s at 1M points); a full lexsort only where x ties."""
+    x = points[:, 0]
+    order = np.argsort(x)
+    ordered = x[order]
+    if len(x) > 1 and (ordered[1:] == ordered[:-1]).any():  # a grid's rows, a plane x = c
+        order = np.lexsort((rank, points[:, 2], points[:, 1], x))
+    place = np.empty(len(x), dtype=np.int64)
+    place[order] = np.arange(len(x))
+    return place
 
 
 def _numbered(roots):
