@@ -14,6 +14,7 @@ import struct
 import numpy as np
 
 from .cloud import CloudFileError, RawCloud, check_memory, find_normals, split_components
+from .las_open import open_reader, point_count
 
 
 def read_las(path) -> RawCloud:
@@ -36,7 +37,7 @@ def _read_las_data(path):
 
     check_record_counts(path)
     try:
-        with rust_panics_refused(path), laspy.open(path) as reader:
+        with rust_panics_refused(path), open_reader(path) as reader:
             _check_header(reader.header, path, laspy)
             return reader.read()
     except CloudFileError:
@@ -132,15 +133,11 @@ def check_record_counts(path) -> None:
 
 
 def _check_point_count(path, head: bytes, offset: int, size: int) -> None:
-    """The header's point count against the records the file holds: laspy reads a LAS 1.4
-    file's 64-bit count only (0 with a legacy count read no points), and only the points a
-    header declares (more records after them were dropped without a word)."""
-    legacy, minor, record = struct.unpack_from("<I", head, 107)[0], head[25], struct.unpack_from("<H", head, 105)[0]
-    count = struct.unpack_from("<Q", head, 247)[0] if minor >= 4 and len(head) >= 255 else legacy
-    if count == 0 and legacy > 0:
-        raise CloudFileError(path, f"inconsistent LAS 1.4 header: its point count (byte 247) is 0 but its legacy "
-                                   f"point count (byte 107) is {legacy}; rewrite the file with a LAS tool (e.g. "
-                                   "`pdal translate` or `las2las`) to set the count")
+    """The header's point count against the records the file holds: laspy reads only the
+    points a header declares (more records after them were dropped without a word). A LAS
+    1.4 count of 0 with a legacy count is read with the legacy count (:mod:`.las_open`)."""
+    minor, record = head[25], struct.unpack_from("<H", head, 105)[0]
+    count = point_count(head)
     if head[104] & 0xC0 or record == 0:  # LAZ: the count is checked while decompressing
         return
     ends = [size] + [start for start in _later_records(head, minor) if start >= offset + count * record]

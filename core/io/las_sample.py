@@ -22,6 +22,7 @@ from .._progress import Progress
 from .._validate import check_int
 from .cloud import CloudFileError
 from .las import rust_panics_refused
+from .las_open import open_reader
 from .las_stream import CHUNK, iter_records, open_las, xyz_of
 
 #: points read after each seek of the second pass: a LAZ chunk as laspy and lazrs write it
@@ -129,7 +130,7 @@ def _fetch(path, info, rows, names, report):
     parts, blocks = [], np.unique(rows // BLOCK)
     at = where = 0  # the block read, and the reader's position
     try:
-        with rust_panics_refused(path), laspy.open(path) as reader:
+        with rust_panics_refused(path), open_reader(path) as reader:
             for i, b in enumerate(blocks):
                 at = int(b) * BLOCK
                 if where != at:

@@ -20,6 +20,7 @@ import numpy as np
 
 from .cloud import CloudFileError, find_normals
 from .las import check_record_counts, rust_panics_refused
+from .las_open import open_reader
 from .write import RESULT_FLAGS
 
 #: points per chunk read or written (about 30 MB of float64 coordinates)
@@ -56,7 +57,7 @@ def open_las(path) -> LasInfo:
 
     check_record_counts(path)
     try:
-        with rust_panics_refused(path), laspy.open(path) as reader:
+        with rust_panics_refused(path), open_reader(path) as reader:
             h = reader.header
             if h.are_points_compressed and not laspy.LazBackend.detect_available():
                 raise CloudFileError(path, "is LAZ-compressed but no LAZ backend is installed; run `pip install lazrs`")
@@ -103,7 +104,7 @@ def iter_records(path, *, chunk: int = CHUNK, info: LasInfo | None = None, coord
     start = 0
     select = laspy.DecompressionSelection
     try:
-        with rust_panics_refused(path), laspy.open(
+        with rust_panics_refused(path), open_reader(
                 path, decompression_selection=select.XY_RETURNS_CHANNEL | select.Z if coordinates_only
                 else select.all()) as reader:
             for pts in reader.chunk_iterator(chunk):

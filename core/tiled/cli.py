@@ -106,9 +106,8 @@ def run(args) -> int:
 
 def _whole_to_las(args, orientation) -> int:
     """k="auto" on a cloud that fits in memory, written as LAS/LAZ."""
-    import laspy
-
     import core
+    from ..io import las_open
     from ..io.atomic import atomic_write
     from ..io.las_stream import LasResultWriter, quantisation, result_columns
     cloud = core.io.read_cloud(args.input, drop_nonfinite=args.drop_nonfinite)
@@ -120,7 +119,7 @@ def _whole_to_las(args, orientation) -> int:
     if str(args.input).lower().endswith(_LAS):  # keep the input's quantisation and fields: the same points
         info = open_las(args.input)
         scales, offsets = info.scales, info.offsets
-        las = laspy.read(args.input)
+        las = las_open.read(args.input)
         records, like = las.points, las.header
     else:
         scales, offsets = quantisation(res.points.min(axis=0), res.points.max(axis=0))

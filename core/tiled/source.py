@@ -15,6 +15,7 @@ from .._validate import as_normals, as_points
 from ..io import read_cloud
 from ..io.read import readable_file
 from ..io.e57 import E57Scans
+from ..io.las_open import open_reader
 from ..io.las_stream import CHUNK, iter_las, iter_records, open_las
 
 _STREAMED = (".las", ".laz")
@@ -57,9 +58,7 @@ class Source:
         order, for its own fields to be carried into a LAS/LAZ output; ``(None, None)`` else."""
         if self._path is None or not str(self._path).lower().endswith((".las", ".laz")):
             return None, None
-        import laspy
-
-        with laspy.open(self._path) as reader:
+        with open_reader(self._path) as reader:
             header = reader.header
         return header, iter_records(self._path, chunk=chunk)
 

@@ -148,13 +148,85 @@ def test_las_count_below_the_records_is_refused(tmp_path, version, point_format,
         read_cloud(path)
 
 
-def test_las14_with_only_the_legacy_count_is_refused_by_name(tmp_path):
-    """The 1.4 count 0 and the legacy count 100: laspy read no point ("contains no points")."""
-    path = _las(tmp_path / "a.las", "1.4", 1)
-    _patch(path, 247, "<Q", 0)
-    _patch(path, 107, "<I", 100)
-    with pytest.raises(CloudFileError, match=r"point count \(byte 247\) is 0 but its legacy point count .* is 100"):
+def _legacy_only(path, count: int):
+    """A copy of the LAS 1.4 file ``path`` whose 64-bit point count (byte 247) is 0 and whose
+    legacy count (byte 107) is ``count``, as some older tools write point formats 0-5."""
+    out = path.with_name("legacy_" + path.name)
+    out.write_bytes(path.read_bytes())
+    _patch(out, 247, "<Q", 0)
+    _patch(out, 107, "<I", count)
+    return out
+
+
+@pytest.mark.parametrize("ext", ["las", "laz"])
+@pytest.mark.parametrize("point_format", [1, 3])
+def test_las14_with_only_the_legacy_count_reads_its_points(tmp_path, point_format, ext):
+    """laspy reads the 64-bit count only: such a file read as empty. It is read with the
+    legacy count (as LAStools and PDAL do) by every reader, and the file is left unchanged."""
+    import core.tiled
+    from core.io import describe
+    from core.io.las_sample import sample_las
+    from core.io.las_stream import iter_las
+
+    if ext == "laz":
+        pytest.importorskip("lazrs")
+    good = _las(tmp_path / f"a.{ext}", "1.4", point_format, n=400)
+    path = _legacy_only(good, 400)
+    before, want = path.read_bytes(), read_cloud(good)
+    cloud = read_cloud(path)
+    np.testing.assert_array_equal(cloud.points, want.points)
+    assert sorted(cloud.fields) == sorted(want.fields)
+    assert describe(path)["n_points"] == 400
+    np.testing.assert_array_equal(np.concatenate([p for _, p, _ in iter_las(path, chunk=150)]), want.points)
+    assert len(sample_las(path, budget=1000).points) == 400
+    res = core.tiled.estimate_tiled(path, tmp_path / "out.laz", k=15, tile_points=150, workers=0)
+    assert res.n_points == 400 and res.n_tiles > 1
+    out = read_cloud(tmp_path / "out.laz")
+    np.testing.assert_allclose(out.points, want.points)
+    assert np.isfinite(out.fields["mean"]).any()
+    assert path.read_bytes() == before
+
+
+@pytest.mark.parametrize("ext", ["las", "laz"])
+def test_las14_with_only_the_legacy_count_in_the_cli(tmp_path, capsys, ext):
+    """`darboux-cli info`, and an estimate whole into LAS/LAZ (k auto: the input read by laspy)."""
+    import json
+
+    from core import cli
+
+    if ext == "laz":
+        pytest.importorskip("lazrs")
+    path = _legacy_only(_las(tmp_path / f"a.{ext}", "1.4", 1, n=300), 300)
+    assert cli.main(["info", "--json", str(path)]) == 0
+    assert json.loads(capsys.readouterr().out)[0]["n_points"] == 300
+    assert cli.main(["estimate", str(path), "-o", str(tmp_path / "out.laz"), "--k", "auto", "-q"]) == 0
+    out = read_cloud(tmp_path / "out.laz")
+    np.testing.assert_allclose(out.points, read_cloud(path).points)
+    assert "intensity" in out.fields and "mean" in out.fields
+
+
+@pytest.mark.parametrize("legacy, match", [(50, "declares 50 points but the point data holds 100 records"),
+                                           (150, r"truncated: the header declares 150 points")])
+def test_las14_legacy_count_unlike_the_records_is_refused(tmp_path, legacy, match):
+    """The legacy count read in place of a 0 is checked against the records as any count."""
+    path = _legacy_only(_las(tmp_path / "a.las", "1.4", 1), legacy)
+    with pytest.raises(CloudFileError, match=match):
         read_cloud(path)
+
+
+def test_overlaid_file_reads_the_overlay_in_any_pieces(tmp_path):
+    from core.io.las_open import OverlaidFile
+
+    path = tmp_path / "a.bin"
+    path.write_bytes(bytes(range(100)))
+    want = bytes(range(10)) + b"abcd" + bytes(range(14, 100))
+    with OverlaidFile(path, 10, b"abcd") as f:
+        assert f.read() == want
+        for start in range(0, 20):
+            f.seek(start)
+            got = b"".join(iter(lambda: f.read(3), b""))
+            assert got == want[start:]
+    assert path.read_bytes() == bytes(range(100))
 
 
 def test_las14_with_extended_records_after_the_points_reads(tmp_path):
