@@ -80,7 +80,12 @@ def band_map(cmap: str, bands: int):
     return ListedColormap(list(matplotlib.colormaps[cmap].colors[:bands]), name=f"{cmap}_{bands}")
 
 
-def update_legend(plotter, shown, colours: dict, background="white") -> tuple | None:
+#: the glyph legend's plate in either theme: its rows are in the glyphs' own colours (a near-black
+#: e1), chosen to show on the coloured points, and on the dark theme's plate e1 was unreadable
+GLYPH_PLATE = "#f4f4f4"
+
+
+def update_legend(plotter, shown, colours: dict, background=GLYPH_PLATE) -> tuple | None:
     """A row for each glyph kind in ``shown`` (colours: kind -> colour), on plates of
     ``background``, then place them (:func:`place_legend`; its window size is returned)."""
     labels = dict(zip(("e1", "e2", "normals"), (text for text, _ in glyphs.LEGEND)))

@@ -302,7 +302,7 @@ class CloudScene(Picking):
     def _glyph_legend(self) -> None:
         """A legend of the glyphs shown, in the lower-left corner (app/legend.py)."""
         shown = [kind for kind in legend.KINDS if f"glyph-{kind}" in self._glyph_names]
-        self._legend_size = legend.update_legend(self.plotter, shown, GLYPH_COLOURS, self.theme.background)
+        self._legend_size = legend.update_legend(self.plotter, shown, GLYPH_COLOURS)  # a light plate in both themes
 
     def radius(self) -> float:
         """Half the diagonal of the cloud's bounding box."""

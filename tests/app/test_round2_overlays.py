@@ -77,3 +77,19 @@ def test_text_plates_follow_the_theme(make_window, qtbot, torus):
     want = pv.Color(DARK.background).float_rgb
     assert np.allclose(window.scene._title_actor.prop.GetBackgroundColor(), want)
     assert np.allclose(window.scene._bar.GetBackgroundProperty().GetColor(), want)
+
+
+def test_glyph_legend_stays_readable_on_the_dark_theme(make_window, qtbot, torus):
+    """The glyph legend's rows are in the glyphs' own colours (e1 near black): on the dark
+    theme's plate its e1 row was black on near black. Its plate is light in both themes."""
+    from app.theme import DARK
+
+    import pyvista as pv
+
+    window = make_window(torus, show_e1=True)
+    window.scene.set_theme(DARK)
+    row = window.plotter.actors["glyph-legend-e1"].prop
+    plate = np.array(row.GetBackgroundColor())
+    ink = np.array(pv.Color(row.GetColor()).float_rgb)
+    luminance = lambda c: float(np.dot(c, [0.2126, 0.7152, 0.0722]))  # noqa: E731
+    assert luminance(plate) - luminance(ink) > 0.5, (plate, ink)
