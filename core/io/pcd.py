@@ -332,6 +332,9 @@ def lzf_decompress(data: bytes, size: int) -> bytes:
 
 
 def _raw_from_props(props, path) -> RawCloud:
+    lower = {name.lower(): name for name in props}
+    if not all(c in props for c in "xyz") and all(c in lower for c in "xyz") and len(lower) == len(props):
+        props = {name.lower(): values for name, values in props.items()}  # FIELDS X Y Z (Z-up tools' spelling)
     if not all(c in props for c in "xyz"):
         raise CloudFileError(path, f"the PCD file has no x, y, z fields (found: {', '.join(props)})")
     points = np.column_stack([props[c] for c in "xyz"])

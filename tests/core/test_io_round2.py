@@ -316,3 +316,14 @@ def test_file_whose_extension_lies_names_its_content(tmp_path, ext):
     path.write_bytes(source.read_bytes())
     with pytest.raises(CloudFileError, match=rf"its content is a \.ply file, not \.{ext}: rename it to \.ply"):
         read_cloud(path)
+
+
+def test_pcd_fields_in_upper_case_are_read(tmp_path):
+    """FIELDS X Y Z NORMAL_X ... (upper case) was refused: "no x, y, z fields (found: X, Y, Z)"."""
+    path = tmp_path / "upper.pcd"
+    path.write_text("VERSION .7\nFIELDS X Y Z NORMAL_X NORMAL_Y NORMAL_Z\nSIZE 4 4 4 4 4 4\nTYPE F F F F F F\n"
+                    "COUNT 1 1 1 1 1 1\nWIDTH 2\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA ascii\n"
+                    "1 2 3 0 0 1\n4 5 6 0 1 0\n")
+    cloud = read_cloud(path)
+    np.testing.assert_array_equal(cloud.points, [[1, 2, 3], [4, 5, 6]])
+    np.testing.assert_array_equal(cloud.normals, [[0, 0, 1], [0, 1, 0]])
