@@ -331,10 +331,17 @@ def lzf_decompress(data: bytes, size: int) -> bytes:
     return bytes(out)
 
 
+def _lower_case(props) -> dict:
+    """``props`` with lower-case names where x, y, z are spelled otherwise (FIELDS X Y Z) and
+    the lower-case names stay distinct; else ``props``."""
+    lower = {name.lower() for name in props}
+    if all(c in props for c in "xyz") or not {"x", "y", "z"} <= lower or len(lower) != len(props):
+        return props
+    return {name.lower(): values for name, values in props.items()}
+
+
 def _raw_from_props(props, path) -> RawCloud:
-    lower = {name.lower(): name for name in props}
-    if not all(c in props for c in "xyz") and all(c in lower for c in "xyz") and len(lower) == len(props):
-        props = {name.lower(): values for name, values in props.items()}  # FIELDS X Y Z (Z-up tools' spelling)
+    props = _lower_case(props)
     if not all(c in props for c in "xyz"):
         raise CloudFileError(path, f"the PCD file has no x, y, z fields (found: {', '.join(props)})")
     points = np.column_stack([props[c] for c in "xyz"])
