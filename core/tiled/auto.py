@@ -25,10 +25,10 @@ from ..refinement import Refined, finish, fit_passes, settle_signs
 from ..stages import flags
 from .._progress import Progress
 from ..tuning import DRIFT_POOL
-from .halo import auto_chain, rings_from
+from .halo import rings_from
 from .plan import TilePlan
 from .store import TileStore
-from .task import auto_plan, LINK_DTYPE, NODE_DTYPE, ROW_DTYPE, _components, _face_viewpoints, _nodes, _rows, load_with_halo
+from .task import auto_plan, LINK_DTYPE, NODE_DTYPE, ROW_DTYPE, _components, _face_viewpoints, _nodes, _rows, load_with_halo, tile_chain
 from . import wholecloud
 
 
@@ -43,8 +43,7 @@ def run_auto_tile(root, tile: int, spec) -> dict:
         _save(store, tile, [_empty()] * (whole.passes + 1), np.zeros((whole.passes + 2, 2)), {})
         return {"tile": tile, "skipped": False, "points": 0, "loaded": 0}
     anchored = anchors.shares_scale(whole)  # a fit or scale read at a follower: rings more (core.tiled.halo.auto_chain)
-    chain = auto_chain(whole.passes, whole.k_search, whole.k_initial, anchored)
-    rec, owner, nb, exact = load_with_halo(store, plan, tile, whole.k_search, chain)
+    rec, owner, nb, exact = load_with_halo(store, plan, tile, *tile_chain(spec))
     pts = np.ascontiguousarray(rec["xyz"])
     normals = np.ascontiguousarray(rec["n"]) if spec.normals_given else None
     tplan = dataclasses.replace(whole, n_points=len(pts))

@@ -17,6 +17,8 @@ short, and the task grows it until nothing does, so the halo is derived from the
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -84,14 +86,19 @@ def shortfall(nb, own, chain, lo, hi) -> tuple[float, np.ndarray]:
     return worst, exact
 
 
-def first_margin(own_xyz: np.ndarray, k: int, rings: int) -> float:
-    """A margin that usually suffices: (rings + 1) k-th neighbour distances, plus a safety."""
+def first_margin(own_xyz: np.ndarray, k: int, rings: int, *, share: float = 1.0, probe: int = _PROBE) -> float:
+    """A margin that usually suffices: (rings + 1) k-th neighbour distances, plus a safety.
+    ``own_xyz`` may be a sample holding ``share`` of the cloud's points (:mod:`.sizing`): the
+    cloud's k-th neighbour is then about the (k share)-th of the sample, whose distance is
+    scaled as on a surface (by the square root of the neighbour counts); ``probe`` points
+    are measured."""
     tree = cKDTree(own_xyz)
-    probe = own_xyz[:: max(1, len(own_xyz) // _PROBE)]
-    kk = min(k, len(own_xyz))
-    d, _ = tree.query(probe, k=kk)
-    r = float(np.quantile(np.reshape(d, (len(probe), kk))[:, -1], 0.99))
-    return _MARGIN_SAFETY * (rings + 1) * r
+    probes = own_xyz[:: max(1, len(own_xyz) // probe)]
+    j = k * share
+    kk = min(max(1, math.ceil(j)), len(own_xyz))
+    d, _ = tree.query(probes, k=kk)
+    r = float(np.quantile(np.reshape(d, (len(probes), kk))[:, -1], 0.99))
+    return _MARGIN_SAFETY * (rings + 1) * r * math.sqrt(min(j, len(own_xyz)) / kk)  # 1 on a tile's own points
 
 
 def gather(store, plan, tile: int, margin: float):

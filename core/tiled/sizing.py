@@ -18,12 +18,10 @@ import math
 import warnings
 
 import numpy as np
-from scipy.spatial import cKDTree
 
-from .. import anchors
-from .halo import _MARGIN_SAFETY, auto_chain, nr_chain
+from .halo import first_margin
 from .plan import make_plan
-from .task import auto_plan
+from .task import tile_chain
 
 #: sample points the margin and the loads are measured on
 _PROBE, _COUNTED = 2_000, 20_000
@@ -38,31 +36,10 @@ class HaloTooWide(UserWarning):
     """The budget allows only tiles that load several times their own points."""
 
 
-def tile_chain(spec):
-    """(k_max, chain) of the run's tiles, as the tasks load them (:mod:`.task`, :mod:`.auto`)."""
-    from ..planning import EstimatePlan  # the estimate's own plan: its k_initial and robust mode
-
-    if spec.k == "auto":
-        whole = auto_plan(spec)
-        return whole.k_search, auto_chain(whole.passes, whole.k_search, whole.k_initial, anchors.shares_scale(whole))
-    nr = EstimatePlan.build(max(spec.k, 3), k=spec.k, method=spec.method, passes=spec.passes,
-                            options=dict(spec.options) or None)
-    return spec.k, nr_chain(nr.passes, spec.k, nr.k_initial, nr.robust)
-
-
 def margin_on_sample(sample: np.ndarray, count: int, k: int, rings: int) -> float:
-    """The first margin of a tile of the whole cloud (``count`` points), from its ``sample``:
-    the k-th neighbour of the cloud is the (k m / count)-th of a sample of m points (on a
-    surface, distances scale as the square root of the neighbour count in between)."""
-    m = len(sample)
-    j = k * m / max(count, m)
-    kk = min(max(1, math.ceil(j)), m - 1)
-    if kk < 1:
-        return 0.0
-    probe = sample[:: max(1, m // _PROBE)]
-    d, _ = cKDTree(sample).query(probe, k=kk + 1)  # the probe itself first
-    r = float(np.quantile(np.reshape(d, (len(probe), kk + 1))[:, -1], 0.99)) * math.sqrt(j / kk)
-    return _MARGIN_SAFETY * (rings + 1) * r
+    """The first margin of a tile of the whole cloud (``count`` points), from its ``sample``
+    (:func:`core.tiled.halo.first_margin` on a share of the points)."""
+    return first_margin(sample, k, rings, share=len(sample) / max(count, len(sample)), probe=_PROBE)
 
 
 def loads(sample: np.ndarray, count: int, n_tiles: int, margin: float) -> np.ndarray:

@@ -10,6 +10,7 @@ import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
+from .. import anchors
 from ..duplicates import CopiesNeighbours, find_duplicates
 from ..estimate import estimate
 from ..kernels.sign_evidence import knn_components
@@ -18,7 +19,7 @@ from ..normals import pca_normals
 from ..orientation import ORIENT_K
 from ..planning import EstimatePlan
 from . import creases
-from .halo import first_margin, gather, grown, nr_chain, shortfall
+from .halo import auto_chain, first_margin, gather, grown, nr_chain, shortfall
 from .plan import TilePlan
 from .store import TileStore
 
@@ -107,10 +108,19 @@ def run_tile(root, tile: int, spec: TileSpec) -> dict:
     return {"tile": tile, "skipped": False, "points": int(own.sum()), "loaded": loaded}
 
 
-def _load_with_halo(store, plan, tile, spec):
+def tile_chain(spec):
+    """(k_max, chain) a tile of the run loads with its halo (:mod:`.halo`): with k="auto" the whole
+    cloud's plan's chain, else the paper's pipeline's (the outlier flags' k and mode as estimate()'s)."""
+    if spec.k == "auto":
+        whole = auto_plan(spec)
+        return whole.k_search, auto_chain(whole.passes, whole.k_search, whole.k_initial, anchors.shares_scale(whole))
     nr = EstimatePlan.build(max(spec.k, 3), k=spec.k, method=spec.method, passes=spec.passes,
-                            options=dict(spec.options) or None)  # the outlier flags' k and mode, as estimate()'s
-    return load_with_halo(store, plan, tile, spec.k, nr_chain(nr.passes, spec.k, nr.k_initial, nr.robust))
+                            options=dict(spec.options) or None)
+    return spec.k, nr_chain(nr.passes, spec.k, nr.k_initial, nr.robust)
+
+
+def _load_with_halo(store, plan, tile, spec):
+    return load_with_halo(store, plan, tile, *tile_chain(spec))
 
 
 def load_with_halo(store, plan, tile, k_max, chain):
