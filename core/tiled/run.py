@@ -99,11 +99,16 @@ def parse_memory(memory) -> int:
 
 def default_tile_points(k: int, memory) -> int:
     """Points per tile so that a worker, a tile, its halo and the estimate fit in ``memory``."""
+    return max(10_000, int(_room(memory) / (bytes_per_point(k) * HALO_ALLOWANCE)))
+
+
+def _room(memory) -> float:
+    """Bytes a worker with ``memory`` has for a tile and its halo (refused below twice the runtime)."""
     budget = parse_memory(memory)
     if budget < 2 * RUNTIME_BYTES:
         raise ValueError(f"memory {memory!r} is too small for a tile worker; give at least "
                          f"{2 * RUNTIME_BYTES // 1_000_000}MB (a worker alone holds about {RUNTIME_BYTES // 1_000_000}MB)")
-    return max(10_000, int((FILL * budget - RUNTIME_BYTES) / (bytes_per_point(k) * HALO_ALLOWANCE)))
+    return FILL * budget - RUNTIME_BYTES
 
 
 def _prepare(source, normals, k, *, method, passes, orientation, options, tile_points, workers, memory,
@@ -120,7 +125,7 @@ def _prepare(source, normals, k, *, method, passes, orientation, options, tile_p
     if spec.k == "auto":
         spec = dataclasses.replace(spec, n_points=max(src.count, 3))
         spec = dataclasses.replace(spec, passes=auto_plan(spec).passes)  # checks method and options first
-    return src, spec, rule, budget, tile_points or _sizer(spec, budget, src.count, workers)
+    return src, spec, rule, budget, tile_points or _sizer(spec, memory, src.count, workers)
 
 
 def _auto_rules(spec):
@@ -142,11 +147,11 @@ def _memory_k(spec) -> int:
     return plan.k_search + AUTO_PASS_NEIGHBOURS * plan.passes
 
 
-def _sizer(spec, budget, count, workers):
+def _sizer(spec, memory, count, workers):
     """The tile size as the sample will tell it (:func:`core.tiled.sizing.choose_tile_points`):
     tiles whose halos fit the budget, for the fewest work on the workers."""
     bpp = bytes_per_point(_memory_k(spec))
-    room = max(1, int(FILL * budget - RUNTIME_BYTES))
+    room = int(_room(memory))
     return functools.partial(choose_tile_points, spec=spec, workers=workers or os.cpu_count() or 1, room=room,
                              bytes_per_point=bpp, least_tiles=max(1, -(-count * bpp // room)))
 

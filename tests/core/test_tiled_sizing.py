@@ -69,3 +69,11 @@ def test_halos_wider_than_the_tiles_are_told(torus):
         tp = sizing.choose_tile_points(torus, len(torus), spec=spec, workers=2, room=len(torus) * bpp,
                                        bytes_per_point=bpp, least_tiles=1)
     assert tp == len(torus)
+
+
+def test_a_budget_below_a_worker_is_refused_before_any_work(tmp_path, torus):
+    """The sizing took the room of any budget (at least 1 byte); the refusal of a budget no
+    worker fits in, which the old size rule made, came back with one shared check."""
+    with pytest.raises(ValueError, match="memory '100MB' is too small for a tile worker"):
+        estimate_tiled(torus, tmp_path / "out.ply", k=15, workers=0, memory="100MB")
+    assert list(tmp_path.iterdir()) == []
