@@ -104,10 +104,10 @@ PCA_K = 15
 #: place (20k torus, every point twice 1e-6 apart: H error 0.08 instead of 1e-4); real
 #: sampling, even 100:1 in density, keeps points orders of magnitude farther apart
 NEAR_COPY = 1e-3
-#: ... and they are merged only when at least this share of the points has such a twin: a
-#: few twins among their neighbours' places cost nothing, while random (Poisson) sampling
+#: ... and twins are merged only when at least this share of the points has one: a few
+#: twins among their neighbours' places cost nothing, while random (Poisson) sampling
 #: leaves ~1.5e-5 of a surface's points that close to another (15 at 1M points), whose
-#: merge would redo the whole search
+#: merge would redo the whole search (a place of three or more copies is always merged)
 NEAR_COPY_SHARE = 0.01
 #: h of eq. 14 in units of the k-th neighbour distance, so no neighbour gets weight 0
 THETA_REACH = 1.1
