@@ -129,6 +129,7 @@ def check_record_counts(path) -> None:
         vlrs = _read_vlrs(f, header_size, n_vlrs)
         _check_extra_bytes(path, vlrs.get(_EXTRA_BYTES, b""))
         _check_laz_sizes(path, f, head, size, vlrs.get(_LASZIP))
+        _check_laz_count(path, f, point_count(head), vlrs.get(_LASZIP), offset)
         _check_laz_layers(path, f, vlrs.get(_LASZIP), offset, size)
 
 
@@ -285,15 +286,50 @@ def _layered_items(laszip) -> list:
     return items
 
 
+def _check_laz_count(path, f, count: int, laszip, offset: int) -> None:
+    """The header's point count against the LAZ chunk table: laspy decompresses only the
+    points a header declares, so whole chunks after them were dropped without a word. The
+    table gives each chunk's point count (variable chunks) or the chunk size, which every
+    chunk but the last holds (fixed chunks): points missing from the count within the last
+    chunk cannot be told without decompressing it."""
+    if laszip is None or len(laszip) < 16:
+        return
+    table = _chunk_table(f, laszip, offset)
+    if not table:
+        return
+    chunk_size = struct.unpack_from("<I", laszip, 12)[0]
+    if chunk_size == _VARIABLE_CHUNKS:
+        held, what = sum(points for points, _ in table), f"its {len(table)} compressed chunks hold"
+    else:
+        held = (len(table) - 1) * chunk_size + 1
+        what = f"its {len(table)} compressed chunks of {chunk_size} hold at least"
+    if chunk_size == _VARIABLE_CHUNKS and held < count:
+        raise CloudFileError(path, f"truncated: the header declares {count} points but {what} {held}")
+    if held > count:
+        raise CloudFileError(path, f"the header declares {count} points but {what} {held}; "
+                                   "the header's point count is wrong (the file was not finished, or was joined to "
+                                   "another): rewrite it with a LAS tool to count every point")
+
+
+def _chunk_table(f, laszip, offset: int):
+    """[(points, bytes)] of each chunk from the chunk table (read by lazrs), or None."""
+    try:
+        import lazrs
+    except ImportError:
+        return None  # laspy refuses the file: no LAZ backend
+    f.seek(offset)
+    try:
+        return [(int(points), int(length)) for points, length in lazrs.read_chunk_table(f, lazrs.LazVlr(laszip))]
+    except (RuntimeError, ValueError, OSError, TypeError):  # lazrs.LazrsError is a RuntimeError
+        return None
+
+
 def _chunk_lengths(f, laszip, offset: int, size: int) -> list:
     """The bytes of each chunk from the chunk table (read by lazrs), or, without a table lazrs
     can read, the first chunk taking the rest of the file."""
     try:
-        import lazrs
+        import lazrs  # noqa: F401
     except ImportError:
         return []  # laspy refuses the file: no LAZ backend
-    f.seek(offset)
-    try:
-        return [int(length) for _, length in lazrs.read_chunk_table(f, lazrs.LazVlr(laszip))]
-    except (RuntimeError, ValueError, OSError, TypeError):  # lazrs.LazrsError is a RuntimeError
-        return [size - offset - 8]
+    table = _chunk_table(f, laszip, offset)
+    return [size - offset - 8] if table is None else [length for _, length in table]

@@ -22,8 +22,9 @@ _STL_SLACK = 50
 
 
 def read_obj(path) -> RawCloud:
-    """``v`` lines are the points. Normals come from faces' ``v//vn`` (or ``v/vt/vn``)
-    indices; without those, ``vn`` lines are used in order when there is one per vertex."""
+    """``v`` lines are the points (``v x y z r g b``: colours as fields red, green, blue).
+    Normals come from faces' ``v//vn`` (or ``v/vt/vn``) indices; without those, ``vn``
+    lines are used in order when there is one per vertex."""
     with open(path, encoding="latin-1") as f:
         lines = f.read().removeprefix("\xef\xbb\xbf").splitlines()  # a UTF-8 BOM hid the first 'v'
     v_lines, vn_lines, f_lines = [], [], []  # f_lines: (line index, #v so far, #vn so far)
@@ -37,8 +38,9 @@ def read_obj(path) -> RawCloud:
         elif key == "f":
             f_lines.append((i, len(v_lines), len(vn_lines)))
     points = _parse_vectors(path, lines, v_lines, "v")
+    colours = _vertex_colours(path, lines, v_lines)
     if not vn_lines:
-        return RawCloud(points, None, {})
+        return RawCloud(points, None, colours)
     vn = _parse_vectors(path, lines, vn_lines, "vn")
     normals, referenced = _face_normals(path, lines, f_lines, points, vn)
     if not referenced and len(vn) == len(points):
@@ -46,7 +48,21 @@ def read_obj(path) -> RawCloud:
     elif not referenced:
         warnings.warn(f"{path}: {len(vn)} 'vn' normals cannot be matched to {len(points)} vertices (no face "
                       "references them and the counts differ); normals ignored", UserWarning, stacklevel=4)
-    return RawCloud(points, normals, {})
+    return RawCloud(points, normals, colours)
+
+
+def _vertex_colours(path, lines, v_lines) -> dict:
+    """The fields red, green, blue of 'v x y z r g b' lines (MeshLab and CloudCompare write
+    vertex colours so), when every 'v' line has them; {} otherwise."""
+    rows = [lines[i].split()[4:] for i in v_lines]
+    if not rows or any(len(row) != 3 for row in rows):
+        return {}
+    try:
+        rgb = np.array(rows, dtype=np.float64)
+    except ValueError:
+        i = next(i for i, row in zip(v_lines, rows) if not all(map(_is_float, row)))
+        raise CloudFileError(path, f"line {i + 1}: cannot parse the colour of {lines[i].strip()!r}") from None
+    return {"red": rgb[:, 0], "green": rgb[:, 1], "blue": rgb[:, 2]}
 
 
 def _parse_vectors(path, lines, indices, key) -> np.ndarray:
@@ -112,7 +128,7 @@ def read_stl(path) -> RawCloud:
     n = int.from_bytes(head[80:84], "little") if len(head) >= 84 else -1
     fits = n >= 0 and 0 <= size - (84 + 50 * n) < _STL_SLACK
     corners = None
-    if head.lstrip()[:5].lower() == b"solid" and not fits:
+    if head.removeprefix(b"\xef\xbb\xbf").lstrip()[:5].lower() == b"solid" and not fits:  # a UTF-8 BOM: ASCII
         corners = _read_stl_ascii(path)
         if not len(corners) and n >= 0 and size >= 84 + 50 * n:
             corners = None  # no ASCII vertices: a binary STL whose header begins with "solid"

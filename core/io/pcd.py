@@ -71,21 +71,36 @@ def _layout(header, path):
     bad = next(((name, size) for name, size in zip(names, sizes) if size not in _SIZES), None)
     if bad is not None:  # numpy would take "4," as a structured dtype
         raise CloudFileError(path, f"the PCD header gives field {bad[0]!r} SIZE {bad[1]!r}; allowed: {', '.join(_SIZES)}")
-    fields = []
-    try:
-        for i, (name, size, kind, count) in enumerate(zip(names, sizes, types, counts)):
-            dtype = np.dtype("<" + _TYPES[kind.upper()] + size)
-            fields.append((name if name != "_" else f"_{i}", dtype.str, int(count)))
-        if "POINTS" in header:
-            n = int(header["POINTS"][0])
-        else:
-            n = int(header["WIDTH"][0]) * int(header.get("HEIGHT", ["1"])[0])
-        if n < 0 or any(count < 1 for _, _, count in fields):
-            raise ValueError
-    except (KeyError, ValueError, TypeError, IndexError):
-        raise CloudFileError(path, "the PCD header has an invalid FIELDS/SIZE/TYPE/COUNT/POINTS entry") from None
+    fields = [_field(path, i, *entry) for i, entry in enumerate(zip(names, sizes, types, counts))]
     _check_unique(path, [name for name, _, _ in fields])
-    return fields, n
+    return fields, _point_count(path, header)
+
+
+def _point_count(path, header) -> int:
+    """POINTS, or without it WIDTH x HEIGHT (HEIGHT 1 if not given)."""
+    if "POINTS" not in header and "WIDTH" not in header:
+        raise CloudFileError(path, "the PCD header has no POINTS or WIDTH line")
+    n = 1
+    for key in ("POINTS",) if "POINTS" in header else ("WIDTH", "HEIGHT"):
+        value = " ".join(header.get(key, ["1"]))
+        if not value.isdigit():
+            raise CloudFileError(path, f"the PCD header gives {key} {value!r}; it must be an integer >= 0")
+        n *= int(value)
+    return n
+
+
+def _field(path, i: int, name: str, size: str, kind: str, count: str):
+    """(name, numpy dtype string, count) of one PCD field; an unnamed field "_" is called _<i>."""
+    if kind.upper() not in _TYPES:
+        raise CloudFileError(path, f"the PCD header gives field {name!r} TYPE {kind!r}; allowed: F, I, U")
+    if not count.isdigit() or int(count) < 1:
+        raise CloudFileError(path, f"the PCD header gives field {name!r} COUNT {count!r}; a count is an integer >= 1")
+    try:
+        dtype = np.dtype("<" + _TYPES[kind.upper()] + size)
+    except TypeError:  # a float of 1 byte
+        raise CloudFileError(path, f"the PCD header gives field {name!r} TYPE {kind!r} SIZE {size!r}; a float (F) "
+                                   "has SIZE 4 or 8") from None
+    return name if name != "_" else f"_{i}", dtype.str, int(count)
 
 
 def _check_unique(path, names) -> None:

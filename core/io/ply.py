@@ -7,7 +7,8 @@ reader. Faces and other elements are not returned, but their rows are counted: a
 that holds more or fewer rows than the header declares is refused (in ASCII, so is a row
 that does not fit its element's properties: core.io.ply_ascii). Non-ASCII bytes are
 allowed in ``comment`` and ``obj_info`` lines only. ASCII float coordinates keep their
-float64 parse; x, y, z, nx, ny, nz in exact case win over other spellings.
+float64 parse; x, y, z, nx, ny, nz in exact case win over other spellings. Beyond the
+eight standard types, int64, uint64 and float16 properties (trimesh writes them) are read.
 """
 
 from __future__ import annotations
@@ -21,11 +22,12 @@ from plyfile import PlyData, PlyElement, PlyListProperty, PlyParseError
 
 from .cloud import NORMAL_NAMES, CloudFileError, RawCloud, remaining_bytes
 from .ply_ascii import check_ascii_rows, declared as _declared, plural as _plural, read_ascii_vertex
+from .ply_types import refuse_repeated_names, restore_types, stand_in_types
 
 _PLY_DTYPES = {np.dtype(t) for t in ("i1", "u1", "i2", "u2", "i4", "u4", "f4", "f8")}
 #: how far to look for ``end_header`` before handing the file to plyfile as it is
 _HEADER_SCAN = 1 << 20
-_END_HEADER = re.compile(rb"(?:^|[\r\n])end_header(?:\r\n|\r|\n)")
+_END_HEADER = re.compile(rb"(?:^|[\r\n])end_header[ \t]*(?:\r\n|\r|\n)")  # trailing blanks: as RPly, tinyply
 _ASCII_ONLY = bytes(range(128)) + b"?" * 128
 #: ``obj_info`` starting a header line: plyfile refuses one after an ``element`` line, and a
 #: comment is what it is (read as one, it may stand anywhere)
@@ -55,27 +57,34 @@ def read_ply(path) -> RawCloud:
 
 def _parse_header(f, path):
     """plyfile's header parser on the header, with non-ASCII bytes in ``comment`` and
-    ``obj_info`` lines read as '?' (``obj_info`` lines as comments); non-ASCII bytes on another line are refused by line number."""
+    ``obj_info`` lines read as '?' (``obj_info`` lines as comments) and the types int64,
+    uint64 and float16 read (:mod:`.ply_types`); non-ASCII bytes on another line are refused
+    by line number. A UTF-8 byte-order mark before ``ply`` (a text editor's) is skipped."""
     raw = f.read(_HEADER_SCAN)
     end = _END_HEADER.search(raw)
     if end is None:  # no end_header near the start: plyfile says what is wrong
         f.seek(0)
         stream = f
     else:
-        raw = raw[: end.end()]
+        raw = raw[: end.end()].removeprefix(b"\xef\xbb\xbf")
         for lineno, line in enumerate(raw.splitlines(), start=1):
             if not line.isascii() and line.split()[:1] not in ([b"comment"], [b"obj_info"]):
                 raise CloudFileError(path, f"not a valid PLY header: line {lineno} "
                                            f"({line.decode('utf-8', 'replace')[:60]!r}) has non-ASCII bytes; "
                                            "only comment and obj_info lines may")
-        stream = io.BytesIO(_OBJ_INFO.sub(b"comment ", raw.translate(_ASCII_ONLY)))  # same length: offsets hold
+        text, restore = stand_in_types(_OBJ_INFO.sub(b"comment ", raw.translate(_ASCII_ONLY)))
+        refuse_repeated_names(text, path)
+        stream = io.BytesIO(text)
     try:
         header = PlyData._parse_header(stream)  # plyfile's own header parser, without the data
     except PlyParseError as exc:
         raise CloudFileError(path, f"not a valid PLY header: {exc}") from None
     except UnicodeDecodeError:
         raise CloudFileError(path, "not a valid PLY header: non-ASCII bytes in the header") from None
-    f.seek(stream.tell())
+    if stream is f:
+        return header
+    restore_types(header, restore)
+    f.seek(end.end())
     return header
 
 
@@ -271,7 +280,10 @@ def _read_vertex_plyfile(f, header, start: int, path):
     except PlyParseError as exc:
         problem = "truncated" if "end-of-file" in str(exc) else "malformed PLY data"
         raise CloudFileError(path, f"{problem}: {exc}") from None
-    except (ValueError, OverflowError) as exc:  # OverflowError: an integer out of its type's range
+    except OverflowError as exc:  # an ASCII integer out of its type's range
+        raise CloudFileError(path, f"malformed PLY data: element {name!r} holds an integer beyond the range of "
+                                   f"its property's type ({exc})") from None
+    except ValueError as exc:
         raise CloudFileError(path, f"malformed PLY data: {exc}") from None
     finally:
         if stream is not f:

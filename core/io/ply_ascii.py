@@ -19,7 +19,7 @@ from .cloud import CloudFileError, format_number
 
 #: numpy type code -> the PLY type name, for messages
 PLY_NAMES = {"i1": "char", "u1": "uchar", "i2": "short", "u2": "ushort", "i4": "int", "u4": "uint",
-             "f4": "float", "f8": "double"}
+             "f4": "float", "f8": "double", "i8": "int64", "u8": "uint64", "f2": "float16"}
 #: the most digits a list count may have in a row (a row of 10**9 values is no row)
 _COUNT_DIGITS = 9
 
@@ -164,7 +164,10 @@ def _row_problem(tokens, element) -> str:
 
 def read_ascii_vertex(f, vertex, path):
     """The vertex properties of an ASCII body whose vertex element comes first (scalars only),
-    or None when plyfile must read it (a row that np.loadtxt does not take)."""
+    or None when plyfile must read it (a row that np.loadtxt does not take, or 64-bit
+    integers, which a float64 parse would round beyond 2**53)."""
+    if any(np.dtype(p.dtype()).kind in "iu" and np.dtype(p.dtype()).itemsize == 8 for p in vertex.properties):
+        return None
     text = io.TextIOWrapper(f, encoding="latin-1", newline=None)
     try:
         with warnings.catch_warnings():

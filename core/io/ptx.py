@@ -34,6 +34,8 @@ def read_ptx(path) -> RawCloud:
     size = os.path.getsize(path)
     scans = []
     with open(path, "rb") as f:
+        if f.read(3) != b"\xef\xbb\xbf":  # a UTF-8 byte-order mark (a text editor's) is skipped
+            f.seek(0)
         reader = _Lines(f, path)
         while reader.skip_blank():
             scans.append(_read_scan(reader, len(scans), size))

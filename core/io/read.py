@@ -10,7 +10,7 @@ import struct
 import numpy as np
 
 from . import e57, las, mesh, off, pcd, ply, ptx, text, vtk
-from .sniff import content_hint
+from .sniff import content_hint, refuse_misread_text
 from .._validate import check_bool
 from .cloud import Cloud, CloudFileError, RawCloud, file_path, finalize
 from .formats import READ_FORMATS, resolve_format
@@ -139,6 +139,7 @@ def _hinted(path, fmt):
 
 def _read_raw(path, fmt) -> RawCloud:
     try:
+        refuse_misread_text(path, fmt)
         return _READERS[fmt](path)
     except ModuleNotFoundError as exc:  # an optional reader dependency is not installed
         extra = _EXTRAS.get(fmt)

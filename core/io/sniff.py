@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import re
 
+from .cloud import CloudFileError
+
 #: leading bytes -> the compression that writes them
 _COMPRESSED = {b"\x1f\x8b": "gzip", b"PK\x03\x04": "zip", b"BZh": "bzip2", b"\xfd7zXZ\x00": "xz",
                b"(\xb5/\xfd": "zstd", b"7z\xbc\xaf\x27\x1c": "7z"}
@@ -35,3 +37,42 @@ def content_hint(path, fmt: str) -> str:
         if fmt not in formats and pattern.match(head):
             return f"; its content is a .{ext} file, not .{fmt}: rename it to .{ext}"
     return ""
+
+
+#: byte-order marks of the UTF-16 and UTF-32 encodings (UTF-32 first: FF FE begins both)
+_WIDE_BOMS = ((b"\xff\xfe\x00\x00", "UTF-32"), (b"\x00\x00\xfe\xff", "UTF-32"), (b"\xff\xfe", "UTF-16"),
+              (b"\xfe\xff", "UTF-16"))
+#: the formats whose readers take text only in ASCII or UTF-8 (the delimited text reader
+#: decodes UTF-16 and UTF-32 itself; LAS, LAZ and E57 are binary)
+_NARROW = ("ply", "pcd", "obj", "off", "vtk", "vtp", "ptx")  # not STL: a binary header may begin FF FE
+#: the formats whose readers split lines at LF only (PLY, OBJ, STL and delimited text take CR too)
+_LF_LINES = ("off", "pcd", "vtk", "ptx")
+
+
+def refuse_misread_text(path, fmt: str) -> None:
+    """Refuse a file of a text format in UTF-16 or UTF-32 (a PowerShell redirect writes
+    UTF-16), whose reader found no points or named its first bytes as garbage; a legacy
+    VTK file behind a UTF-8 byte-order mark, which VTK's reader calls an unrecognized file
+    type; and an OFF, PCD, VTK or PTX file whose lines end in CR alone (classic Mac OS),
+    which their readers took for one line ("truncated", "premature EOF")."""
+    if fmt not in _NARROW:
+        return
+    with open(path, "rb") as f:
+        head = f.read(4096)
+    kind = next((name for bom, name in _WIDE_BOMS if head.startswith(bom)), None)
+    if kind is not None:
+        raise CloudFileError(path, f"is {kind} text (a PowerShell redirect writes it so); .{fmt} files are read as "
+                                   "ASCII or UTF-8: save it as UTF-8 (or ASCII) text")
+    if fmt in _LF_LINES and _cr_lines(head):
+        raise CloudFileError(path, "has lines ending in CR alone (classic Mac OS); convert them to LF or CR LF line "
+                                   "endings (e.g. with dos2unix -c mac)")
+    if fmt == "vtk" and head.startswith(b"\xef\xbb\xbf"):
+        raise CloudFileError(path, "starts with a UTF-8 byte-order mark (a text editor's), which VTK's legacy reader "
+                                   "does not take; save it without one")
+
+
+def _cr_lines(head: bytes) -> bool:
+    """Whether the first line break in ``head`` is a CR without an LF after it."""
+    at = re.search(rb"[\r\n]", head)
+    return at is not None and head[at.start() : at.start() + 2] not in (b"\r\n", b"\n") and \
+        not head[at.start() :].startswith(b"\n")

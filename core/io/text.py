@@ -11,44 +11,48 @@ Without usable column names: x y z come first; other columns become fields ``col
 r g b, x y z i r g b) a warning says that no normals were read. A .pts file of 4 or 7
 columns is Leica's x y z intensity [red green blue]. The file is decoded as UTF-8 when it
 is valid UTF-8, else as latin-1. The numbers are parsed by ``np.loadtxt`` from the file.
+A file of several blocks, each a count line and its rows (a PTS file of several scans), is
+read whole, with the field ``scan`` (:mod:`.text_blocks`).
 """
 
 from __future__ import annotations
 
 import codecs
-import re
 import warnings
 
 import numpy as np
 
 from .cloud import CloudFileError, RawCloud, find_normals
+from .text_blocks import count_blocks, load_blocks
+from .text_head import guess_delimiter as _guess_delimiter
+from .text_head import header_names, token_hint
+from .text_head import is_number as _is_number
+from .text_head import refuse_data_like as _refuse_data_like
+from .text_head import split as _split
 
 _MAX_HEADER_LINES = 1000
 _CHUNK_ROWS = 100_000
-#: a token shaped like a number in a style the parser does not take ("3.5e", C99 hex
-#: "0x1.8p+0", Fortran "1.5D+00"): a line made mostly of them is a data line, not a header
-_NUMBERISH = re.compile(r"[+-]?(0[xX][0-9a-fA-F]*(\.[0-9a-fA-F]*)?([pP][+-]?\d*)?|(\d+(\.\d*)?|\.\d+)([eEdD][+-]?\d*)?)")
 #: headerless columns are normals where, of the finite non-zero rows, this share has a
 #: length within _UNIT_TOL of 1 (colours 0-255 or 0-1, intensities do not)
 _UNIT_SHARE = 0.99
 _UNIT_TOL = 0.01
 #: where headerless normals may start: x y z nx ny nz ..., x y z r g b nx ny nz (CloudCompare)
 _NORMAL_STARTS = (3, 6)
-#: tokens that mark a missing value (R, pandas, SQL, spreadsheets): a row of them is data, not a header
-_MISSING = frozenset(("na", "n/a", "nan", "null", "none", "nil", "-", "--", "?", "missing", "#n/a"))
-_ANY_SEPARATOR = re.compile(r"[\s,;]+")
 
 
 def read_text(path, fmt: str) -> RawCloud:
     """Points, normals and extra columns from a delimited text file."""
     encoding = _encoding(path)
     head = _scan_head(path, encoding)
-    table = _load_table(path, encoding, head)
-    if head["count"] is not None and head["count"] != len(table):
+    table, scan = _load_table(path, encoding, head)
+    if scan is None and head["count"] is not None and head["count"] != len(table):
         raise CloudFileError(
             path, f"line {head['count_line']} declares {head['count']} points but {len(table)} data lines follow"
         )
-    return _raw_from_table(table, head["names"], fmt, path)
+    raw = _raw_from_table(table, head["names"], fmt, path)
+    if scan is not None:
+        raw.fields.setdefault("scan", scan)
+    return raw
 
 
 def _encoding(path) -> str:
@@ -100,26 +104,6 @@ def _decimal_comma(text: str) -> bool:
     return False
 
 
-def _guess_delimiter(text: str) -> str | None:
-    return "," if "," in text else ";" if ";" in text else None
-
-
-def _split(line: str, delimiter: str | None) -> list[str]:
-    """Tokens without quotes; a trailing delimiter ("1,2,3,") adds no empty token."""
-    tokens = [t.strip().strip('"').strip() for t in line.split(delimiter)]
-    while len(tokens) > 1 and tokens[-1] == "":
-        tokens.pop()
-    return tokens
-
-
-def _is_number(token: str) -> bool:
-    try:
-        float(token)
-    except ValueError:
-        return False
-    return True
-
-
 def _empty_column(lineno: int, tokens: list[str]) -> str:
     """The message for a data line with an empty field (a missing value is not a zero)."""
     column = tokens.index("") + 1
@@ -138,30 +122,6 @@ def _header_line(path, lineno: int, text: str, tokens: list[str]) -> tuple[bool,
             "point (1.5, not 1,5), separated by commas, semicolons or spaces",
         )
     return (False, text, lineno)
-
-
-def _refuse_data_like(path, header, ncols: int | None) -> None:
-    """Refuse a header line with the data's column count (``None``, no data line: 3 or more)
-    made mostly of number-like tokens ("1.5 2.5 3.5e", "1.5D+00 ...", "0x1.8p+0 ...") or
-    missing-value marks ("NA,NA,NA", "1,null,2"), or one that begins with a whole row of
-    numbers ("1 2 3 a"): a data line the parser cannot take, named as on any later line."""
-    for is_comment, text, lineno in header:
-        bad = None if is_comment else _data_like(text, ncols)
-        if bad is not None:
-            hint = " (a missing value; every data line needs a number in each column)" if bad.lower() in _MISSING else ""
-            raise CloudFileError(path, f"line {lineno}: cannot parse {bad!r} as a number{hint}")
-
-
-def _data_like(text: str, ncols: int | None) -> str | None:
-    """The first token that is not a number, when the line ``text`` is a data line (see
-    :func:`_refuse_data_like`); None for a header line."""
-    tokens = _split(text, _guess_delimiter(text))
-    words = _ANY_SEPARATOR.split(text)
-    if ncols is not None and len(words) > ncols and all(_is_number(t) for t in words[:ncols]):
-        return next(t for t in words if not _is_number(t))
-    numberish = sum(bool(_is_number(t) or _NUMBERISH.fullmatch(t) or t.lower() in _MISSING) for t in tokens)
-    shaped = len(tokens) == ncols if ncols is not None else len(tokens) >= 3
-    return next(t for t in tokens if not _is_number(t)) if shaped and 2 * numberish > len(tokens) else None
 
 
 def _scan_head(path, encoding) -> dict:
@@ -193,7 +153,7 @@ def _scan_head(path, encoding) -> dict:
                     path, f"line {lineno}: found {len(tokens)} column(s); need at least 3 (x y z [nx ny nz ...])"
                 )
             _refuse_data_like(path, header, len(tokens))
-            names = _header_names(header, len(tokens))
+            names = header_names(path, header, len(tokens))
             trailing = delimiter is not None and text.endswith(delimiter)
             return dict(skip=lineno - 1, first=lineno, delimiter=delimiter, ncols=len(tokens), names=names,
                         count=count, count_line=count_line, usecols=range(len(tokens)) if trailing else None)
@@ -201,21 +161,9 @@ def _scan_head(path, encoding) -> dict:
     raise CloudFileError(path, "contains no points (no numeric data lines)")
 
 
-def _header_names(header, ncols):
-    """Column names: the last header line with one name per column naming x, y and z (a
-    units line or comment after it does not hide it), else the last line if it has one
-    name per column and is not a comment."""
-    for i, (is_comment, text, _) in enumerate(reversed(header)):
-        names = _split(text, _guess_delimiter(text))
-        lower = [n.lower() for n in names]
-        if len(names) != ncols or len(set(lower)) != ncols:
-            continue
-        if {"x", "y", "z"} <= set(lower) or (i == 0 and not is_comment):
-            return names
-    return None
-
-
-def _load_table(path, encoding, head) -> np.ndarray:
+def _load_table(path, encoding, head):
+    """The data lines as a table, and None; or for a file of several count-line blocks
+    (:mod:`.text_blocks`), the table of all of them and each row's block index."""
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)  # "input contained no data"
@@ -225,17 +173,24 @@ def _load_table(path, encoding, head) -> np.ndarray:
     except UnicodeDecodeError:
         raise CloudFileError(path, "is not valid UTF-8 text") from None
     except ValueError as exc:
-        raise diagnose_lines(path, encoding, head, exc) from None
-    return table
+        blocks = count_blocks(path, encoding, head)
+        if blocks is None:
+            raise diagnose_lines(path, encoding, head, exc) from None
+        try:
+            return load_blocks(path, encoding, head, blocks)
+        except ValueError as again:
+            raise diagnose_lines(path, encoding, head, again, skip={n for n, _ in blocks}) from None
+    return table, None
 
 
-def diagnose_lines(path, encoding, head, exc) -> CloudFileError:
-    """Re-read the data lines in Python to name the first bad line (``head``: first, ncols, delimiter)."""
+def diagnose_lines(path, encoding, head, exc, skip=frozenset()) -> CloudFileError:
+    """Re-read the data lines in Python to name the first bad line (``head``: first, ncols,
+    delimiter; the line numbers ``skip`` are not data lines)."""
     delimiter, ncols = head["delimiter"], head["ncols"]
     with open(path, encoding=encoding, errors="replace", newline=None) as f:
         for lineno, line in enumerate(f, start=1):
             text = line.split("#", 1)[0].strip()
-            if lineno < head["first"] or not text:
+            if lineno < head["first"] or not text or lineno in skip:
                 continue
             tokens = _split(text, delimiter)
             if len(tokens) != ncols:
@@ -246,7 +201,7 @@ def diagnose_lines(path, encoding, head, exc) -> CloudFileError:
             if bad == "":
                 return CloudFileError(path, _empty_column(lineno, tokens))
             if bad is not None:
-                return CloudFileError(path, f"line {lineno}: cannot parse {bad!r} as a number")
+                return CloudFileError(path, f"line {lineno}: cannot parse {bad!r} as a number{token_hint(bad)}")
     return CloudFileError(path, f"cannot parse the data lines: {exc}")
 
 

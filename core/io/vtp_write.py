@@ -21,7 +21,7 @@ _TYPES = {("f", 4): "Float32", ("f", 8): "Float64", ("i", 1): "Int8", ("i", 2): 
 
 def write_vtp(f, columns) -> None:
     """Write ``columns`` (list of (name, (N,) array), x y z first) to the binary stream ``f``."""
-    arrays = _arrays(columns)
+    arrays = point_arrays(columns)
     n = len(columns[0][1])
     points = np.column_stack([values for _, values in columns[:3]]).astype("<f8")
     cells = np.arange(n, dtype="<i8")
@@ -45,7 +45,7 @@ def write_vtp(f, columns) -> None:
     xml.clear()
     for name, values in arrays:
         data_array(name, values, 1 if values.ndim == 1 else 3)
-    normals = ' Normals="Normals"' if any(name == "Normals" for name, _ in arrays) else ""
+    normals = ' Normals="Normals"' if [name for name, _ in columns[3:6]] == ["nx", "ny", "nz"] else ""
     head = (
         '<?xml version="1.0"?>\n'
         '<VTKFile type="PolyData" version="1.0" byte_order="LittleEndian" header_type="UInt64">\n'
@@ -56,7 +56,7 @@ def write_vtp(f, columns) -> None:
         '<Verts>\n' + "\n".join(verts_xml) + '\n</Verts>\n'
         '</Piece>\n</PolyData>\n<AppendedData encoding="raw">\n_'
     )
-    f.write(head.encode("ascii"))
+    f.write(head.encode("utf-8"))  # XML without an encoding declaration is UTF-8
     for block in blocks:
         f.write(np.uint64(block.nbytes).astype("<u8").tobytes())
         f.write(memoryview(block))
@@ -68,7 +68,7 @@ def _attribute(name: str) -> str:
     return f'"{escape(name, quote=True)}"'
 
 
-def _arrays(columns) -> list:
+def point_arrays(columns) -> list:
     """The point-data arrays after x y z: (name, (N,) or (N, 3) array), triples joined."""
     out, rest, i = [], columns[3:], 0
     while i < len(rest):

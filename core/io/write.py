@@ -14,7 +14,7 @@ from numpy.typing import ArrayLike
 
 from . import ply, text, vtp_write
 from .atomic import atomic_write
-from .cloud import CloudFileError, file_path
+from .cloud import NORMAL_NAMES, CloudFileError, file_path
 from .formats import WRITE_FORMATS, resolve_format
 
 _WRITERS = {
@@ -77,15 +77,22 @@ def write_cloud(path: str | os.PathLike | BinaryIO, points: ArrayLike, *, normal
         if format is None:
             raise ValueError("format= is required when writing to a stream (e.g. format='csv')")
         fmt = resolve_format(pathlib.Path("<stream>"), format, WRITE_FORMATS, "writing")
-        _WRITERS[fmt](path, _columns(points, normals, fields))
+        columns = _columns(points, normals, fields)
+        _check_names_for(fmt, columns)
+        _WRITERS[fmt](path, columns)
         return path
     path = file_path(path)
     fmt = resolve_format(path, format, WRITE_FORMATS, "writing")
     columns = _columns(points, normals, fields)
+    _check_names_for(fmt, columns)
     try:
         with atomic_write(path) as f:
             _WRITERS[fmt](f, columns)
     except OSError as exc:
+        folder = path.parent
+        if isinstance(exc, FileNotFoundError) and not folder.is_dir():
+            raise CloudFileError(path, f"cannot be written: {exc.strerror} (the folder {str(folder)!r} does not "
+                                       "exist)") from exc
         raise CloudFileError(path, f"cannot be written: {exc.strerror or exc}") from exc
     return path
 
@@ -146,6 +153,33 @@ def _field_columns(fields, n: int) -> list:
         raise ValueError(f"field names {', '.join(bad)} clash with x y z nx ny nz or with each other "
                          "(names are compared ignoring case)")
     return extra
+
+
+def _check_names_for(fmt: str, columns) -> None:
+    """Refuse, before any file is opened, field names the format cannot hold (non-ASCII in
+    a PLY header) or that its readers would take for the normals (normal_x normal_y normal_z,
+    n_x ... without normals=; a VTP array called Normals or normal): the field would come back
+    as the cloud's normals, or be lost behind them."""
+    names = [name for name, _ in columns]
+    lower = [name.lower() for name in names]
+    for triple in NORMAL_NAMES if "nx" not in names else ():
+        if set(triple) <= set(lower):
+            raise ValueError(f"fields {' '.join(triple)} would be read back as the normals, not as fields; pass "
+                             "normals as normals=, or rename the field")
+    if fmt == "ply" and not all(name.isascii() for name in names):
+        bad = next(name for name in names if not name.isascii())
+        raise ValueError(f"field name {bad!r} is not ASCII, which a PLY header cannot hold; rename it, or write "
+                         ".csv, .xyz or .vtp")
+    if fmt == "vtp":
+        _check_vtp_names(columns)
+
+
+def _check_vtp_names(columns) -> None:
+    """A VTP array called Normals or normal, other than the normals: the reader takes it for them."""
+    fields = [column for column in columns[3:] if column[0] not in ("nx", "ny", "nz")]
+    if {"normals", "normal"} & {name.lower() for name, _ in vtp_write.point_arrays(columns[:3] + fields)}:
+        raise ValueError("a field called normals or normal (or its _x _y _z columns) would be the VTP file's "
+                         "normals; pass normals as normals=, or rename the field")
 
 
 def _field_column(name, values, n: int) -> list:

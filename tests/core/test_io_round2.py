@@ -56,7 +56,7 @@ def test_text_first_row_with_trailing_text_is_refused(tmp_path, first, bad):
         read_cloud(path)
 
 
-@pytest.mark.parametrize("header", ["x y z", "Scan 1 of 3", "VIEWPOINT 0 0 0 1 0 0 0", "1.5m 2m 3m", "4"])
+@pytest.mark.parametrize("header", ["x y z", "Scan 1 of 3", "VIEWPOINT 0 0 0 1 0 0 0", "4"])
 def test_text_header_lines_still_read(tmp_path, header):
     path = _write(tmp_path / "a.pts", f"{header}\n" + ROWS)
     assert len(read_cloud(path)) == 4
