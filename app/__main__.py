@@ -7,6 +7,7 @@ whole window and exits (0 on success, 1 with a message on failure).
 from __future__ import annotations
 
 import argparse
+import atexit
 import math
 import signal
 import sys
@@ -22,7 +23,7 @@ from . import DEFAULT_CLOUD
 from . import file_fields
 from .fields import is_file_field, resolve_field
 from .hard_exit import end_now, exit_at_once
-from .jobs import live_job_threads
+from .jobs import join_job_threads, live_job_threads
 from .persist import restore_layout, restore_state
 from .state import ORIENTATIONS, ViewerState
 
@@ -206,11 +207,12 @@ def _quit_on_sigint(app: QApplication, outcome: dict) -> QTimer:
 class _Screenshot:
     """``--screenshot``: save the window once the first full result is drawn, then close."""
 
-    def __init__(self, window, args, outcome: dict, pick):
+    def __init__(self, window, args, outcome: dict, pick, size):
         from .actions import SCREENSHOT_SUFFIX, with_default_suffix  # the window is up: its modules are loaded
 
         self.window, self.outcome, self.pick = window, outcome, pick
         self.target, self.whole = with_default_suffix(args.screenshot, SCREENSHOT_SUFFIX), not args.view_only
+        self.size = size  # asked: (width, height)
         self.done = False
         self.field = window.state.field  # as given (the state falls back to H where it is not drawn)
         window.loader.loaded.connect(self.on_loaded)
@@ -249,6 +251,7 @@ class _Screenshot:
         if self.done:
             return
         self.done = True
+        _size_note(self.window, *self.size, not self.whole)  # the size the picture has
         try:
             self.target.parent.mkdir(parents=True, exist_ok=True)
             ok = self.window.save_screenshot(self.target, whole_window=self.whole)
@@ -315,12 +318,29 @@ def main(argv: list[str] | None = None) -> int:
         signal.signal(signal.SIGINT, before)
 
 
+#: How long a process that called :func:`main` itself (a script, a notebook) waits at its
+#: exit for the background jobs its window left running (a kernel numba compiles), s.
+EXIT_JOIN_S = 120.0
+
+
+def join_jobs_at_exit() -> None:
+    """At the exit of a process that called :func:`main` (``atexit``): let the jobs the window
+    abandoned end before the interpreter is finalised around them (a job inside numba's
+    compiler or a kernel then ended in "terminate called without an active exception", an
+    abort, or SIGSEGV). :func:`run` ends the process itself first (:func:`app.hard_exit.end_now`)."""
+    if live_job_threads():
+        print("darboux: waiting for a background job to stop…", file=sys.stderr, flush=True)
+        join_job_threads(EXIT_JOIN_S)
+
+
 def _run_window(args, args_list, state, teach, size) -> int:
     """The window's life: build it, open the first cloud, run the event loop, shut down."""
     width, height = size
     from .window import MainWindow  # noqa: PLC0415 - pyvistaqt/VTK only once the arguments are valid
 
     app = QApplication.instance() or QApplication([sys.argv[0], *args_list])
+    atexit.unregister(join_jobs_at_exit)  # (once; and before Qt's own clean-up, atexit runs the last first)
+    atexit.register(join_jobs_at_exit)
     app.setApplicationName("Darboux")
     app.setOrganizationName("Darboux")
     settings = QSettings("Darboux", "darboux")
@@ -338,11 +358,12 @@ def _run_window(args, args_list, state, teach, size) -> int:
             dock.hide()  # a figure: the 3D view(s) get the whole window
     window.resize(width, height)
     window.show()
-    _size_note(window, width, height, args.view_only)
+    if interactive:  # (a screenshot says so when it is saved: the compare view can still widen the window)
+        _size_note(window, width, height, args.view_only)
     if teach:
         window.teach.configure(**teach)
     pick = state.picked  # loading a cloud clears the pick: restore it on the first result
-    shot = None if interactive else _Screenshot(window, args, outcome, pick)
+    shot = None if interactive else _Screenshot(window, args, outcome, pick, size)
     _open_first(window, args, pick, example=bool(teach.get("example")))
     code = app.exec()
     del shot

@@ -19,9 +19,10 @@ import os
 import queue
 import sys
 import threading
+import time
 import weakref
 
-__all__ = ["JobThread", "live_job_threads", "lower_priority", "BACKGROUND_NICE"]
+__all__ = ["JobThread", "join_job_threads", "live_job_threads", "lower_priority", "BACKGROUND_NICE"]
 
 LOG = logging.getLogger(__name__)
 
@@ -98,3 +99,13 @@ class JobThread:
 def live_job_threads() -> list[str]:
     """Names of job threads still running (tests check this after windows close)."""
     return [t._thread.name for t in list(_LIVE) if t.is_alive()]
+
+
+def join_job_threads(timeout: float) -> list[str]:
+    """Wait up to ``timeout`` s in all for the job threads to end (their windows told them to
+    stop: a cancelled estimate ends at its next check, a kernel numba compiles when it is
+    compiled); the names of those still running."""
+    deadline = time.monotonic() + max(float(timeout), 0.0)
+    for job in list(_LIVE):
+        job._thread.join(max(deadline - time.monotonic(), 0.0))
+    return live_job_threads()

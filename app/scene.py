@@ -9,13 +9,13 @@ from __future__ import annotations
 
 import numpy as np
 import pyvista as pv
-from pyvistaqt import QtInteractor
 
 from . import framing, glyphs, legend
 from .detail import VisibleDetail
 from .geometry import CloudGeometry
 from .lod import LevelOfDetail, paint
 from .picking import Picking
+from .plotter import MULTI_SAMPLES, make_plotter
 from .theme import LIGHT, Theme
 
 __all__ = ["CloudScene", "GLYPH_COLOURS", "FRAME_COLOURS", "MULTI_SAMPLES", "make_plotter"]
@@ -25,18 +25,6 @@ FRAME_COLOURS = glyphs.FRAME_COLOURS
 GLYPH_COLOURS = {"e1": FRAME_COLOURS["e1"], "e2": FRAME_COLOURS["e2"], "normals": FRAME_COLOURS["n"]}
 NAN_COLOUR = legend.NAN_DEFAULT
 TEXT_COLOUR = "#222222"
-#: Samples per pixel of the 3D views' frame buffer: one. pyvista's default of 8 made every
-#: llvmpipe frame cost 1.7-1.9x (bunny and a 100k-sphere still frame of 1M, 760x850 and
-#: 1100x850, 2 and 8 samples alike; measured in one run, app.bench), and a frame that renders
-#: on the GUI thread is what the GUI stall is made of. It smoothed only true edges (sphere
-#: seams, glyphs, the bar's ends), not a sphere's outline, cut out per pixel (an impostor).
-MULTI_SAMPLES = 0
-
-
-def make_plotter(parent=None) -> QtInteractor:
-    """A 3D view of the viewer: rendered only when asked (no auto-update timer), one sample
-    a pixel (:data:`MULTI_SAMPLES`)."""
-    return QtInteractor(parent, auto_update=False, multi_samples=MULTI_SAMPLES)
 
 
 def _camera_state(renderer) -> tuple:
@@ -66,6 +54,7 @@ class CloudScene(Picking):
         self.point_size = 5.0  # the user's "Point size": the sprite size at the default density
         self.sprite_size = 5.0  # what is drawn: follows the point spacing on screen (app/framing.py)
         self._sprite_spacing, self._fit_sprite = 0.0, None  # spacing; sprite px the last fit gave
+        self.fitted_by: CloudScene | None = None  # the scene whose fits frame this view (the compare view's: the main)
         #: actor name -> size factor: point layers drawn over the cloud, resized with its sprites
         self.sprite_layers = {"pick-neighbours": 1.6}
         self._fit_pending: tuple | None = None  # (window size, camera) the last fit left
@@ -242,7 +231,7 @@ class CloudScene(Picking):
         if self._actor is None or self.points is None or not len(self.points):
             return
         size = framing.sprite_size(self.plotter.renderer, np.asarray(self._cloud.center), self._sprite_spacing,
-                                   self.point_size, self._fit_sprite)
+                                   self.point_size, (self.fitted_by or self)._fit_sprite)
         self.sprite_size = self._actor.prop.point_size = size  # VTK ignores a set to the same value
         self.lod.set_point_size(max(size, 2.0))
         for name, factor in self.sprite_layers.items():

@@ -16,6 +16,7 @@ from __future__ import annotations
 from PySide6.QtCore import QCoreApplication, QEvent, QTimer
 
 from .lod import STILL_POINTS
+from .theme import current_theme
 from .widgets import CompareView
 
 __all__ = ["WindowViews"]
@@ -47,6 +48,7 @@ class WindowViews:
             self.compare.hide()
             self.splitter.addWidget(self.compare)
             self.compare.link_to(self.plotter)
+            _share_camera(self.scene, self.compare.scene)
             self.compare.plotter.render_window.AddObserver("EndEvent", self._compare_frame_done)
         self.presenter.compare_scene = self.compare.scene
         self.scene.linked = [self.compare.plotter]  # fits frame the narrower of the two views
@@ -69,6 +71,16 @@ class WindowViews:
         if self._refit_due:
             self._refit_due = False
             self.scene.fit_view()
+
+    def changeEvent(self, event) -> None:  # noqa: N802
+        """The desktop switched between a light and a dark palette: the 3D views and the
+        histogram follow, as the Qt widgets do by themselves (they stayed white in a dark
+        window until the viewer was started again)."""
+        if (event.type() in (QEvent.Type.PaletteChange, QEvent.Type.ApplicationPaletteChange)
+                and not self._closed and current_theme() != self.scene.theme):
+            self.apply_theme()
+            self.render_all()
+        super().changeEvent(event)
 
     def fit_view(self) -> None:
         """F: frame the whole cloud, keeping the direction."""
@@ -125,6 +137,15 @@ class WindowViews:
         if not self._compare_due:  # (else a main frame is on its way: the compare's follows it)
             self._frame_due = False
             self.histogram.after_frame()
+
+
+def _share_camera(main, compare) -> None:
+    """The two views share a camera: a drag in either shows both stand-ins (app/lod.py), and
+    its end asks both zoom details; the main view's fit caps the sprites of both (zoomed in
+    past it, the compare view's grew to twice the main's: it never fits, so had no cap)."""
+    main.lod.follow(compare.plotter, after_end=main.detail.request)
+    compare.lod.follow(main.plotter, after_end=compare.detail.request)
+    compare.fitted_by = main
 
 
 def _paint(view) -> None:

@@ -296,6 +296,8 @@ class MainWindow(WindowActions, WindowStatus, WindowViews, QMainWindow):
         self.compile_watch.close()
         self.loader.shutdown()
         self.estimator.shutdown()
+        if self._exporter is not None:
+            self._exporter.shutdown()  # a file being written is finished first
         for box in list(self._boxes):
             box.close()
         self._boxes.clear()

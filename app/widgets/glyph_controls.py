@@ -3,16 +3,24 @@
 
 from __future__ import annotations
 
-from PySide6.QtCore import Qt
+from PySide6.QtCore import QEvent, Qt
 from PySide6.QtWidgets import QCheckBox, QFormLayout, QHBoxLayout, QWidget
 from superqt import QLabeledDoubleSlider, QLabeledSlider
 
 from ..glyphs import GLYPH_POINTS
 from ..scene import GLYPH_COLOURS
+from ..theme import current_theme
 from ._bind import blocked
 
 _SWITCHES = (("show_e1", "e1", "Max. principal direction"), ("show_e2", "e2", "Min. principal direction"),
              ("show_normals", "n", "Estimated normal"))
+
+
+def _label_style(colour: str) -> str:
+    """Bold, in the glyph's colour; on a light plate where the palette is dark, as the 3D
+    legend's (e1's near-black and n's purple were unreadable on a dark panel)."""
+    plate = "background-color: #f4f4f4; border-radius: 3px; padding: 0px 3px;" if current_theme().name == "dark" else ""
+    return f"QCheckBox {{ color: {colour}; font-weight: bold; {plate} }}"
 
 
 class GlyphControls(QWidget):
@@ -31,8 +39,8 @@ class GlyphControls(QWidget):
         row = QHBoxLayout()
         for key, text, tip in _SWITCHES:
             box = QCheckBox(text)
-            colour = GLYPH_COLOURS["normals" if key == "show_normals" else text]
-            box.setStyleSheet(f"QCheckBox {{ color: {colour}; font-weight: bold; }}")
+            box.setProperty("glyph_colour", GLYPH_COLOURS["normals" if key == "show_normals" else text])
+            box.setStyleSheet(_label_style(box.property("glyph_colour")))
             box.setToolTip(tip)
             box.toggled.connect(lambda on, key=key: self._state.set(**{key: bool(on)}))
             self.boxes[key] = box
@@ -56,6 +64,15 @@ class GlyphControls(QWidget):
         self.density.valueChanged.connect(lambda v: self._state.set(glyph_density=v / 100.0))
         self.length.valueChanged.connect(lambda v: self._state.set(glyph_length=float(v)))
         state.changed.connect(self._on_state)
+
+    def changeEvent(self, event) -> None:  # noqa: N802
+        """The palette turned dark or light: the labels' plates follow."""
+        if event.type() in (QEvent.Type.PaletteChange, QEvent.Type.ApplicationPaletteChange):
+            for box in self.boxes.values():
+                style = _label_style(box.property("glyph_colour"))
+                if box.styleSheet() != style:
+                    box.setStyleSheet(style)
+        super().changeEvent(event)
 
     def _sync(self) -> None:
         s = self._state
