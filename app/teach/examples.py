@@ -60,13 +60,13 @@ EXAMPLES = {
         "inside it is a saddle (hyperbolic, K < 0); the top and bottom circles, where the two "
         "regions meet, are parabolic. The lines of curvature are the meridians and the "
         "parallels. Positive and negative curvature cancel: ∫K dA = 0, χ = 0.",
-        ("frame", "dupin", "lines", "types"), 30.0, _closest([0.0, -1.0, 0.0])),
+        ("frame", "dupin", "lines", "types"), 30.0, _closest([0.0, 1.0, 0.0])),  # the far inner wall, seen through the hole
     "saddle": Example(
         "Saddle: hyperbolic points", "saddle",
         "At the waist of this peanut-shaped surface the normal sections bend towards the normal "
         "in one direction and away from it in the other: k1 > 0 > k2. The Euler curve crosses "
         "zero at the asymptotic directions, where the Dupin hyperbolas have their asymptotes.",
-        ("frame", "sections", "dupin"), 40.0, _closest([0.0, 0.0, -1.2])),
+        ("frame", "sections", "dupin"), 40.0, _closest([0.0, -0.96, 0.72])),  # the waist, towards the oblique view
 }
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from html import escape
 from pathlib import Path
 
 from PySide6.QtCore import Qt
@@ -102,7 +103,7 @@ class Teach:
         """Load a guided example's shape, show its overlays and text, pick its point."""
         example = EXAMPLES[key]
         self.configure(enabled=True, overlays=example.overlays, theta=example.theta)
-        self.panel.show_example(f"<b>{example.title}</b><br>{example.text}")
+        self.panel.show_example(f"<b>{escape(example.title, quote=False)}</b><br>{escape(example.text, quote=False)}")  # "K < 0" is not a tag
         self._pending_example = example
         self.window.load_shape(example.shape)
 
