@@ -6,7 +6,8 @@ sides of a thin tube) the opposite sides' normals are anti-parallel, so that cos
 them the best neighbours and the propagation makes them agree: one side flips. Here
 every kNN edge carries a signed evidence that also reads the chord between the points
 (:func:`core.kernels.sign_evidence.sign_evidence`): along a sheet it is Hoppe's test, across a
-gap, a thin part or a crease it is the side of the chord each normal faces. Signs are
+gap, a thin part or a crease it is the side of the chord each normal faces, its offsets
+gated by the noise (:mod:`core.orientation_evidence`: a fold does not widen the gate). Signs are
 fixed along the maximum spanning forest of |evidence| (Kruskal with a parity
 union-find), except that two parts of :data:`core.tuning.VOTE_SIZE` points or more are
 joined by the summed evidence of all the edges between them, not by their strongest
@@ -27,13 +28,11 @@ import numpy as np
 from .kernels import patches
 from .kernels import sign_evidence as kern
 from .kernels.union_find import signed_forest
+from .orientation_evidence import GATE, ORIENT_K, TRUST_FLOOR  # noqa: F401  (re-exported)
+from .orientation_evidence import edge_evidence as _evidence
 from .part_joins import join_parts
-from .tuning import FOLD_TRUST, PATCH_COS, PATCH_MAX, PATCH_ROUNDS, PATCH_TILT, PATCH_TRUST, RESETTLE_K, VOTE_GROWTH, VOTE_SIZE
+from .tuning import PATCH_COS, PATCH_MAX, PATCH_ROUNDS, PATCH_TILT, PATCH_TRUST, RESETTLE_K, VOTE_GROWTH, VOTE_SIZE
 
-#: neighbours per point in the orientation graph. 10 rather than Hoppe's 8: the chord
-#: test needs the graph to reach across a thin part's edges; measured on the thin shapes
-#: (tests/test_orientation.py) at noise 0.2 spacing.
-ORIENT_K = 10
 #: the points of a component that vote on its sign: its outer half by distance from the
 #: cloud's centre (where the surface faces away from it), read from a histogram of the
 #: distances in units of the component's RMS distance, VOTE_BINS bins over [0, 2) (a tiled
@@ -53,9 +52,6 @@ STRAY_RMS = 10.0
 #: closed surface (whose outward normals sum to zero); see :func:`floors_up`. Denser sampling
 #: on one side of a closed object lengthens its mean (a box with its top 5x as dense: 0.4).
 OPEN_SHARE = 0.6
-#: an offset along a normal counts in the chord test only beyond this many times the
-#: pair's spread (median offset of their neighbours from their planes): below it, it is noise
-GATE = 2.0
 #: edges are taken strongest first to within 1/SORT_LEVELS of evidence (ties below that
 #: make no measurable difference; a counting sort is 5x faster than argsort at 10^7 edges)
 SORT_LEVELS = 4096
@@ -63,11 +59,6 @@ SORT_LEVELS = 4096
 #: shapes at noise 0.2 spacing (20k points, k = 15, seeds 0-2): +0.03-0.10 % of the points
 #: agree with the truth after 3 sweeps; later sweeps flip almost nothing
 SETTLE_SWEEPS = 3
-#: the least trust an edge's point keeps (:func:`_evidence`): with none, a point whose edges
-#: all had zero evidence was left out of the forest and kept the sign its eigenvector
-#: happened to have, which depends on the order of the points in memory (3 of 3000 points
-#: of a sphere quantised to a grid, tests/core/test_spatial_order.py)
-TRUST_FLOOR = 0.01
 MODES = ("outward", "propagate", "keep")
 
 
@@ -89,7 +80,8 @@ def orient(points, normals, idx, mode="outward", *, ok=None, rank=None, trust=Fa
     points : (N, 3) float array.
     normals : (N, 3) unit normals (NaN rows allowed where ``ok`` is False); not modified.
     idx : (N, K) int neighbour indices, the point itself first; the first
-        :data:`ORIENT_K` columns form the graph.
+        :data:`ORIENT_K` columns form the graph, the first
+        :data:`core.orientation_evidence.NOISE_RING` the ring of its noise floor.
     mode : "outward" (each connected component made to face away from the cloud's centre
         at its far points), "propagate" (Hoppe's convention: each component's highest
         point faces +z), "keep" (signs untouched, only the confidence), a (3,)
@@ -111,7 +103,8 @@ def orient(points, normals, idx, mode="outward", *, ok=None, rank=None, trust=Fa
     pts = np.ascontiguousarray(points, dtype=np.float64)
     nrm = np.ascontiguousarray(normals, dtype=np.float64)  # read only: every result below is a new array
     ok = np.isfinite(nrm).all(axis=1) if ok is None else np.asarray(ok, dtype=bool)
-    graph = np.asarray(idx)[:, :ORIENT_K]  # a view in its own int type (as resettle's): no copy of the graph
+    idx = np.asarray(idx)
+    graph = idx[:, :ORIENT_K]  # a view in its own int type (as resettle's): no copy of the graph
     if graph.dtype not in (np.int32, np.int64):
         graph = graph.astype(np.int64)
     n = len(pts)
@@ -123,7 +116,7 @@ def orient(points, normals, idx, mode="outward", *, ok=None, rank=None, trust=Fa
     # Hoppe's term weighted by the raw chord offsets (as resettle's) on the integer-k normals: a thin rim's
     # inflated gate had it vote the two faces apart (1:1:0.1 ellipsoid, k = 15); k="auto" (``trust``)
     # keeps the gated weight (raw there cost the 2-5 spacing wedge 0.05 % of its face share at seed 4)
-    ev, first = _evidence(pts, nrm, graph, ok, rank, trust=trust, raw_weight=not trust, spread=spread)
+    ev, first = _evidence(pts, nrm, graph, ok, rank, trust=trust, raw_weight=not trust, spread=spread, ring=idx)
     sign = np.ones(n)
     if not isinstance(mode, str):
         sign[np.einsum("ij,ij->i", nrm, np.asarray(mode, dtype=float) - pts) < 0] = -1.0
@@ -205,7 +198,8 @@ def resettle(points, normals, idx, mode, *, ok=None, trust=False):
     Whole faces are not re-decided: their signs came from the
     spanning forest's seams, which the refined normals would not judge better. Only for
     the modes that decide signs ("outward", "propagate"); otherwise every sign is kept.
-    ``idx`` (N, K) holds at least :data:`ORIENT_K` neighbours; its first RESETTLE_K vote.
+    ``idx`` (N, K) holds at least :data:`ORIENT_K` neighbours; its first RESETTLE_K vote (its
+    first :data:`core.orientation_evidence.NOISE_RING`: the noise floor's ring).
     ``trust``: as :func:`orient`'s.
 
     Returns ``(sign, confidence)``: (N,) +1 / -1 to multiply the normals by and each point's
@@ -218,7 +212,7 @@ def resettle(points, normals, idx, mode, *, ok=None, trust=False):
     graph = idx[:, :RESETTLE_K]  # a view in its own int type (an int64 copy: 229 MiB at 1M points)
     n = len(pts)
     flat = np.empty(n)
-    ev, _ = _evidence(pts, nrm, graph, ok, np.arange(n), want_first=False, trust=trust, raw_weight=True, flat=flat)
+    ev, _ = _evidence(pts, nrm, graph, ok, np.arange(n), want_first=False, trust=trust, raw_weight=True, flat=flat, ring=idx)
     sign = np.ones(n)
     confidence = np.empty(n)
     kern.agreement(ev, graph, np.zeros(n, dtype=np.int8), ok, confidence)
@@ -367,31 +361,3 @@ def far_facing(rel, normals, reach):
     with np.errstate(invalid="ignore", divide="ignore"):
         facing = np.einsum("ij,ij->i", normals[far], rel[far]) / dist[far]
     return far, np.nan_to_num(facing)
-
-
-def _evidence(points, normals, graph, ok, rank, *, trust=False, want_first=True, raw_weight=False, flat=None, spread=None):
-    """The signed evidence of every graph edge, and which entries are an edge's first copy
-    (None without ``want_first``: :func:`resettle` reads only the evidence; each point's
-    noise gate from its first :data:`ORIENT_K` neighbours, however wide the graph). With
-    ``trust`` each edge is scaled by its two points' trust, 1 - :data:`core.tuning.FOLD_TRUST` x
-    (the median offset of their neighbours from their plane) / (the distance to the farthest
-    of them), clipped to [:data:`TRUST_FLOOR`, 1]: ~1 on a sheet, small where the neighbours
-    fold over. ``raw_weight``: as :func:`core.kernels.sign_evidence.sign_evidence`'s; ``flat``: an
-    (N,) array that receives each point's trust (1 without ``trust``); ``spread``: one that
-    receives each point's noise spread (:func:`core.kernels.sign_evidence.offset_spread`)."""
-    n = len(points)
-    spread_graph = graph[:, :ORIENT_K]  # a view: the kernels read strided rows as fast
-    spread = np.empty(n) if spread is None else spread
-    kern.offset_spread(points, normals, spread_graph, ok, spread)
-    weight = np.empty(0)  # none: every trust 1
-    if trust:
-        reach = np.linalg.norm(points[spread_graph[:, -1]] - points, axis=1)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            weight = np.clip(1.0 - FOLD_TRUST * spread / reach, TRUST_FLOOR, 1.0)
-        weight[reach == 0.0] = 1.0  # a point whose neighbours all coincide with it: nothing to read a fold from
-    ev = np.empty(graph.shape)
-    first = np.empty(graph.shape if want_first else (0, 0), dtype=np.bool_)
-    kern.sign_evidence(points, normals, spread, weight, graph, ok, GATE, ev, first, rank, raw_weight)
-    if flat is not None:
-        flat[:] = weight if trust else 1.0
-    return ev, first if want_first else None

@@ -306,3 +306,16 @@ def _vote_level(link, ea, eb, ew, nd, rank, limit):
             continue
         join_signed(link, ra, rb, pa ^ pb ^ (1 if total[p] < 0.0 else 0))
     return again
+
+
+@njit(**_OPTS, parallel=True)
+def least_near(values, ring, out):
+    """out[i]: the least values[j] over the j in ring[i] (branch-free: 1.7 ms for two hops at
+    100k points, against 6 ms with a test of each j's ``ok`` and 30 ms by
+    :func:`core.kernels.pool.pooled_above`'s selection)."""
+    n, k = ring.shape
+    for i in prange(n):
+        least = np.inf
+        for q in range(k):
+            least = min(least, values[ring[i, q]])
+        out[i] = least
