@@ -1,7 +1,7 @@
 """The initial normals of :func:`core.estimate` (a stage of :mod:`core.stages`): weighted
 PCA (eqs. 13-14), with k="auto" refined by 2-jets on a neighbourhood that grows with the
-measured noise, kept from lying across folds, and widened where scan lines leave the
-nearest too few lines (:mod:`core.plane_spread`)."""
+measured noise, kept from lying across folds or reaching around bends (:mod:`core.reach`), and
+widened where scan lines leave the nearest too few lines (:mod:`core.plane_spread`)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import anchors, kernels, local_noise, plane_spread, scale, tuning
+from . import anchors, kernels, local_noise, plane_spread, reach, scale, tuning
 from .kernels.knn import unflagged_first
 from .normals import jet_normals, pca_normals
 from .tuning import COLLINEAR, THETA_REACH
@@ -62,7 +62,7 @@ def _initial_normals(pts, nb, plan, outlier, report) -> tuple[Initial, np.ndarra
     if noise is None:
         jet, ratio, clean = noise_samples(pts, nrm, ok, idx_p, dist_p, outlier)
         noise = scale.noise_ratio(np.where(clean, ratio, np.nan) if clean.any() else ratio, 1.0)
-        jet, ratios = (jet, ratio), (ratio, clean)
+        jet, ratios = (jet, ratio * dist_p[:, -1]), (ratio, clean)  # the small jets' heights in length units
     k_init = scale.initial_k(noise, plan.k_initial, plan.k_search, plan.n_points)
     if k_init > nb.width:  # noise this large grows most jets to k_search too: search them all once, unless
         del idx_p, dist_p  # only anchors walk on (core.anchors.shares_scale; views of the narrow graph would keep it alive)
@@ -94,7 +94,32 @@ def _at_cloud_scale(pts, nb, plan, outlier, report, cloud, smalls) -> tuple[Init
         return Initial(nrm, ok, noise, k_init), _refused(ok, wide, plan)
     nrm, typical, folded = unfolded(nrm, small, *fold_spreads(small, idx, nb, k_init, outlier, plan),
                                     plan.fold_typical, pts=pts, small_rows=idx_p)
-    return Initial(nrm, ok, noise, k_init, typical), _refused(ok, np.where(folded, height, wide), plan)
+    wide = np.where(folded, height, wide)
+    if plan.initial == "jet":  # nor around a bend (core.reach)
+        nrm, ok, wide = _within_reach(pts, nb, plan, outlier, (nrm, ok, wide), (small, height, idx_p), k_init, ~folded)
+    return Initial(nrm, ok, noise, k_init, typical), _refused(ok, wide, plan)
+
+
+def _within_reach(pts, nb, plan, outlier, fitted, smalls, k_init, open_, *, centres=None):
+    """``fitted`` = (normals, ok, their 2-jets' heights) of the ``centres`` (M,) (default: every
+    point) on ``k_init`` neighbours, re-fitted where the wide 2-jet reaches around a bend
+    (:func:`core.reach.overreaching`, among the ``open_`` (M,) ones) on a smaller size
+    (:func:`core.reach.narrowed`), or the ``smalls`` (small normals, their heights, their rows,
+    (N, ...)) where none fits."""
+    nrm, ok, wide = fitted
+    small, height, idx_p = smalls
+    c = np.arange(len(nrm)) if centres is None else centres
+    noise = reach.pooled_height(height, idx_p[c])
+    over = np.flatnonzero(reach.overreaching(wide, noise, idx_p, c) & open_ & ok)
+    if not len(over):
+        return fitted
+    nrm, ok, wide = nrm.copy(), ok.copy(), wide.copy()
+    n_c, ok_c, h_c, left = reach.narrowed(pts, nrm[over], ok[over], c[over], noise[over],
+                                          reach.sizes_below(k_init, plan.k_initial),
+                                          lambda at, k: _level_rows(nb, at, k, outlier, plan)[:2])
+    n_c[left], h_c[left] = small[c[over[left]]], height[c[over[left]]]
+    nrm[over], ok[over], wide[over] = n_c, ok_c, h_c
+    return nrm, ok, wide
 
 
 def _levels(pts, nb, plan, small_rows, small, ratios, k_init):
@@ -134,7 +159,11 @@ def _at_levels(pts, nb, plan, outlier, levels, init, refused, smalls) -> tuple[I
         spread = np.empty(len(c))
         kernels.normal_spread(small, idx, spread)
         n_c, _, folded = unfolded(n_c, small[c], spread, clean, pts=pts, small_rows=idx_p[c])
-        nrm[c], ok[c], refused[c] = n_c, ok_c, _refused(ok_c, np.where(folded, height[c], wide), plan)
+        wide = np.where(folded, height[c], wide)
+        if plan.initial == "jet":  # nor around a bend (core.reach)
+            n_c, ok_c, wide = _within_reach(pts, nb, plan, outlier, (n_c, ok_c, wide), smalls, int(k), ~folded,
+                                            centres=c)
+        nrm[c], ok[c], refused[c] = n_c, ok_c, _refused(ok_c, wide, plan)
     return init._replace(normals=nrm, has_normal=ok, local=float(np.mean(levels != init.k))), refused
 
 
