@@ -14,7 +14,8 @@ joined by the summed evidence of all the edges between them, not by their strong
 one (:func:`core.kernels.sign_evidence.voted_signs`: one wrong edge on a plate's rim
 flipped its whole other side, 50 % agreement at k="auto"), then every component is turned outward by its points farthest from the
 cloud's centre (on a closed surface the point farthest from any centre has its normal
-pointing away from it). A point that most of its evidence disagrees with is then flipped
+pointing away from it; a thin open part, whose far points lie nearly in its plane, by the
+side its other skin lies on: :func:`_thin_parts`). A point that most of its evidence disagrees with is then flipped
 (a local majority, a few sweeps). Each point's ``confidence`` is the evidence-weighted share of
 its neighbours that agree with its final sign.
 """
@@ -29,6 +30,7 @@ from .kernels import patches
 from .kernels import sign_evidence as kern
 from .kernels.union_find import signed_forest
 from .orientation_evidence import GATE, ORIENT_K, TRUST_FLOOR  # noqa: F401  (re-exported)
+from .orientation_evidence import FAR_WEAK, THIN_MIN, THIN_MIN_POINTS, thin_vote
 from .orientation_evidence import edge_evidence as _evidence
 from .part_joins import join_parts
 from .tuning import PATCH_COS, PATCH_MAX, PATCH_ROUNDS, PATCH_TILT, PATCH_TRUST, RESETTLE_K, VOTE_GROWTH, VOTE_SIZE
@@ -131,7 +133,7 @@ def orient(points, normals, idx, mode="outward", *, ok=None, rank=None, trust=Fa
         group, parity = join_parts(pts, nrm * sign[:, None], labels, spread, rank, GATE)
         if (parity < 0).any():
             sign[ok] *= parity[labels[ok]]
-        _global_signs(pts, nrm * sign[:, None], (labels, group), mode, sign, rank)
+        _global_signs(pts, nrm * sign[:, None], (labels, group), mode, sign, rank, spread=spread)
         labels = np.append(group, -1)[labels]  # -1 (no normal) stays -1
     confidence = np.empty(n)
     kern.agreement(ev, graph, (sign < 0).astype(np.int8), ok, confidence)
@@ -253,12 +255,14 @@ def orient_normals(points, normals, idx, mode, *, ok=None):
     return orient(points, normals, idx, mode, ok=ok).normals
 
 
-def _global_signs(points, normals, parts, mode, sign, rank):
+def _global_signs(points, normals, parts, mode, sign, rank, *, spread=None):
     """Flip whole groups of components (in ``sign``; ``parts`` = (component label per point,
     group per component), :func:`core.part_joins.join_parts`): "outward" by the sum of its
     components' votes, each by its outer half by distance from the cloud's centre
     (:data:`VOTE_BINS`) (weighted by how squarely they face away), "propagate" by the sign
-    of the group's highest point's normal z (of equally high ones, the lowest ``rank``)."""
+    of the group's highest point's normal z (of equally high ones, the lowest ``rank``).
+    A group whose normals sum to almost nothing and whose far points vote weakly (a thin
+    part's two skins, open) takes the vote of its skins instead (:func:`_thin_parts`)."""
     labels, group = parts
     have = np.flatnonzero(labels >= 0)
     if not len(have):
@@ -288,9 +292,39 @@ def _global_signs(points, normals, parts, mode, sign, rank):
         grp = group[lab]
         beside = centre_beside(sums, normal_sums(rel, grp, n_comp), np.bincount(grp, square, n_comp),
                                np.bincount(grp, minlength=n_comp))
-        vote = floors_up(np.bincount(group, np.bincount(lab[far], facing, n_comp), n_comp), sums, counts, beside)
+        vote = np.bincount(group, np.bincount(lab[far], facing, n_comp), n_comp)
+        if spread is not None:
+            voters = np.bincount(group, np.bincount(lab[far], minlength=n_comp), n_comp)
+            _thin_parts(points, normals, (have, group[labels[have]]), (vote, voters, sums, counts), rank, spread)
+        vote = floors_up(vote, sums, counts, beside)
         lab = group[labels[rows]]
     sign[have[vote[lab] < 0]] *= -1.0
+
+
+def _thin_parts(points, normals, members, votes, rank, spread):
+    """Each group (``members``: rows with a normal and their group) whose far points'
+    ``vote`` is weak (mean facing of its ``voters`` below
+    :data:`core.orientation_evidence.FAR_WEAK`) and whose normals ``sums`` are short
+    (mean below :data:`OPEN_SHARE`: both skins of a thin part, or a closed surface) takes, in
+    ``vote``, :func:`core.orientation_evidence.thin_vote` where that reads at least
+    :data:`core.orientation_evidence.THIN_MIN` either way: its skins face away from each
+    other. Its far points are its rim, nearly in its plane: its outside barely shows there."""
+    vote, voters, sums, counts = votes
+    with np.errstate(invalid="ignore", divide="ignore"):
+        weak = np.abs(vote) < FAR_WEAK * voters
+        short = np.linalg.norm(sums, axis=1) <= OPEN_SHARE * counts
+    rows, grp = members
+    read = weak & short & (counts > THIN_MIN_POINTS)
+    if not read.any():
+        return
+    rows, grp = rows[read[grp]], grp[read[grp]]
+    rows = rows[np.lexsort((rank[rows], grp))]  # by group, then in the order of their coordinates
+    sizes = np.bincount(grp, minlength=len(vote))
+    ends = np.cumsum(sizes)
+    for g in np.flatnonzero(read):
+        score = thin_vote(points, normals, rows[ends[g] - sizes[g]:ends[g]], spread)
+        if abs(score) >= THIN_MIN:
+            vote[g] = score
 
 
 def normal_sums(normals, part, n_parts) -> np.ndarray:
