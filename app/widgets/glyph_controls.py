@@ -8,6 +8,7 @@ from PySide6.QtWidgets import QCheckBox, QFormLayout, QHBoxLayout, QWidget
 from superqt import QLabeledDoubleSlider, QLabeledSlider
 
 from ..glyphs import GLYPH_POINTS
+from ..legend import GLYPH_PLATE
 from ..scene import GLYPH_COLOURS
 from ..theme import current_theme
 from ._bind import blocked
@@ -19,7 +20,7 @@ _SWITCHES = (("show_e1", "e1", "Max. principal direction"), ("show_e2", "e2", "M
 def _label_style(colour: str) -> str:
     """Bold, in the glyph's colour; on a light plate where the palette is dark, as the 3D
     legend's (e1's near-black and n's purple were unreadable on a dark panel)."""
-    plate = "background-color: #f4f4f4; border-radius: 3px; padding: 0px 3px;" if current_theme().name == "dark" else ""
+    plate = f"background-color: {GLYPH_PLATE}; border-radius: 3px; padding: 0px 3px;" if current_theme().name == "dark" else ""
     return f"QCheckBox {{ color: {colour}; font-weight: bold; {plate} }}"
 
 
