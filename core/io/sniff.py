@@ -40,8 +40,8 @@ def content_hint(path, fmt: str) -> str:
 
 
 #: byte-order marks of the UTF-16 and UTF-32 encodings (UTF-32 first: FF FE begins both)
-_WIDE_BOMS = ((b"\xff\xfe\x00\x00", "UTF-32"), (b"\x00\x00\xfe\xff", "UTF-32"), (b"\xff\xfe", "UTF-16"),
-              (b"\xfe\xff", "UTF-16"))
+_WIDE_BOMS = ((b"\xff\xfe\x00\x00", "utf-32"), (b"\x00\x00\xfe\xff", "utf-32"), (b"\xff\xfe", "utf-16"),
+              (b"\xfe\xff", "utf-16"))
 #: the formats whose readers take text only in ASCII or UTF-8 (the delimited text reader
 #: decodes UTF-16 and UTF-32 itself; LAS, LAZ and E57 are binary)
 _NARROW = ("ply", "pcd", "obj", "off", "vtk", "vtp", "ptx")  # not STL: a binary header may begin FF FE
@@ -59,9 +59,9 @@ def refuse_misread_text(path, fmt: str) -> None:
         return
     with open(path, "rb") as f:
         head = f.read(4096)
-    kind = next((name for bom, name in _WIDE_BOMS if head.startswith(bom)), None)
+    kind = wide_encoding(head)
     if kind is not None:
-        raise CloudFileError(path, f"is {kind} text (a PowerShell redirect writes it so); .{fmt} files are read as "
+        raise CloudFileError(path, f"is {kind.upper()} text (a PowerShell redirect writes it so); .{fmt} files are read as "
                                    "ASCII or UTF-8: save it as UTF-8 (or ASCII) text")
     if fmt in _LF_LINES and _cr_lines(head):
         raise CloudFileError(path, "has lines ending in CR alone (classic Mac OS); convert them to LF or CR LF line "
@@ -69,6 +69,11 @@ def refuse_misread_text(path, fmt: str) -> None:
     if fmt == "vtk" and head.startswith(b"\xef\xbb\xbf"):
         raise CloudFileError(path, "starts with a UTF-8 byte-order mark (a text editor's), which VTK's legacy reader "
                                    "does not take; save it without one")
+
+
+def wide_encoding(head: bytes) -> str | None:
+    """"utf-32" or "utf-16" where ``head`` begins with that encoding's byte-order mark, else None."""
+    return next((name for bom, name in _WIDE_BOMS if head.startswith(bom)), None)
 
 
 def _cr_lines(head: bytes) -> bool:

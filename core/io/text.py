@@ -23,6 +23,7 @@ import warnings
 import numpy as np
 
 from .cloud import CloudFileError, RawCloud, find_normals
+from .sniff import wide_encoding
 from .text_blocks import count_blocks, load_blocks
 from .text_head import guess_delimiter as _guess_delimiter
 from .text_head import header_names, token_hint
@@ -63,10 +64,9 @@ def _encoding(path) -> str:
         start = f.read(4096)
     if start.startswith(b"\xef\xbb\xbf"):
         return "utf-8-sig"
-    if start.startswith((b"\xff\xfe\x00\x00", b"\x00\x00\xfe\xff")):  # before UTF-16: FF FE begins both
-        return "utf-32"
-    if start.startswith((b"\xff\xfe", b"\xfe\xff")):
-        return "utf-16"
+    wide = wide_encoding(start)
+    if wide is not None:
+        return wide
     if b"\0" in start:
         kind = "UTF-16 text without a byte-order mark" if start[1::2].count(0) > len(start) // 4 else "binary data"
         raise CloudFileError(path, f"is not a text point cloud: it looks like {kind} (NUL bytes); "
