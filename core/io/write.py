@@ -77,14 +77,11 @@ def write_cloud(path: str | os.PathLike | BinaryIO, points: ArrayLike, *, normal
         if format is None:
             raise ValueError("format= is required when writing to a stream (e.g. format='csv')")
         fmt = resolve_format(pathlib.Path("<stream>"), format, WRITE_FORMATS, "writing")
-        columns = _columns(points, normals, fields)
-        _check_names_for(fmt, columns)
-        _WRITERS[fmt](path, columns)
+        _WRITERS[fmt](path, _columns_for(fmt, points, normals, fields))
         return path
     path = file_path(path)
     fmt = resolve_format(path, format, WRITE_FORMATS, "writing")
-    columns = _columns(points, normals, fields)
-    _check_names_for(fmt, columns)
+    columns = _columns_for(fmt, points, normals, fields)
     try:
         with atomic_write(path) as f:
             _WRITERS[fmt](f, columns)
@@ -153,6 +150,14 @@ def _field_columns(fields, n: int) -> list:
         raise ValueError(f"field names {', '.join(bad)} clash with x y z nx ny nz or with each other "
                          "(names are compared ignoring case)")
     return extra
+
+
+def _columns_for(fmt: str, points, normals, fields) -> list:
+    """The columns to write (:func:`_columns`), their names checked for ``fmt``
+    (:func:`_check_names_for`) before any file is opened."""
+    columns = _columns(points, normals, fields)
+    _check_names_for(fmt, columns)
+    return columns
 
 
 def _check_names_for(fmt: str, columns) -> None:
