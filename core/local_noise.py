@@ -42,7 +42,7 @@ import numpy as np
 
 from .kernels.pool import pooled_above, pooled_nanmeans
 from .scale import initial_k
-from .tuning import INITIAL_K0
+from .tuning import INITIAL_K0, JET_KS
 
 #: neighbours a point's noise is pooled over (the initial graph's width with k="auto")
 POOL = 40
@@ -61,8 +61,8 @@ FACTOR = 1.5
 MIN_SHARE = 0.01
 #: the pooling is skipped where fewer than MIN_SHARE / SCARCE of the points lie above its bound (:func:`_scarce`)
 SCARCE = 8
-#: the initial k a region may take (a factor ~sqrt(2) apart)
-LADDER = np.array([15, 20, 28, 40, 56, 80, 113, 160, 226, 320])
+#: the initial k a region may take (a factor ~sqrt(2) apart): the jets' sizes
+LADDER = np.asarray(JET_KS)
 
 
 def moving_bound(k_cloud) -> float:
@@ -113,10 +113,7 @@ def local_k(ratio, clean, pool, k_cloud, k_min, k_max, n_points) -> np.ndarray |
     own = np.where(above, initial_k(np.where(above, noise, 0.0), k_min, k_max, n_points), k_cloud)
     moved = own > FACTOR * k_cloud
     if moved.any():  # a region, not a scattered point or a thin band of bias: most of the pool moves too
-        share, _ = np.empty(len(moved)), np.empty(len(moved))
-        flags = moved.astype(np.float64)
-        pooled_nanmeans(flags, flags, np.ascontiguousarray(pool), share, _)
-        moved &= share > 0.5
+        moved &= pool_share(moved.astype(np.float64), pool) > 0.5
     if not moved.any():
         return None
     steps = LADDER[(LADDER >= low) & (LADDER <= high)]
@@ -127,6 +124,14 @@ def local_k(ratio, clean, pool, k_cloud, k_min, k_max, n_points) -> np.ndarray |
     small = levels[(counts < MIN_SHARE * len(out)) & (levels != k_cloud)]
     out[np.isin(out, small)] = k_cloud  # too few points for a region of their own
     return None if (out == k_cloud).all() else out
+
+
+def pool_share(flags, pool) -> np.ndarray:
+    """(M,) the mean of ``flags`` (N,) (1.0 or 0.0; NaN left out) over each row of ``pool``
+    (M, m): the share of a point's pool that does what it does (a region, not a stray point)."""
+    share, _ = np.empty(len(pool)), np.empty(len(pool))
+    pooled_nanmeans(flags, flags, np.ascontiguousarray(pool), share, _)
+    return share
 
 
 def _scarce(above) -> bool:

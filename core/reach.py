@@ -43,6 +43,7 @@ import numpy as np
 
 from . import kernels
 from .kernels.pool import MAX_POOL, pooled_nanmeans
+from .local_noise import pool_share
 from .normals import jet_normals
 from .tuning import COLLINEAR, JET_KS, THETA_REACH
 
@@ -80,9 +81,7 @@ def overreaching(wide, noise, rows, centres=None) -> np.ndarray:
     c = np.arange(len(rows)) if centres is None else centres
     flags = np.full(len(rows), np.nan)
     flags[c] = over
-    share, _ = np.empty(len(c)), np.empty(len(c))
-    pooled_nanmeans(flags, flags, np.ascontiguousarray(rows[c, :MAX_POOL]), share, _)
-    return over & (share > SHARE)
+    return over & (pool_share(flags, rows[c, :MAX_POOL]) > SHARE)
 
 
 def narrowed(pts, normals, ok, centres, noise, sizes, rows):
@@ -112,7 +111,7 @@ def narrowed(pts, normals, ok, centres, noise, sizes, rows):
 
 
 def sizes_below(k_init, k_min) -> np.ndarray:
-    """The sizes of :data:`core.tuning.JET_KS` (:data:`core.local_noise.LADDER`) above ``k_min`` and
+    """The sizes of :data:`core.tuning.JET_KS` (as :data:`core.local_noise.LADDER`) above ``k_min`` and
     below ``k_init``, widest first."""
     ladder = np.asarray(JET_KS)
     return ladder[(ladder > k_min) & (ladder < k_init)][::-1]
