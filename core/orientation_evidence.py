@@ -22,6 +22,7 @@ noise's own level swallows the chord test across the knife edge (no gate at all:
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from .kernels import sign_evidence as kern
 from .tuning import FOLD_TRUST
@@ -126,8 +127,6 @@ def thin_vote(points, normals, order, spread) -> float:
     distance to its 6th nearest count as its own sheet). On a thin part the other skin lies
     behind each point (the segment between the skins is inside the solid): > 0 when the skins
     face away from each other, outward. On one open sheet both sides are empty: ~0."""
-    from scipy.spatial import cKDTree
-
     pts = points[order]
     tree = cKDTree(pts)
     take = order[np.linspace(0, len(order) - 1, min(len(order), THIN_SAMPLES)).astype(np.int64)]
