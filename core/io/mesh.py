@@ -9,6 +9,7 @@ import warnings
 import numpy as np
 
 from .cloud import CloudFileError, RawCloud
+from .sniff import UTF8_BOM
 
 _STL_RECORD = np.dtype([("normal", "<f4", (3,)), ("vertices", "<f4", (3, 3)), ("attribute", "<u2")])
 #: ``vertex`` as the first word of a line (a solid named "vertex colours" is no vertex)
@@ -26,7 +27,7 @@ def read_obj(path) -> RawCloud:
     Normals come from faces' ``v//vn`` (or ``v/vt/vn``) indices; without those, ``vn``
     lines are used in order when there is one per vertex."""
     with open(path, encoding="latin-1") as f:
-        lines = f.read().removeprefix("\xef\xbb\xbf").splitlines()  # a UTF-8 BOM hid the first 'v'
+        lines = f.read().removeprefix(UTF8_BOM.decode("latin-1")).splitlines()  # a UTF-8 BOM hid the first 'v'
     v_lines, vn_lines, f_lines = [], [], []  # f_lines: (line index, #v so far, #vn so far)
     for i, line in enumerate(lines):
         parts = line.split(None, 1)
@@ -128,7 +129,7 @@ def read_stl(path) -> RawCloud:
     n = int.from_bytes(head[80:84], "little") if len(head) >= 84 else -1
     fits = n >= 0 and 0 <= size - (84 + 50 * n) < _STL_SLACK
     corners = None
-    if head.removeprefix(b"\xef\xbb\xbf").lstrip()[:5].lower() == b"solid" and not fits:  # a UTF-8 BOM: ASCII
+    if head.removeprefix(UTF8_BOM).lstrip()[:5].lower() == b"solid" and not fits:  # a UTF-8 BOM: ASCII
         corners = _read_stl_ascii(path)
         if not len(corners) and n >= 0 and size >= 84 + 50 * n:
             corners = None  # no ASCII vertices: a binary STL whose header begins with "solid"

@@ -18,6 +18,7 @@ import warnings
 import numpy as np
 
 from .cloud import CloudFileError, RawCloud, check_memory
+from .sniff import UTF8_BOM
 
 _KEYWORD = re.compile(rb"(ST)?(C)?(N)?(4)?(n)?OFF")
 #: bytes of the shortest vertex line, "0 0 0\n": a bound on the vertices a file can hold
@@ -62,7 +63,7 @@ def _content(f):
 
 def _header(path, lines) -> tuple[dict, int, int]:
     """The keyword's flags, the vertex and face counts, from the first content lines."""
-    first = next(lines, b"").removeprefix(b"\xef\xbb\xbf")
+    first = next(lines, b"").removeprefix(UTF8_BOM)
     if first[:3] == b"off":  # a lower-case plain keyword, as some writers spell it
         first = b"OFF" + first[3:]
     match = _KEYWORD.match(first)

@@ -23,6 +23,7 @@ from plyfile import PlyData, PlyElement, PlyListProperty, PlyParseError
 from .cloud import NORMAL_NAMES, CloudFileError, RawCloud, remaining_bytes
 from .ply_ascii import check_ascii_rows, declared as _declared, plural as _plural, read_ascii_vertex
 from .ply_types import refuse_repeated_names, restore_types, stand_in_types
+from .sniff import UTF8_BOM
 
 _PLY_DTYPES = {np.dtype(t) for t in ("i1", "u1", "i2", "u2", "i4", "u4", "f4", "f8")}
 #: how far to look for ``end_header`` before handing the file to plyfile as it is
@@ -66,7 +67,7 @@ def _parse_header(f, path):
         f.seek(0)
         stream = f
     else:
-        raw = raw[: end.end()].removeprefix(b"\xef\xbb\xbf")
+        raw = raw[: end.end()].removeprefix(UTF8_BOM)
         for lineno, line in enumerate(raw.splitlines(), start=1):
             if not line.isascii() and line.split()[:1] not in ([b"comment"], [b"obj_info"]):
                 raise CloudFileError(path, f"not a valid PLY header: line {lineno} "

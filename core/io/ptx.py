@@ -18,6 +18,7 @@ import os
 import numpy as np
 
 from .cloud import CloudFileError, RawCloud, Scan, check_memory, joined_scans
+from .sniff import UTF8_BOM
 
 #: bytes of the shortest possible point line, "0 0 0\n": a bound on the points a file can hold
 _MIN_LINE = 6
@@ -34,7 +35,7 @@ def read_ptx(path) -> RawCloud:
     size = os.path.getsize(path)
     scans = []
     with open(path, "rb") as f:
-        if f.read(3) != b"\xef\xbb\xbf":  # a UTF-8 byte-order mark (a text editor's) is skipped
+        if f.read(len(UTF8_BOM)) != UTF8_BOM:  # a UTF-8 byte-order mark (a text editor's) is skipped
             f.seek(0)
         reader = _Lines(f, path)
         while reader.skip_blank():

@@ -3,10 +3,14 @@ file is compressed or its extension names another format than its content."""
 
 from __future__ import annotations
 
+import codecs
 import re
 
 from .cloud import CloudFileError
 
+#: the UTF-8 byte-order mark (EF BB BF), which a text editor may put before a text file's
+#: first line: the readers of text formats skip it (the legacy VTK reader refuses it by name)
+UTF8_BOM = codecs.BOM_UTF8
 #: leading bytes -> the compression that writes them
 _COMPRESSED = {b"\x1f\x8b": "gzip", b"PK\x03\x04": "zip", b"BZh": "bzip2", b"\xfd7zXZ\x00": "xz",
                b"(\xb5/\xfd": "zstd", b"7z\xbc\xaf\x27\x1c": "7z"}
@@ -16,7 +20,7 @@ _CONTENT = (
     (re.compile(rb"LASF"), ("las", "laz"), "las"),
     (re.compile(rb"ASTM-E57"), ("e57",), "e57"),
     (re.compile(rb"# vtk DataFile"), ("vtk",), "vtk"),
-    (re.compile(rb"(\xef\xbb\xbf)?\s*(<\?xml[^>]*>\s*)?<VTKFile"), ("vtp", "vtk"), "vtp"),
+    (re.compile(b"(" + re.escape(UTF8_BOM) + rb")?\s*(<\?xml[^>]*>\s*)?<VTKFile"), ("vtp", "vtk"), "vtp"),
     (re.compile(rb"(#[^\n]*\n)*\s*VERSION\s+\.?\d"), ("pcd",), "pcd"),
     (re.compile(rb"(#[^\n]*\n)*\s*(ST)?C?N?4?n?OFF(\s|\d)"), ("off",), "off"),
 )
@@ -66,7 +70,7 @@ def refuse_misread_text(path, fmt: str) -> None:
     if fmt in _LF_LINES and _cr_lines(head):
         raise CloudFileError(path, "has lines ending in CR alone (classic Mac OS); convert them to LF or CR LF line "
                                    "endings (e.g. with dos2unix -c mac)")
-    if fmt == "vtk" and head.startswith(b"\xef\xbb\xbf"):
+    if fmt == "vtk" and head.startswith(UTF8_BOM):
         raise CloudFileError(path, "starts with a UTF-8 byte-order mark (a text editor's), which VTK's legacy reader "
                                    "does not take; save it without one")
 

@@ -23,16 +23,16 @@ import warnings
 import numpy as np
 
 from .cloud import CloudFileError, RawCloud, find_normals
-from .sniff import wide_encoding
+from .sniff import UTF8_BOM, wide_encoding
 from .text_blocks import count_blocks, load_blocks
 from .text_head import guess_delimiter as _guess_delimiter
 from .text_head import header_names, token_hint
 from .text_head import is_number as _is_number
 from .text_head import refuse_data_like as _refuse_data_like
 from .text_head import split as _split
+from .text_rows import write_rows
 
 _MAX_HEADER_LINES = 1000
-_CHUNK_ROWS = 100_000
 #: headerless columns are normals where, of the finite non-zero rows, this share has a
 #: length within _UNIT_TOL of 1 (colours 0-255 or 0-1, intensities do not)
 _UNIT_SHARE = 0.99
@@ -62,7 +62,7 @@ def _encoding(path) -> str:
     NUL bytes without a BOM are refused."""
     with open(path, "rb") as f:
         start = f.read(4096)
-    if start.startswith(b"\xef\xbb\xbf"):
+    if start.startswith(UTF8_BOM):
         return "utf-8-sig"
     wide = wide_encoding(start)
     if wide is not None:
@@ -258,15 +258,6 @@ def _unit_rows(block: np.ndarray) -> bool:
     return len(length) > 0 and np.count_nonzero(np.abs(length - 1.0) <= _UNIT_TOL) >= _UNIT_SHARE * len(length)
 
 
-def _row_format(values: np.ndarray) -> tuple[str, str]:
-    """(printf format, storage dtype): shortest round-trip floats, 9 digits for float32, integers."""
-    if values.dtype == bool or np.issubdtype(values.dtype, np.signedinteger):
-        return "%d", "i8"
-    if np.issubdtype(values.dtype, np.unsignedinteger):
-        return "%d", "u8"
-    return ("%.9g" if values.dtype == np.float32 else "%r"), "f8"
-
-
 def write_text(f, columns, *, delimiter: str, header: bool) -> None:
     """Write ``columns`` (list of (name, (N,) array)) as delimited lines.
 
@@ -281,11 +272,4 @@ def write_text(f, columns, *, delimiter: str, header: bool) -> None:
         f.write((delimiter.join(names) + "\n").encode())
     elif not plain:
         f.write(("# " + delimiter.join(names) + "\n").encode())
-    formats, dtypes = zip(*(_row_format(values) for _, values in columns))
-    line = delimiter.join(formats) + "\n"
-    table = np.empty(len(columns[0][1]), dtype=[(f"c{i}", dt) for i, dt in enumerate(dtypes)])
-    for i, (_, values) in enumerate(columns):
-        table[f"c{i}"] = values
-    for start in range(0, len(table), _CHUNK_ROWS):
-        rows = table[start : start + _CHUNK_ROWS].tolist()  # tuples of Python floats and ints
-        f.write("".join(map(line.__mod__, rows)).encode())
+    write_rows(f, [values for _, values in columns], delimiter)
