@@ -242,6 +242,9 @@ def _summary(res, name, elapsed, dst, out) -> None:
               + (f"; {oriented} of them oriented as estimated normals are (no neighbour has a file normal)"
                  if oriented else ""),
               file=out)
+    if repaired.get("use") == "signs":
+        print(f"file normals: rougher than the estimator's own (roughness {repaired['roughness']}), "
+              "used for their signs only", file=out)
     v = res.valid
     if v.any():
         for name in SUMMARY_FIELDS:

@@ -57,7 +57,9 @@ def estimate(
     normals : (N, 3) array_like, optional. Used as the initial normals (their signs are
         kept); otherwise weighted PCA (eqs. 13–14) estimates them. Rows a file left
         zero, NaN or inf are estimated from their neighbours and rows of another length
-        renormalised (``params["normals_repaired"]`` counts them).
+        renormalised (``params["normals_repaired"]`` counts them). With k="auto", normals
+        rougher than the estimator's own give only their signs
+        (:mod:`core.given_normals_check`; ``params["normals_repaired"]["use"]``).
     k : "auto" (default) or int. Neighbourhood size including the point itself (the paper
         uses 15). "auto" (NF/NR only) chooses k per point by a bias–variance rule, see
         :mod:`core.scale`; the result's ``k_point`` holds the choice. Unless set in
@@ -273,7 +275,7 @@ def prepare(pts, normals, plan, neighbours, report, *, cache=None, near=False, s
     if normals is None:
         init, repaired = run("initial", lambda: initial_normals(pts, fit_nb, plan, outlier, report, views)), None
     else:
-        init, repaired = run("initial", lambda: given_normals(pts, normals, nb, plan))
+        init, repaired = run("initial", lambda: given_normals(pts, normals, nb, plan, outlier))
     init, confidence, turn = run("orientation", lambda: orient_signs(pts, init, nb.take_indices(plan.k_initial), plan,
                                                                       rank=order.order, views=views, consistent=consistent))
     report(0.45, "orientation")

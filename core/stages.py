@@ -16,9 +16,11 @@ from .kernels.permute import put_rows
 from .border import border_of_valid, served_by
 from .neighbours import Neighbours, search_neighbours
 from .normal_repair import repair_normals
-from .initial_normals import Initial
+from .given_normals_check import max_roughness, roughness, signed_like
+from .initial_normals import Initial, initial_normals, initial_rows
 from .orientation import orient
 from .patch import Chunk
+from ._progress import Progress
 from .spatial_order import SpatialOrder, given_in_spatial_order
 from .wide_neighbours import search_in_spatial_order
 from .creases import crease_residuals, judge_creases as _creases
@@ -119,14 +121,30 @@ def outlier_scores(pts, idx) -> np.ndarray:
     return scores
 
 
-def given_normals(pts, normals, nb, plan) -> tuple[Initial, dict]:
+def given_normals(pts, normals, nb, plan, outlier) -> tuple[Initial, dict]:
     """The caller's (or file's) normals with unusable rows (zero, NaN, inf) estimated from
     their neighbours and unscaled ones renormalised (:mod:`core.normal_repair`), the rows no
     file normal decides (all, when none is usable) oriented "outward" as estimated ones are:
     whatever the orientation, which this cached stage does not depend on (:mod:`core.stage_cache`;
     the other modes re-orient every row). The counts go to ``params["normals_repaired"]``."""
     fixed, counts = repair_normals(pts, normals, *nb.take(plan.k_initial), orientation="outward", trust=plan.auto)
-    return Initial(fixed, np.isfinite(fixed).all(axis=1)), counts
+    init = Initial(fixed, np.isfinite(fixed).all(axis=1))
+    return judged_given(pts, init, nb, plan, outlier, counts) if plan.auto else (init, counts)
+
+
+def judged_given(pts, given: Initial, nb, plan, outlier, counts) -> tuple[Initial, dict]:
+    """With k="auto", the estimator's own initial normals (:func:`core.initial_normals.initial_normals`)
+    turned to the ``given`` ones' sides where the given ones are rougher than they
+    (:mod:`core.given_normals_check`), else ``given``; ``counts`` gains the verdict,
+    ``"use"``: "initial" or "signs", and the ``"roughness"`` it was read from."""
+    own = initial_normals(pts, nb, plan, outlier, Progress(None))
+    rough = roughness(pts, given.normals, own.normals, own.has_normal, *initial_rows(nb, own.k, outlier, plan))
+    use = "signs" if rough > max_roughness(own.k, plan.k_initial) else "initial"
+    counts = {**counts, "use": use, "roughness": round(rough, 3)}
+    if use == "initial":
+        return given, counts
+    normals, has_normal = signed_like(own.normals, own.has_normal, given.normals, nb.take_indices(plan.k_initial))
+    return own._replace(normals=normals, has_normal=has_normal), counts
 
 
 #: k="auto" with the caller's signs (kept, or facing viewpoints): beyond this share of points whose
