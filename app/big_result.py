@@ -27,6 +27,7 @@ from core.io.las_sample import sample_las
 from core.io.las_stream import open_las
 
 from . import framing
+from .background_job import Relay
 from .jobs import lower_priority
 from .fields import compute_fields
 from .request import EstimateRequest
@@ -128,7 +129,7 @@ def _spacing(points) -> float:
     return float(mean_spacing(points))
 
 
-class _Relay(QObject):
+class _Relay(Relay):
     done = Signal(int, object)  # generation, EstimateOutput
     failed = Signal(int, str)
 
@@ -156,9 +157,8 @@ class BigResultView(QObject):
         self.overview: EstimateOutput | None = None
         self.thread: threading.Thread | None = None  # the read under way (or the last one)
         self._gen = 0
-        self._relay = _Relay()  # parentless: a late answer after the window closed reaches nobody
-        self._relay.done.connect(self._on_read)
-        self._relay.failed.connect(self._on_failed)
+        # parentless (app.background_job): a late answer after the window closed reaches nobody
+        self._relay = _Relay(done=self._on_read, failed=self._on_failed)
         self._settle = QTimer(self)
         self._settle.setSingleShot(True)
         self._settle.setInterval(SETTLE_MS)

@@ -18,7 +18,7 @@ from PySide6.QtCore import QObject, Signal, Slot
 
 import core.io
 
-from .jobs import JobThread
+from .background_job import Relay, RelayedJobs
 
 __all__ = ["ResultExporter", "EXPORT_WAIT_S"]
 
@@ -26,7 +26,7 @@ __all__ = ["ResultExporter", "EXPORT_WAIT_S"]
 EXPORT_WAIT_S = 300.0
 
 
-class _Relay(QObject):
+class _Relay(Relay):
     written = Signal(object, object)  # tag, the path written
     failed = Signal(object, object, str)  # tag, exception, traceback
 
@@ -40,10 +40,8 @@ class ResultExporter(QObject):
 
     def __init__(self, parent: QObject | None = None):
         super().__init__(parent)
-        self._relay = _Relay()  # parentless: may be emitted on after we are gone
-        self._relay.written.connect(self._on_written)
-        self._relay.failed.connect(self._on_failed)
-        self._jobs: JobThread | None = None
+        relay = _Relay(written=self._on_written, failed=self._on_failed)
+        self._jobs = RelayedJobs("darboux-export", relay, lazy=True)  # the thread starts with the first write
         self.pending = 0  # writes asked and not yet answered
 
     @property
@@ -52,10 +50,8 @@ class ResultExporter(QObject):
 
     def write(self, path: Path, result, tag=None) -> None:
         """Write ``result`` (a frozen core result) to ``path`` on the job thread."""
-        if self._jobs is None:
-            self._jobs = JobThread("darboux-export")
         self.pending += 1
-        relay = self._relay
+        relay = self._jobs.relay
 
         def job():
             try:
@@ -79,9 +75,4 @@ class ResultExporter(QObject):
 
     def shutdown(self, timeout: float = EXPORT_WAIT_S) -> bool:
         """Let the writes asked end (up to ``timeout`` s); whether they did."""
-        for signal in (self._relay.written, self._relay.failed):
-            try:
-                signal.disconnect()
-            except (RuntimeError, TypeError):
-                pass
-        return self._jobs is None or self._jobs.stop(timeout)
+        return self._jobs.shutdown(timeout)

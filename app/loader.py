@@ -14,7 +14,7 @@ from PySide6.QtCore import QObject, Signal, Slot
 
 import core.io
 
-from .jobs import JobThread
+from .background_job import Relay, RelayedJobs
 from .fields import prepare_sampling
 from .source import display_name, load_file, make_shape
 
@@ -28,7 +28,7 @@ class LoadTicket:
         self.gen, self.label, self.path, self.remember = gen, label, path, remember
 
 
-class _Relay(QObject):
+class _Relay(Relay):
     done = Signal(object, object)  # ticket, CloudSource
     failed = Signal(object, str, str)  # ticket, message, detail
 
@@ -44,22 +44,19 @@ class CloudLoader(QObject):
     def __init__(self, parent: QObject | None = None):
         super().__init__(parent)
         self._gen = 0
-        self._relay = _Relay()  # parentless: may be emitted on after we are gone
-        self._relay.done.connect(self._on_done)
-        self._relay.failed.connect(self._on_failed)
-        self._jobs = JobThread("darboux-load")
+        self._jobs = RelayedJobs("darboux-load", _Relay(done=self._on_done, failed=self._on_failed))
         self.pending: LoadTicket | None = None
 
     def open_file(self, path, *, remember: bool = True) -> LoadTicket:
         path = os.fsdecode(path)  # bytes names too (undecodable bytes as surrogate escapes)
         ticket = self._ticket(display_name(path), path, remember)
-        relay = self._relay
+        relay = self._jobs.relay
         self._jobs.put(lambda: _run(relay, ticket, lambda: load_file(ticket.path), file=True))
         return ticket
 
     def make_shape(self, name: str, n: int) -> LoadTicket:
         ticket = self._ticket(f"{name} ({n:,} pts)")
-        relay = self._relay
+        relay = self._jobs.relay
         self._jobs.put(lambda: _run(relay, ticket, lambda: make_shape(name, n)))
         return ticket
 
@@ -70,12 +67,7 @@ class CloudLoader(QObject):
 
     def shutdown(self, timeout: float = 0.3) -> bool:
         self.pending = None
-        for signal in (self._relay.done, self._relay.failed):
-            try:
-                signal.disconnect()
-            except (RuntimeError, TypeError):
-                pass
-        return self._jobs.stop(timeout)
+        return self._jobs.shutdown(timeout)
 
     def _ticket(self, label, path=None, remember=False) -> LoadTicket:
         self._gen += 1

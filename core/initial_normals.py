@@ -11,8 +11,7 @@ import numpy as np
 
 from . import anchors, kernels, local_noise, plane_spread, reach, scale, tuning
 from .kernels.knn import unflagged_first
-from .normals import jet_normals, pca_normals
-from .tuning import COLLINEAR, THETA_REACH
+from .normals import jet_normals, pca_jet_at, pca_normals
 
 
 class Initial(NamedTuple):
@@ -151,11 +150,7 @@ def _at_levels(pts, nb, plan, outlier, levels, init, refused, smalls) -> tuple[I
     for k in np.unique(levels[levels != init.k]):  # above the cloud's (core.local_noise), so above plan.k_initial
         c = np.flatnonzero(levels == k)
         idx, dist, clean = _level_rows(nb, c, int(k), outlier, plan)
-        n_c, ok_c = np.empty((len(c), 3)), np.empty(len(c), dtype=bool)
-        kernels.pca_normals_at(pts, c, idx, dist, THETA_REACH, COLLINEAR, n_c, ok_c)
-        wide = np.zeros(len(c))
-        if plan.initial == "jet":
-            n_c, wide = jet_normals(pts, n_c, ok_c, idx, dist, centres=c)
+        n_c, ok_c, wide = pca_jet_at(pts, c, idx, dist, jet=plan.initial == "jet")
         spread = np.empty(len(c))
         kernels.normal_spread(small, idx, spread)
         n_c, _, folded = unfolded(n_c, small[c], spread, clean, pts=pts, small_rows=idx_p[c])

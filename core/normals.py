@@ -35,6 +35,14 @@ def pca_normals(points, idx, dist, *, progress=None):
     return normals, ok
 
 
+def pca_normals_at(points, centres, idx, dist):
+    """:func:`pca_normals` (eqs. 13-14) of the ``centres`` (M,) only, on their rows ``idx``,
+    ``dist`` (M, k): ``(normals (M, 3), ok (M,))``."""
+    normals, ok = np.empty((len(centres), 3)), np.empty(len(centres), dtype=bool)
+    kernels.pca_normals_at(points, centres, idx, dist, THETA_REACH, COLLINEAR, normals, ok)
+    return normals, ok
+
+
 def _run(centres):
     """A slice for sorted distinct ``centres`` that are one run of indices, else ``centres``."""
     if len(centres) and centres[-1] - centres[0] == len(centres) - 1:
@@ -74,3 +82,14 @@ def jet_normals(points, normals, ok, idx, dist, *, centres=None, progress=None):
         if progress is not None:
             progress(min(len(rows), start + _CHUNK) / max(len(rows), 1), "normals")
     return out, height
+
+
+def pca_jet_at(points, centres, idx, dist, *, jet=True):
+    """The initial normals of the ``centres`` (M,) on their rows ``idx``, ``dist`` (M, k):
+    :func:`pca_normals_at`, refined by :func:`jet_normals` if ``jet``. Returns ``(normals
+    (M, 3), ok (M,), height (M,))``, ``height`` the 2-jets' residual (zeros without jets)."""
+    normals, ok = pca_normals_at(points, centres, idx, dist)
+    height = np.zeros(len(centres))
+    if jet:
+        normals, height = jet_normals(points, normals, ok, idx, dist, centres=centres)
+    return normals, ok, height

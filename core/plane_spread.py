@@ -31,7 +31,8 @@ import numpy as np
 from . import kernels
 from .kernels.spread import curve_shares, plane_spread, weighted_plane_spread
 from .linalg import tangent_basis
-from .tuning import COLLINEAR, FOLD_FLAT, INITIAL_JET_PIVOT, THETA_REACH, THIN_SPREAD
+from .normals import pca_normals_at
+from .tuning import FOLD_FLAT, INITIAL_JET_PIVOT, THETA_REACH, THIN_SPREAD
 
 
 def spreads(pts, normals, nb, k, centres=None) -> np.ndarray:
@@ -145,8 +146,7 @@ def _determine(pts, normals, nb, todo, ks) -> None:
     rows = _CandidateRows(nb, max(ks, default=0))
     for cand in ks:
         idx, dist = rows(todo, cand)
-        frame, has = np.empty((len(todo), 3)), np.empty(len(todo), dtype=bool)
-        kernels.pca_normals_at(pts, todo, idx, dist, THETA_REACH, COLLINEAR, frame, has)
+        frame, has = pca_normals_at(pts, todo, idx, dist)
         found, good, tilts = _jets(pts, todo, idx, dist, frame, has)
         normals[todo[tilts]] = found[tilts]  # where the jet is within its noise of the PCA plane, that is kept
         todo = todo[~good]
@@ -176,8 +176,8 @@ def _widen(pts, normals, nb, thin, ks, line, sheet, small) -> None:
     for cand in ks:
         idx, dist = rows(thin, cand)
         idx.flags.writeable = False  # the compiled signature :func:`spreads` uses
-        found, has, spread = np.empty((len(thin), 3)), np.empty(len(thin), dtype=bool), np.empty(len(thin))
-        kernels.pca_normals_at(pts, thin, idx, dist, THETA_REACH, COLLINEAR, found, has)
+        found, has = pca_normals_at(pts, thin, idx, dist)
+        spread = np.empty(len(thin))
         before = normals[thin]
         normals[thin] = found
         plane_spread(pts, normals, thin, idx, np.arange(len(thin)), np.full(len(thin), cand), spread)

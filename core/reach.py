@@ -41,11 +41,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import kernels
 from .kernels.pool import MAX_POOL, pooled_nanmeans
 from .local_noise import pool_share
-from .normals import jet_normals
-from .tuning import COLLINEAR, JET_KS, THETA_REACH
+from .normals import pca_jet_at
+from .tuning import JET_KS
 
 #: a 2-jet's residual on the wide neighbourhood may be this many times the noise its 15
 #: nearest measure and still count as noise. The ratio, noise alone (the 6000-point hold-out
@@ -99,9 +98,7 @@ def narrowed(pts, normals, ok, centres, noise, sizes, rows):
         if not len(at):
             break
         idx, dist = rows(centres[at], int(k))
-        n_c, ok_c = np.empty((len(at), 3)), np.empty(len(at), dtype=bool)
-        kernels.pca_normals_at(pts, centres[at], idx, dist, THETA_REACH, COLLINEAR, n_c, ok_c)
-        n_c, h_c = jet_normals(pts, n_c, ok_c, idx, dist, centres=centres[at])
+        n_c, ok_c, h_c = pca_jet_at(pts, centres[at], idx, dist)
         with np.errstate(invalid="ignore"):
             fits = ok_c & (h_c <= GROWTH * noise[at])
         take = at[fits]
