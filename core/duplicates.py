@@ -10,7 +10,8 @@ every copy its place's answer (:func:`expand`); ``params["duplicates"]`` counts 
 Exact copies are found before the search (:func:`find_duplicates`: a hash table of the
 coordinates, :func:`core.kernels.repeats.any_repeated`, 25 ms at 1M points), near ones on
 its graph (:func:`near_copies`), places of more near copies than a neighbourhood holds as
-isolated balls (:func:`_isolated_clumps`). Given normals are the first copy's.
+isolated balls (:func:`_isolated_clumps`), and clouds of clumps jittered 1e-3 to 0.1 of their
+spacing (stacked frames) at the clumps' means (:mod:`core.clumps`). Given normals are the first copy's.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
+from .clumps import screened, stacked_places
 from .kernels.repeats import any_repeated, coordinate_hashes
 from .neighbours import Neighbours
 from .tuning import NEAR_COPY, NEAR_COPY_SHARE
@@ -45,8 +47,8 @@ class NearCopies(Exception):
 
 class Merged(NamedTuple):
     """The distinct positions of a cloud: ``points`` (M, 3) in the order of their first
-    copy, ``first`` (M,) the caller's index of that copy, ``inverse`` (N,) the distinct
-    position of every caller's point."""
+    copy (a clump's mean, :mod:`core.clumps`), ``first`` (M,) the caller's index of that
+    copy, ``inverse`` (N,) the distinct position of every caller's point."""
 
     points: np.ndarray
     first: np.ndarray
@@ -91,23 +93,34 @@ def _merge(pts: np.ndarray) -> Merged | None:
     return Merged(pts[first], first, inverse)
 
 
-def near_copies(idx: np.ndarray, dist: np.ndarray, points: np.ndarray, rank=None) -> Merged | None:
+def near_copies(idx: np.ndarray, dist: np.ndarray, points: np.ndarray, rank=None, *,
+                spatial: bool = False) -> Merged | None:
     """Places of points nearer each other than :data:`core.tuning.NEAR_COPY` of their
     neighbourhood radius (the last column of ``dist``), from a kNN graph ``idx`` (N, k) of
     ``points`` (its point first), and places of more copies than the graph reaches
     (:func:`_isolated_clumps`); or None when there are none, or only twins of fewer than
     :data:`core.tuning.NEAR_COPY_SHARE` of the points (no place of three or more). Such
     points are connected into places; a place is its first point's (lowest ``rank``, the
-    caller's index of each row, default the row) coordinates. ``first`` and ``inverse`` are
+    caller's index of each row, default the row) coordinates. A cloud of clumps (stacked
+    frames, :mod:`core.clumps`) gives its clumps' means as places, its copy nearest the mean
+    first; clumps of more copies than ``idx`` holds are screened for only where ``points``
+    are in ``spatial`` order (rows beside a row are near it). ``first`` and ``inverse`` are
     in rows of ``points``."""
     if idx.shape[1] < 2:
         return None
+    rank = np.arange(len(points)) if rank is None else np.asarray(rank)
+    wide = screened(idx, points, spatial)  # a cloud of clumps (core.clumps), else copies within NEAR_COPY
+    places = stacked_places(points, rank, wide) if wide else None
+    return _near_places(idx, dist, points, rank) if places is None else Merged(*places)
+
+
+def _near_places(idx, dist, points, rank) -> Merged | None:
+    """:func:`near_copies` of copies within :data:`core.tuning.NEAR_COPY` of the radius."""
     span, k = _span(points), idx.shape[1]
     inside, wide, typical = _clumped(dist[:, -1], span)
     if wide:
         idx, dist = _wider(points, CLUMP_WIDER * idx.shape[1])
     close = dist[:, 1:] < NEAR_COPY * dist[:, -1:]
-    rank = np.arange(len(points)) if rank is None else np.asarray(rank)
     # a copy lies within NEAR_COPY of the typical radius; where that measures nothing, of the
     # spacing of as many places as points on a surface across the cloud (below any surface's)
     largest = NEAR_COPY * (typical if typical > 0.0 else span / np.sqrt(len(points)))

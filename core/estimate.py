@@ -294,13 +294,13 @@ def _near_copies(pts, nb, order: SpatialOrder, plan) -> None:
     """Raise :class:`core.duplicates.NearCopies` (places in the caller's rows of ``pts``)
     if the graph ``nb`` (on the points in ``order``) shows points on top of others."""
     idx, dist = nb.take(plan.k_initial)
-    found = near_copies(idx, dist, nb.points, rank=order.order)
+    found = near_copies(idx, dist, nb.points, rank=order.order, spatial=order.order is not None)
     if found is None:
         return
-    if order.order is not None:  # rows of the sorted points -> the caller's
+    if order.order is not None:  # rows of the sorted points -> the caller's (a place: its copies' mean, core.clumps)
         inverse = np.empty_like(found.inverse)
         inverse[order.order] = found.inverse
-        found = Merged(pts[order.order[found.first]], order.order[found.first], inverse)
+        found = Merged(found.points, order.order[found.first], inverse)
     raise NearCopies(found)
 
 
