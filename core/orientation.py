@@ -9,7 +9,8 @@ every kNN edge carries a signed evidence that also reads the chord between the p
 gap, a thin part or a crease it is the side of the chord each normal faces, its offsets
 gated by the noise (:mod:`core.orientation_evidence`: a fold does not widen the gate). Signs are
 fixed along the maximum spanning forest of |evidence| (Kruskal with a parity
-union-find), except that two parts of :data:`core.tuning.VOTE_SIZE` points or more are
+union-find; two registered copies of one surface are read as such where they cross:
+:mod:`core.double_scan`), except that two parts of :data:`core.tuning.VOTE_SIZE` points or more are
 joined by the summed evidence of all the edges between them, not by their strongest
 one (:func:`core.kernels.sign_evidence.voted_signs`: one wrong edge on a plate's rim
 flipped its whole other side, 50 % agreement at k="auto"), then every component is turned outward by its points farthest from the
@@ -28,12 +29,12 @@ import numpy as np
 
 from .kernels import patches
 from .kernels import sign_evidence as kern
-from .kernels.union_find import signed_forest
+from .double_scan import choose_reading, signed_reading
 from .orientation_evidence import GATE, ORIENT_K, TRUST_FLOOR  # noqa: F401  (re-exported)
 from .orientation_evidence import FAR_WEAK, THIN_MIN, THIN_MIN_POINTS, thin_vote
 from .orientation_evidence import edge_evidence as _evidence
 from .part_joins import join_parts
-from .tuning import PATCH_COS, PATCH_MAX, PATCH_ROUNDS, PATCH_TILT, PATCH_TRUST, RESETTLE_K, VOTE_GROWTH, VOTE_SIZE
+from .tuning import PATCH_COS, PATCH_MAX, PATCH_ROUNDS, PATCH_TILT, PATCH_TRUST, RESETTLE_K
 
 #: the points of a component that vote on its sign: its outer half by distance from the
 #: cloud's centre (where the surface faces away from it), read from a histogram of the
@@ -114,20 +115,20 @@ def orient(points, normals, idx, mode="outward", *, ok=None, rank=None, trust=Fa
     rank = np.arange(n) if rank is None else np.asarray(rank, dtype=np.int64)
     if isinstance(mode, str) and mode != "keep":  # the signs are decided here: ties go by place, not index
         rank = geometric_rank(pts, rank)
-    spread = np.empty(n)
+    spread, flat = np.empty(n), np.empty(n)
     # Hoppe's term weighted by the raw chord offsets (as resettle's) on the integer-k normals: a thin rim's
     # inflated gate had it vote the two faces apart (1:1:0.1 ellipsoid, k = 15); k="auto" (``trust``)
     # keeps the gated weight (raw there cost the 2-5 spacing wedge 0.05 % of its face share at seed 4)
-    ev, first = _evidence(pts, nrm, graph, ok, rank, trust=trust, raw_weight=not trust, spread=spread, ring=idx)
+    ev, first = _evidence(pts, nrm, graph, ok, rank, trust=trust, raw_weight=not trust, spread=spread, ring=idx,
+                          flat=flat)
     sign = np.ones(n)
     if not isinstance(mode, str):
         sign[np.einsum("ij,ij->i", nrm, np.asarray(mode, dtype=float) - pts) < 0] = -1.0
     elif mode != "keep":
         rows = np.empty(n, dtype=np.int64)
         rows[rank] = np.arange(n)
-        edges = kern.strongest_first(ev, first, SORT_LEVELS, rows, graph)
-        flip = np.zeros(n, dtype=np.int8)
-        roots = kern.voted_signs(edges, signed_forest(n), flip, rank, VOTE_SIZE, VOTE_GROWTH)
+        ev, flip, roots = choose_reading(pts, nrm, ev, (graph, first, rows, rank), spread=spread, weight=flat,
+                                         levels=SORT_LEVELS)
         sign[flip == 1] = -1.0
         labels = np.where(ok, _numbered(roots), -1)
         group, parity = join_parts(pts, nrm * sign[:, None], labels, spread, rank, GATE)
@@ -213,8 +214,10 @@ def resettle(points, normals, idx, mode, *, ok=None, trust=False):
         nrm = np.where(ok[:, None], nrm, 0.0)
     graph = idx[:, :RESETTLE_K]  # a view in its own int type (an int64 copy: 229 MiB at 1M points)
     n = len(pts)
-    flat = np.empty(n)
-    ev, _ = _evidence(pts, nrm, graph, ok, np.arange(n), want_first=False, trust=trust, raw_weight=True, flat=flat, ring=idx)
+    flat, spread = np.empty(n), np.empty(n)
+    ev, _ = _evidence(pts, nrm, graph, ok, np.arange(n), want_first=False, trust=trust, raw_weight=True, flat=flat,
+                      ring=idx, spread=spread)
+    ev = signed_reading(pts, nrm, graph, ev, spread=spread, weight=flat)  # a double scan's signs: its reading
     sign = np.ones(n)
     confidence = np.empty(n)
     kern.agreement(ev, graph, np.zeros(n, dtype=np.int8), ok, confidence)
