@@ -23,7 +23,7 @@ import tempfile
 from pathlib import Path
 
 #: the files that define compiled kernels; any change to one of them changes the cache key
-_KERNEL_SOURCES = ("kernels/*.py", "gauss_bonnet.py")
+_KERNEL_SOURCES = ("kernels/*.py", "gauss_bonnet.py", "io/float_repr.py")
 
 #: a cache directory given by the environment (the user's, or a parent process's choice)
 _GIVEN = os.environ.get("NUMBA_CACHE_DIR")

@@ -351,6 +351,8 @@ def _result(pts, kept, plan, *, stages, neighbours, repaired) -> CurvatureResult
         normals_repaired=repaired,
         jet_fraction=float(kc.on_jet.mean()),
     )
+    if marks.volumetric is not None:  # k="auto": points on no surface at any scale, made invalid (core.volumetric)
+        params["volumetric"] = int(np.count_nonzero(marks.volumetric))
     fitted = np.where(fit.degree > 0, fit.degree.astype(np.int64), plan.options.get("degree", -1))  # a fit may fall a degree
     degree = np.where(kc.on_jet, JET_DEGREE if kc.jet_degree is None else kc.jet_degree, fitted)
     e1, e2 = signed_directions(fit.e1, fit.e2)
