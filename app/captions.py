@@ -92,13 +92,23 @@ def status_line(out) -> str:
     border = getattr(res, "border", None)
     n_border = 0 if border is None else int(np.count_nonzero(border))
     text += f"  ·  {n_border:,} on a border (grey)" if n_border else ""
-    repaired = (getattr(res, "params", None) or {}).get("normals_repaired") or {}
-    fixed = repaired.get("unusable", 0) + repaired.get("renormalised", 0)
-    text += f"  ·  {fixed:,} file normals repaired" if fixed else ""
-    copies = (getattr(res, "params", None) or {}).get("duplicates", 0)
-    text += f"  ·  {copies:,} duplicates merged" if copies else ""
+    text += _params_text(getattr(res, "params", None) or {})
     text += f"  ·  {out.elapsed:.2f} s" + _reused_text(out)
     return text
+
+
+def _params_text(params) -> str:
+    """What the estimate did to the cloud it was given: file normals repaired or used for
+    their signs only (core.given_normals_check), points in a volume (core.volumetric),
+    duplicates merged."""
+    repaired = params.get("normals_repaired") or {}
+    fixed = repaired.get("unusable", 0) + repaired.get("renormalised", 0)
+    text = f"  ·  {fixed:,} file normals repaired" if fixed else ""
+    text += "  ·  file normals rough: used for their signs only" if repaired.get("use") == "signs" else ""
+    volume = params.get("volumetric", 0)
+    text += f"  ·  {volume:,} on no surface (a volume)" if volume else ""
+    copies = params.get("duplicates", 0)
+    return text + (f"  ·  {copies:,} duplicates merged" if copies else "")
 
 
 #: How the status line names the stages re-used from the previous estimate (core.stage_cache).

@@ -63,3 +63,29 @@ def test_duplicate_points_are_counted_and_coloured_like_their_place(make_window,
     res = w.output.result
     np.testing.assert_array_equal(res.mean[2000:], res.mean[:2000])
     assert abs(np.median(res.mean) - 1.0) < 0.02
+
+
+def test_rough_file_normals_and_a_volume_are_named_in_the_status_bar(make_window, tmp_path):
+    """A file whose normals are cruder than the estimator's own (PCA on 6 neighbours, noisy
+    torus) beside a Gaussian blob of points: the status bar says the file normals gave only
+    their signs and how many points lie on no surface."""
+    from scipy.spatial import cKDTree
+
+    from core import shapes
+    from core.io import write_cloud
+
+    s = shapes.torus(3000, seed=2)
+    rng = np.random.default_rng(2)
+    pts = s.points + rng.normal(scale=0.03, size=s.points.shape)
+    idx = cKDTree(pts).query(pts, 6)[1]
+    q = pts[idx] - pts[idx].mean(axis=1, keepdims=True)
+    crude = np.linalg.eigh(np.einsum("nki,nkj->nij", q, q))[1][:, :, 0]
+    crude *= np.sign(np.einsum("ij,ij->i", crude, s.normals))[:, None]
+    blob = rng.normal(scale=0.3, size=(1500, 3)) + [0, 0, 6]
+    path = tmp_path / "scan.ply"
+    write_cloud(path, np.vstack([pts, blob]), normals=np.vstack([crude, np.tile([0.0, 0.0, 1.0], (1500, 1))]))
+    w = make_window(load_file(path))
+    text = w.status_label.text()
+    assert "file normals rough: used for their signs only" in text
+    volume = w.output.result.params["volumetric"]
+    assert volume >= 1400 and f"{volume:,} on no surface" in text
