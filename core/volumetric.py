@@ -14,6 +14,8 @@ most points of most clouds stop at), so the wider searches are made for the rest
 from __future__ import annotations
 
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from .kernels.surface_share import sees_surface
@@ -37,6 +39,9 @@ SURFACE_SHARE = (0.041, 0.036, 0.048, 0.064, 0.072, 0.111, 0.114, 0.117, 0.119, 
 #: it removes (the 15 nearest at 0.5 kept 17 and 52)
 CONSENSUS = 0.7
 CONSENSUS_K = 80
+#: the fewest points a volume's region holds: as many as the widest rung's neighbourhood
+#: (:func:`_regions_of_a_volume`)
+MIN_VOLUME = 320
 #: the rungs read on one fetch of rows (the widest of each; the narrower are their first columns)
 FETCHES = ((15,), (20, 28, 40), (56, 80), (113, 160), (226, 320))
 
@@ -57,6 +62,26 @@ def volumetric(points, nb) -> np.ndarray:
     near = np.setdiff1d(rows, at)  # unseen points' neighbours that a rung saw a surface at: a volume's chance
     at, rows = np.concatenate([at, near]), np.vstack([rows, search(near, rows.shape[1])]) if len(near) else rows
     out[at] = seen[rows].mean(axis=1) >= CONSENSUS
+    return _regions_of_a_volume(out, search)
+
+
+def _regions_of_a_volume(flagged, search) -> np.ndarray:
+    """``flagged`` where its points join (among their 15 nearest) in groups of at least
+    :data:`MIN_VOLUME` points: a small closed object (a sphere of 16-150 points) is enclosed by
+    the wider rungs' neighbourhoods and reads as a volume at all of them, as a volume's points
+    do; fewer points than the widest rungs hold cannot tell the two apart."""
+    at = np.flatnonzero(flagged)
+    if len(at) < MIN_VOLUME:
+        return np.zeros_like(flagged)
+    rows = search(at, min(JET_KS[0], len(flagged)))
+    place = np.full(len(flagged), -1, dtype=np.int64)
+    place[at] = np.arange(len(at))
+    inside = place[rows] >= 0
+    src = np.repeat(np.arange(len(at)), rows.shape[1])[inside.ravel()]
+    joins = coo_matrix((np.ones(len(src)), (src, place[rows][inside])), shape=(len(at), len(at)))
+    _, label = connected_components(joins, directed=False)
+    out = np.zeros_like(flagged)
+    out[at] = np.bincount(label)[label] >= MIN_VOLUME
     return out
 
 

@@ -114,3 +114,14 @@ def test_integer_k_is_the_papers_pipeline():
     res = core.estimate(pts, k=15)
     assert res.valid.all() and "volumetric" not in res.params
     assert volumetric(pts, res.neighbours).all()
+
+
+@pytest.mark.parametrize("n", [16, 60, 150, 300])
+def test_a_small_closed_object_is_no_volume(n):
+    """A sphere of 16-300 points, alone or beside a blob: the wider sizes enclose it and read
+    it as isotropic as a volume, but its region is smaller than a volume's (MIN_VOLUME)."""
+    ball = shapes.sphere(n, seed=n).points
+    blob = np.random.default_rng(n).normal(scale=0.5, size=(2000, 3)) + [0, 0, 10]
+    assert core.estimate(ball).params["volumetric"] == 0
+    res = core.estimate(np.vstack([ball, blob]))
+    assert not volumetric(res.points, res.neighbours)[:n].any() and res.valid[n:].mean() < 0.01
