@@ -20,15 +20,13 @@ what remains of a cubic's error is the bias of the terms it lacks, and a richer 
 removes it: a quartic on 20 neighbours (:data:`JET_DEGREES`) has 20-50x smaller H, K and
 e1 errors than the cubic on 15 on the hold-out surfaces of ``python -m core bench
 holdout``. The degree is chosen per point by the same intersection of confidence
-intervals, walking *down* in bias: the richer models, then the cubic at its chosen size;
-a model is kept while its Hessian's interval (sd from the noise measured apart) meets
-those of all the less biased models before it. Noise-free the intervals are narrow and
-the quartic stays; with real noise its interval (15 terms on 20 points) is wide and the
-walk ends at the cubic. Only points whose cubic stopped within the richer models' reach
-take part (where the cubic grew wider, noise, not bias, limits it). A richer model whose
-residual variance per degree of freedom exceeds the cubic's on 15 is skipped: its wider
-neighbourhood holds something no polynomial describes (an edge, a fold). (:mod:`core.kernels.jet_degree`,
-run inside the cubic's intervals on the same sums; ``res.degree_point`` holds the degree.)
+intervals, walking *down* in bias: the quartic on 20, 28, ... 113 neighbours, then the
+cubic at its chosen size; a model is kept while its Hessian's interval (sd from the noise
+measured apart) meets those of all before it. Noise-free the quartic stays at 20; at noise
+of 1e-4-3e-3 spacing it grows (on 20 it is too noisy); with more noise the walk ends at the cubic.
+Only points whose cubic stopped within the quartic's reach take part; a richer model whose residual
+variance per dof exceeds :data:`JET_MISFIT` times the cubic's ends the richer models (an edge, a
+fold). (:mod:`core.kernels.jet_degree`, on the cubic's sums; ``res.degree_point``: the degree.)
 
 **Shared at wide scales.** With noise nearly every jet grows to the largest size. Where
 k="auto"'s wide fits are shared (:mod:`core.anchors`), the rule runs at the anchors drawn
@@ -81,8 +79,8 @@ from .linalg import tangent_basis
 from .patch import Chunk
 from .tuning import (ANCHOR_REACH, AUTO_DEGREE, AUTO_KS, DEGREE_PIVOT, FOLD_COS, FOLD_FRACTION, FOLD_MIN_BAD, FOLD_NOISE,
                      GAMMA, INITIAL_K0, INITIAL_SHARE, JET_DEGREE, JET_GAMMA, JET_DEGREES, JET_KS, JET_QUIET, JET_REACH,
-                     JET_SCORE, NOISE_KS, NOISE_POOL, RCOND, JET_RCOND, JET_THIN_TILT, JET_TILT,
-                     ROUNDING_NOISE, WIDEN_SHARE)
+                     JET_DEGREE_GAMMA, JET_MISFIT, JET_SCORE, NOISE_KS, NOISE_POOL, RCOND, JET_RCOND, JET_THIN_TILT,
+                     JET_TILT, ROUNDING_NOISE, WIDEN_SHARE)
 
 __all__ = ["AUTO_DEGREE", "AUTO_KS", "GAMMA", "INITIAL_K0", "JET_KS", "JET_DEGREE", "JET_SCORE",
            "candidates", "choose_k", "noise_ratio", "initial_k", "jet_candidates", "noise_variance", "choose_jets",
@@ -337,10 +335,12 @@ def _jet_ici(nb, idx, usable, ks, frames, sigma2_h, deg, report, *, lead=None):
         report(0.2 + 0.8 * min(len(usable), start + _CHUNK) / max(len(usable), 1), "choosing k")
     chosen = out[0]
     if m < len(ks):
-        again = usable[(chosen[usable] < 0) | (chosen[usable] >= m - 2)]
-        for start in range(0, len(again), _CHUNK):
-            c = again[start:start + _CHUNK]
-            run(c, nb.rows(c, ks[-1])[0], ks)
+        again = (chosen[usable] < 0) | (chosen[usable] >= m - 2)
+        richer = usable[~again & (out[2][usable] == -2)], ks[:int(np.searchsorted(ks, deg.kmax, side="right"))]
+        for redo, sizes in ((usable[again], ks), richer):  # the cubic final, the quartic still growing: to its widest
+            for start in range(0, len(redo), _CHUNK):
+                c = redo[start:start + _CHUNK]
+                run(c, nb.rows(c, sizes[-1])[0], sizes)
     chosen[follow] = chosen[lead_of]
     alone = follow[(chosen[follow] < 0) & noisy[follow]]  # their anchor's rule failed: their own (not the sat-out)
     if len(alone):
@@ -358,7 +358,8 @@ def _degree_rule(ks, quiet):
     kd = np.array([k for _, k in models], dtype=np.int64)
     return jet_kernels.DegreeRule(np.ascontiguousarray(quiet, dtype=np.bool_), degrees, kd,
                                   np.argsort(kd, kind="stable").astype(np.int64), int(reach),
-                                  int(max([JET_DEGREE, *degrees])), int(max([0, *kd])))
+                                  int(max([JET_DEGREE, *degrees])), int(max([0, *kd])), float(JET_MISFIT),
+                                  float(JET_DEGREE_GAMMA))
 
 
 def aligned_jets(jets, normals):

@@ -220,23 +220,19 @@ NOISE_KS = (15, 28)
 #: neighbours over which the residual variances are pooled (a point's own 15-neighbour
 #: fit has 5 degrees of freedom; pooling over 20 of them gives about 100)
 NOISE_POOL = 20
-#: interval width of the jet rule, in standard deviations. 3 intervals are tested at up to
-#: 8 sizes, so a textbook 2 rejects a size by chance at many points of a noisy cloud:
-#: measured on 7 stand-in surfaces at 0.1-0.5 spacing of noise, 3 left 5-15 % of the points
-#: at small k (errors x1.5-15), 5 none; noise-free, 5 and 3 choose the same.
+#: interval width of the jet rule, in standard deviations. 3 intervals are tested at up to 8 sizes, so a textbook 2
+#: rejects a size by chance at many points of a noisy cloud: measured on 7 stand-in surfaces at 0.1-0.5 spacing of
+#: noise, 3 left 5-15 % of the points at small k (errors x1.5-15), 5 none; noise-free, 5 and 3 choose the same.
 JET_GAMMA = 5.0
-#: where the measured noise (sigma over the radius s of 15 neighbours) is below this, the
-#: data are nearly noise-free and the position jet (which inherits no error of estimated
-#: normals) is the result; elsewhere the cubic normal field of NR, refined, averages the
-#: noise better: measured on 7 stand-ins (noise-free the jet is 2-30x better than NR at
-#: the same k; at 0.1-0.5 spacing NR is 1.2-1.8x better than the jet at the same k).
-#: Measured on the 13 hold-out and tuning surfaces of core.bench.holdout (6000 points):
-#: noise-free data measure 0-0.0003 (99th percentile), 0.01 spacing of noise 0.0017-0.0027
-#: (median), 0.02 spacing 0.0035-0.0051, 0.1 spacing ~0.023. The earlier 0.006 kept noise
-#: of 0.01-0.02 spacing on the cubic jet, where NR had 2.5-15x smaller H and K errors
-#: (torus at 0.01: H 0.0018 against 0.027); 0.001 (about 0.004 spacing) leaves a 3x
-#: margin over noise-free data. An outlier that raises a point's neighbours' residuals
-#: keeps them off the jet (the jet is not robust).
+#: where the measured noise (sigma over the radius s of 15 neighbours) is below this, the data are nearly noise-free and
+#: the position jet (which inherits no error of estimated normals) is the result; elsewhere the cubic normal field of
+#: NR, refined, averages the noise better: measured on 7 stand-ins (noise-free the jet is 2-30x better than NR at the
+#: same k; at 0.1-0.5 spacing NR is 1.2-1.8x better than the jet at the same k). Measured on the 13 hold-out and tuning
+#: surfaces of core.bench.holdout (6000 points): noise-free data measure 0-0.0003 (99th percentile), 0.01 spacing of
+#: noise 0.0017-0.0027 (median), 0.02 spacing 0.0035-0.0051, 0.1 spacing ~0.023. The earlier 0.006 kept noise of
+#: 0.01-0.02 spacing on the cubic jet, where NR had 2.5-15x smaller H and K errors (torus at 0.01: H 0.0018 against
+#: 0.027); 0.001 (about 0.004 spacing) leaves a 3x margin over noise-free data. An outlier that raises a point's
+#: neighbours' residuals keeps them off the jet (the jet is not robust).
 JET_QUIET = 0.001
 #: the least noise (over s) the jet rule's intervals assume: float64 coordinates are rounded to ~1e-16 of their size, so
 #: no measured noise below this is real. A cube whose faces lie on the axes is exactly planar and measured 0, the same
@@ -250,30 +246,33 @@ ROUNDING_NOISE = 1e-12
 #: columns held (core.tuning.SEARCH_WIDTH): with noise most jets grow to the largest size
 #: (noise 0.2 spacing on a torus: 96 % at 226), noise-free nearly none do. Speed only.
 WIDEN_SHARE = 0.5
-#: ... but only where the 15 neighbours reach less than this fraction of a radius of
-#: curvature (s |k|max): on 1000 points of a torus (15 neighbours span 0.65 of the tube's
-#: radius) NR's cubic normal field at the NF rule's k has a quarter of the jet's H error,
-#: while on the 6000-point stand-ins (s |k| < 0.3) the jet at 15 wins noise-free.
+#: ... but only where the 15 neighbours reach less than this fraction of a radius of curvature (s |k|max): on 1000
+#: points of a torus (15 neighbours span 0.65 of the tube's radius) NR's cubic normal field at the NF rule's k has a
+#: quarter of the jet's H error, while on the 6000-point stand-ins (s |k| < 0.3) the jet at 15 wins noise-free.
 JET_REACH = 0.4
-#: in robust mode, points whose outlier score exceeds this stay out of the jets (which are
-#: least squares): 42 % of 3 % outliers 2-8 spacings off a torus score below 4 (the
-#: flag) and, left in, stopped their neighbours' rule early: H error x2.4 their clean
-#: baseline; x1.28 with 2.5, x1.26 with 2.0 (together with the k_init floor), x1.2 with 1.5
+#: in robust mode, points whose outlier score exceeds this stay out of the jets (which are least squares): 42 % of 3 %
+#: outliers 2-8 spacings off a torus score below 4 (the flag) and, left in, stopped their neighbours' rule early: H
+#: error x2.4 their clean baseline; x1.28 with 2.5, x1.26 with 2.0 (together with the k_init floor), x1.2 with 1.5
 JET_SCORE = 1.5
-#: polynomial degree of the position jets (noise-free, degree 2 at its best k lost 1.1-1.5x
-#: to degree 3 on the stand-ins, and picking the degree per point by the smaller variance lost too)
+#: polynomial degree of the position jets (noise-free, degree 2 at its best k lost 1.1-1.5x to degree 3 on the
+#: stand-ins, and picking the degree per point by the smaller variance lost too)
 JET_DEGREE = 3
-#: higher degrees the jet rule tries where the data are quiet (noise below JET_QUIET), each
-#: on the smallest of JET_KS with at least 5 neighbours more than its terms (a cubic has 10
-#: terms on 15; a quartic 15 on 20; a quintic 21 on 28). Noise-free, the cubic's error is
-#: the bias of the terms it lacks, and on the 7 hold-out surfaces (core.bench.holdout) a
-#: quartic on 20 neighbours had 20-50x smaller H, K and e1 errors than the cubic on 15, a
-#: quintic on 28 100-300x; with noise their variance is larger, so core.kernels.jet_degree
-#: takes them only while their confidence intervals say the cubic is biased. The quintic
-#: (5, 28) is left out for time: on a 100k-point torus it doubled the degree step (about
-#: half of NR k=15's time with it, a quarter without), and the quartic alone already beats
-#: every oracle of the hold-out race noise-free by 10x or more.
-JET_DEGREES = ((4, 20),)
+#: higher degrees the jet rule tries where the data are quiet (noise below JET_QUIET), as (degree, neighbours), walked
+#: in order. Noise-free, the cubic's error is the bias of the terms it lacks: on the 7 hold-out surfaces a quartic on
+#: 20 neighbours had 20-50x smaller H, K and e1 errors than the cubic on 15 (a quintic on 28 100-300x, left out for
+#: time). core.kernels.jet_degree takes them while their intervals agree: the quartic grows as the cubic does. Until
+#: 2026-12-07 the quartic on 20 only: at noise of 1e-4-3e-3 spacing (float32 far from the origin, rounded exports) it
+#: is too noisy, the cubic grew to 40-80 with its quartic's bias (+1.5 % H on a sphere at 1e-3), and the default was
+#: 10-50x worse than noise-free or at 1e-2 (median |H| error / median |H|, 6 shapes: 1e-3 0.011-0.023 -> 0.001-0.004).
+JET_DEGREES = ((4, 20), (4, 28), (4, 40), (4, 56), (4, 80), (4, 113))
+#: a richer model whose residual variance per degree of freedom exceeds this many times the cubic's ends the richer
+#: models (the walk goes on to the cubic): its wider neighbourhood holds an edge or a fold. Until 2026-12-07 1: at noise
+#: of 1e-4 spacing both are noise on 5 degrees of freedom and the test a coin flip (77 % of a sphere fell to the cubic,
+#: H error x150); 10 ~ the 99th percentile of F(5, 5); an edge's misfit is orders of magnitude.
+JET_MISFIT = 10.0
+#: interval width (sd) of the richer models' walk: 5 (JET_GAMMA) let the quartic grow to where its bias is 5 sd, on a
+#: torus at 1e-3-3e-3 spacing of noise 1.3-1.5x the error of 3 (only quiet data walk; a chance stop costs a size)
+JET_DEGREE_GAMMA = 3.0
 #: with k="auto", refinement passes run only if NR (not the jet) fits at least this share of
 #: the points with noise (noise-free, 0.1 % of a 5000-point torus was left: 4 points whose
 #: mean turn let 2 passes through)

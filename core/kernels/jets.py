@@ -21,7 +21,7 @@ from numba import njit, prange
 
 from ._base import BLOCK, OPTS
 from .algebra import chol_solve, cholesky
-from .jet_degree import DegreeRule, degree_scratch, grow, jet_degrees, stash_cubic, walk
+from .jet_degree import DegreeRule, degree_scratch, grow, jet_degrees, start_chain, stash_cubic, walk
 from .jet_sums import P3, P5, _offsets, ring_sums
 from .scale import _folded, _local_reference
 
@@ -114,8 +114,10 @@ def jet_ici(f, ks, sigma2, rule, deg, chosen, coef, walked):
     Where ``deg.quiet[r]`` and the cubic stopped within ``deg.reach`` neighbours,
     ``walked[r]`` gets the answer of :func:`core.kernels.jet_degree.jet_degrees` for that
     cubic (a model index, len(deg.kd) for the cubic, -1 none; -1 also where it does not
-    run) and ``coef[r, :6]`` the chosen richer model's: the sums are of the richest degree
-    up to its size, the cubic's their leading block (:func:`core.kernels.jet_degree.grow`).
+    run; -2 where the richer models still agree at ``ks[-1]`` short of ``deg.kmax``: run it again
+    on more neighbours; past the first only where the cubic reached its size, as there) and
+    ``coef[r, :6]`` the chosen richer model's: the sums are of the richest degree up to its size,
+    the cubic's their leading block (:func:`core.kernels.jet_degree.grow`).
     """
     m = len(f.centres)
     for blk in prange((m + BLOCK - 1) // BLOCK):
@@ -139,16 +141,19 @@ def _ici_block(f, ks, sigma2, rule, deg, chosen, coef, walked, start, stop):
         acc[:] = 0.0
         bounds[0, :] = -math.inf
         bounds[1, :] = math.inf
+        start_chain(ds)
         chosen[r], prev = _ici_point(f, ks, sigma2[r], rule, deg, r, uvw, vecs, (G, L), bounds, ref, (acc, ds, ring))
         coef[r, :] = vecs[5, :P3]
         walked[r] = -1
         if chosen[r] < 0:
             coef[r, :] = math.nan
         elif deg.quiet[r] and len(deg.kd) > 0 and ks[chosen[r]] <= deg.reach:
-            if prev < deg.kmax:  # the cubic stopped short of the richer models: their sums completed
-                _offsets(f, r, prev, deg.kmax, uvw)
-                grow(uvw, prev, deg.kmax, deg, vecs[0], G, vecs[1], acc, sigma2[r], rule.rcond, ds)
-            walked[r] = walk(ds, len(deg.kd), chosen[r], rule.gamma, bounds)
+            top = min(deg.kmax, ks[-1])  # the neighbours held
+            if prev < top and ds.alive[0] and ks[chosen[r]] >= deg.kd[deg.by_k[0]]:  # see jet_degree.jet_degrees
+                _offsets(f, r, prev, top, uvw)
+                grow(uvw, prev, top, deg, vecs[0], G, vecs[1], acc, sigma2[r], rule.rcond, ds)
+            final = top == deg.kmax or not ds.alive[0] or ks[chosen[r]] < deg.kd[deg.by_k[0]]
+            walked[r] = walk(ds, deg, chosen[r], bounds) if final else -2
             if 0 <= walked[r] < len(deg.kd):
                 coef[r, :6] = ds.keep[walked[r]]
 

@@ -112,7 +112,7 @@ def test_the_intervals_run_the_degree_rule_on_their_own_sums_bit_for_bit():
     ran = quiet & (chosen >= 0) & (ks[np.maximum(chosen, 0)] <= deg.reach)
     assert (walked[~ran] == -1).all() and ran.sum() > n // 3
     sub = np.flatnonzero(ran)
-    g = kernels.Frames(f.points, f.normals, f.idx[sub, :20].copy(), f.kc[sub], f.h[sub], f.centres[sub], f.t1[sub],
+    g = kernels.Frames(f.points, f.normals, f.idx[sub, :deg.kmax].copy(), f.kc[sub], f.h[sub], f.centres[sub], f.t1[sub],
                        f.t2[sub], f.z[sub])
     two, coef6 = np.empty(len(sub), dtype=np.int64), np.empty((len(sub), 6))
     jets.jet_degrees(g, deg.degrees, deg.kd, ks[chosen[sub]], sigma2[sub], rule, two, coef6)

@@ -52,8 +52,8 @@ def test_noise_variance_is_not_fooled_by_curvature():
 def test_noise_free_ends_small_where_it_bends_noisy_wide_where_flat():
     torus = shapes.torus(4000, seed=2)
     _, k, _ = _choose(torus, 0.0)
-    # the cubic stops at its smallest size; the degree rule then takes the quintic on its own smallest size
-    assert np.median(k) == max(kd for _, kd in tuning.JET_DEGREES)
+    # the cubic stops at its smallest size; the degree rule then takes the quartic on its own smallest size
+    assert np.median(k) == min(kd for _, kd in tuning.JET_DEGREES)
     plane = shapes.plane(4000, seed=2)
     _, k_plane, _ = _choose(plane, 0.3)
     assert np.median(k_plane[plane.interior]) == scale.JET_KS[-1]
