@@ -167,7 +167,9 @@ def test_noise_free_cloud_searches_few_rows_wide(monkeypatch):
     monkeypatch.setattr(WidenableNeighbours, "rows", counting)
     res = estimate(pts)
     assert isinstance(res.neighbours, LazyNeighbours) and res.neighbours._made is None
-    assert sum(searched) < 0.05 * len(pts)
+    # 7.4 % (446 rows) since the quiet points' quartic walks 20..113 where the cubic reached 20
+    # (tuning.JET_DEGREES, 2026-12-07: tiny noise); 3 % before
+    assert sum(searched) < 0.10 * len(pts)
     top = plan(len(pts), k="auto").k_search
     assert res.neighbours.k_max == top and res.neighbours.indices.shape == (len(pts), top)
 
