@@ -265,11 +265,15 @@ def write_text(f, columns, *, delimiter: str, header: bool) -> None:
     comment line is written only when there are columns beyond x y z [nx ny nz], or normals
     the reader would not take for normals without it (not unit length, or none finite).
     """
+    f.write(header_line(columns, delimiter=delimiter, header=header))
+    write_rows(f, [values for _, values in columns], delimiter)
+
+
+def header_line(columns, *, delimiter: str, header: bool) -> bytes:
+    """The names line :func:`write_text` writes before the rows (b"" for plain x y z [nx ny nz])."""
     names = [name for name, _ in columns]
     plain = names == ["x", "y", "z"] or (names == ["x", "y", "z", "nx", "ny", "nz"] and
                                          _unit_rows(np.column_stack([v for _, v in columns[3:]]).astype(np.float64)))
     if header:
-        f.write((delimiter.join(names) + "\n").encode())
-    elif not plain:
-        f.write(("# " + delimiter.join(names) + "\n").encode())
-    write_rows(f, [values for _, values in columns], delimiter)
+        return (delimiter.join(names) + "\n").encode()
+    return b"" if plain else ("# " + delimiter.join(names) + "\n").encode()

@@ -13,21 +13,16 @@ import pytest
 
 from core.io import text_rows, write_cloud
 from core.io.sniff import UTF8_BOM
-from core.io.text import _unit_rows
+from core.io.text import header_line
 from core.io.write import _columns_for
 
 FORMATS = {"csv": (",", True), "xyz": (" ", False), "txt": (" ", False)}
 
 
 def reference_write_text(f, columns, *, delimiter: str, header: bool) -> None:
-    """The writer before the kernel: one Python ``%`` per row, 100k rows at a time."""
-    names = [name for name, _ in columns]
-    plain = names == ["x", "y", "z"] or (names == ["x", "y", "z", "nx", "ny", "nz"] and
-                                         _unit_rows(np.column_stack([v for _, v in columns[3:]]).astype(np.float64)))
-    if header:
-        f.write((delimiter.join(names) + "\n").encode())
-    elif not plain:
-        f.write(("# " + delimiter.join(names) + "\n").encode())
+    """The writer before the kernel: its names line (unchanged, :func:`core.io.text.header_line`),
+    then one Python ``%`` per row, 100k rows at a time."""
+    f.write(header_line(columns, delimiter=delimiter, header=header))
 
     def row_format(values):
         if values.dtype == bool or np.issubdtype(values.dtype, np.signedinteger):
