@@ -19,6 +19,8 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
+from .clump_surfaces import object_clumps
+
 #: a cloud may be clumps where a quarter of its sampled points (:func:`screened`) have a gap of this
 #: surprise ``j log(d_{j+1} / d_j)`` (see the module): on 20k-point clean clouds (10 shapes, noise
 #: 0.1-1 spacing, scan lines 5-10:1) at most 0.4 % do; a hexagonal lattice's ties reach 5.0 at
@@ -171,6 +173,7 @@ def _agreed_clumps(points, rank, wide):
     # a clump seen alike by most of its copies: more than half of its size name its lowest row and its size
     _, at, count = np.unique(label * (k + 1) + inside, return_inverse=True, return_counts=True)
     agreed = (2 * count[at.ravel()] > inside + 1) & sure
+    agreed &= ~object_clumps(points, np.where(agreed, label, -1))  # small objects keep their points
     return np.where(agreed, label, -1)
 
 
