@@ -50,8 +50,8 @@ def test_small_objects_far_apart_are_estimated_not_merged(k, count, per, layout,
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_objects_are_told_from_blobs_and_segments_of_copies(seed):
     """Spheres of 50-255 points (clean or at 0.2 spacing of noise) are objects; Gaussian blobs
-    of 20-300 copies and segments along a view ray (with or without a little lateral jitter)
-    are copies, in any pose."""
+    of 20-300 copies, segments along a view ray (with or without a little lateral jitter) and
+    discs across it (locally flat like a surface, but flat as a whole) are copies, in any pose."""
     rng = np.random.default_rng(seed)
     turn = Rotation.random(random_state=seed).as_matrix()
     groups, objects = [], []
@@ -61,8 +61,10 @@ def test_objects_are_told_from_blobs_and_segments_of_copies(seed):
         objects += [True, True]
     for m in (20, 80, 300):
         ray = rng.normal(size=(m, 1)) * [[0.3, 0.2, 1.0]]
-        groups += [rng.normal(size=(m, 3)), ray, ray + rng.normal(0.0, 0.1, (m, 3))]
-        objects += [False, False, False]
+        disc = rng.normal(size=(m, 3)) * [1.0, 1.0, 0.0]  # jittered across the view ray only
+        groups += [rng.normal(size=(m, 3)), ray, ray + rng.normal(0.0, 0.1, (m, 3)), disc,
+                   disc + rng.normal(0.0, 0.2, (m, 3)) * [0.0, 0.0, 1.0]]
+        objects += [False] * 5
     points = np.concatenate([g + [50.0 * i, 0.0, 0.0] for i, g in enumerate(groups)]) @ turn.T
     label = np.concatenate([np.full(len(g), i) for i, g in enumerate(groups)])
     found = object_clumps(points, label)
