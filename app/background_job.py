@@ -1,7 +1,8 @@
 """A job thread whose answers reach the GUI thread through a parentless relay of signals.
 
-:class:`app.loader.CloudLoader` and :class:`app.exporter.ResultExporter` run their jobs on
-an :class:`app.jobs.JobThread`, and the jobs answer by emitting on a :class:`Relay`: a
+:class:`app.loader.CloudLoader`, :class:`app.exporter.ResultExporter` and
+:class:`app.estimator.Estimator` run their jobs on an :class:`app.jobs.JobThread`, and the
+jobs answer by emitting on a :class:`Relay` (the estimator's is its worker): a
 parentless ``QObject`` of signals made on the GUI thread, wired to its owner's slots
 (parentless: a job may emit after the owner is gone, :mod:`app.jobs`). :class:`RelayedJobs`
 holds the pair and shuts it down in the one safe order: the relay's signals disconnected

@@ -1,9 +1,10 @@
 """GUI-thread controller of the estimate worker: numbering, dropping, cancelling.
 
 Slider -> debounce -> :meth:`Estimator.submit` (a frozen request with a generation id)
--> :class:`app.worker.EstimateWorker` on a :class:`app.jobs.JobThread` -> queued
-signals back here -> only the latest generation is passed on (napari's layer
-slicer, mne-qt-browser's superseded-run check). Cancel makes the GUI idle at once:
+-> :class:`app.worker.EstimateWorker` (a :class:`app.background_job.Relay`) on the job
+thread of a :class:`app.background_job.RelayedJobs` -> queued signals back here -> only
+the latest generation is passed on (napari's layer slicer, mne-qt-browser's
+superseded-run check). Cancel makes the GUI idle at once:
 the stale job is abandoned, stops at its next chunk and its answer is dropped.
 """
 
@@ -11,7 +12,8 @@ from __future__ import annotations
 
 from PySide6.QtCore import QObject, Signal, Slot
 
-from .jobs import JobThread, live_job_threads
+from .background_job import RelayedJobs
+from .jobs import live_job_threads
 from .request import EstimateRequest
 from .source import CloudSource
 from .worker import EstimateOutput, EstimateWorker
@@ -49,13 +51,9 @@ class Estimator(QObject):
         super().__init__(parent)
         self._gen = 0
         self._busy = False
-        self._worker = EstimateWorker()  # parentless: the job thread may outlive us
-        self._jobs = JobThread("darboux-estimate")
-        self._worker.finished.connect(self._on_finished)
-        self._worker.previewed.connect(self._on_preview)
-        self._worker.failed.connect(self._on_failed)
-        self._worker.cancelled.connect(self._on_cancelled)
-        self._worker.progress.connect(self._on_progress)
+        self._worker = EstimateWorker(finished=self._on_finished, previewed=self._on_preview, failed=self._on_failed,
+                                      cancelled=self._on_cancelled, progress=self._on_progress)  # parentless
+        self._jobs = RelayedJobs("darboux-estimate", self._worker)
 
     # GUI thread -------------------------------------------------------------
     @property
@@ -99,16 +97,11 @@ class Estimator(QObject):
         self._set_busy(False)
 
     def shutdown(self, timeout: float = SHUTDOWN_WAIT_S) -> bool:
-        """Cancel, stop the job thread and wait up to ``timeout`` s. Safe to call twice."""
+        """Cancel, idle, then disconnect the worker's answers and stop the job thread, waiting
+        up to ``timeout`` s (:meth:`app.background_job.RelayedJobs.shutdown`). Safe to call twice."""
         self._worker.latest = -1
-        for signal in (self._worker.finished, self._worker.previewed, self._worker.failed,
-                       self._worker.cancelled, self._worker.progress):
-            try:
-                signal.disconnect()
-            except (RuntimeError, TypeError):
-                pass
         self._set_busy(False)
-        return self._jobs.stop(timeout)
+        return self._jobs.shutdown(timeout)
 
     @staticmethod
     def running_threads() -> list[str]:

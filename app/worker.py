@@ -20,7 +20,7 @@ import traceback
 from dataclasses import dataclass, field
 
 import numpy as np
-from PySide6.QtCore import QObject, Signal
+from PySide6.QtCore import Signal
 
 import core
 import core.metrics
@@ -28,6 +28,7 @@ import core.noise
 from core.spacing import mean_spacing
 from core.stage_cache import StageCache
 
+from .background_job import Relay
 from .fields import compute_fields
 from .preview import PREVIEW_K, make_subsample, spread, wants_preview
 from .request import EstimateRequest
@@ -67,12 +68,12 @@ class EstimateOutput:
     preview: int = 0  # points of the preview subsample; 0 for the full result
 
 
-class EstimateWorker(QObject):
+class EstimateWorker(Relay):
     """Runs requests one at a time on a job thread (:meth:`run`).
 
     :attr:`latest` is written by the GUI thread (a plain int read between chunks).
-    The object is created on the GUI thread without a parent; its signals are queued
-    to the GUI thread.
+    The object is created on the GUI thread without a parent (a :class:`app.background_job.Relay`:
+    ``slots`` wires its signals); its signals are queued to the GUI thread.
     """
 
     finished = Signal(object)  # EstimateOutput (full)
@@ -81,8 +82,8 @@ class EstimateWorker(QObject):
     cancelled = Signal(int)  # gen
     progress = Signal(int, float, str)  # gen, fraction, stage
 
-    def __init__(self):
-        super().__init__()
+    def __init__(self, **slots):
+        super().__init__(**slots)
         self.latest = 0
         self._noisy_key = self._noisy = None
         self._sub_key = self._sub = None

@@ -15,11 +15,10 @@ averaged, sqrt(m) less) and every copy gets its place's answer (:func:`core.dupl
 from __future__ import annotations
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from .clump_surfaces import object_clumps
+from .components import pair_components
 
 #: a cloud may be clumps where a quarter of its sampled points (:func:`screened`) have a gap of this
 #: surprise ``j log(d_{j+1} / d_j)`` (see the module): on 20k-point clean clouds (10 shapes, noise
@@ -141,8 +140,7 @@ def _halves_joined(points, inverse):
     near = dist[:, 1:] < np.minimum(CLUMP_HALVES * np.median(dist[:, 1:], axis=1, keepdims=True),
                                     2.0 * np.maximum(spread[:, None], spread[idx[:, 1:]]))
     rows, cols = np.nonzero(near)
-    joins = coo_matrix((np.ones(len(rows)), (rows, idx[rows, cols + 1])), shape=(len(means), len(means)))
-    return connected_components(joins, directed=False)[1][inverse]
+    return pair_components(len(means), rows, idx[rows, cols + 1])[inverse]
 
 
 def _balls(points, rank, radius):

@@ -20,11 +20,10 @@ from dataclasses import replace
 from typing import NamedTuple
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from .clumps import screened, stacked_places
+from .components import pair_components
 from .kernels.repeats import any_repeated, coordinate_hashes
 from .neighbours import Neighbours
 from .tuning import NEAR_COPY, NEAR_COPY_SHARE
@@ -137,9 +136,7 @@ def _near_places(idx, dist, points, rank) -> Merged | None:
 
 def _places(rows, cols, points, rank) -> Merged:
     """The places of the pairs ``rows``-``cols`` of points on top of each other."""
-    n = len(points)
-    pairs = coo_matrix((np.ones(len(rows), dtype=np.int8), (rows, cols)), shape=(n, n))
-    _, label = connected_components(pairs, directed=False)
+    label = pair_components(len(points), rows, cols)
     by_rank = np.argsort(rank, kind="stable")
     _, at = np.unique(label[by_rank], return_index=True)  # each place's first point, places by label
     lead_rows = by_rank[at]

@@ -22,8 +22,8 @@ from .result import CurvatureResult
 from .spatial_order import SpatialOrder
 from .refinement import refine, settle_signs, turned
 from .initial_normals import initial_normals
-from .stages import (choose_scale, crease_reference, flags, given_normals, orient_signs, outlier_scores,
-                     spatial_neighbours)
+from .stages import (choose_scale, crease_reference, flags, given_normals, off_volume, orient_signs,
+                     outlier_scores, spatial_neighbours)
 from .tuning import AUTO_PASSES, JET_DEGREE, MAX_PASSES, OUTLIER_SCORE, PASS_DECAY, PCA_K
 
 __all__ = ["estimate", "AUTO_PASSES", "MAX_PASSES", "OUTLIER_SCORE", "PASS_DECAY", "PCA_K"]
@@ -323,12 +323,12 @@ def _plan(plan, n, asked, normals_given) -> EstimatePlan:
 
 def _reported(stages):
     """The stages' outputs (initial normals, refined fit, k per point, flags) cut to the
-    arrays :func:`_result` reads, the result's normals already chosen (a fit's where valid,
-    else its input's): only these go back to the caller's order (the initial normals, the
-    fit's residuals, its input normals and the scale's ``k`` and ``quiet`` were moved there
-    too and dropped)."""
+    arrays :func:`_result` reads, the points on no surface made invalid (:func:`core.stages.off_volume`)
+    and the result's normals chosen (a fit's where valid, else its input's): only these go
+    back to the caller's order (the initial normals, the fit's residuals, its input normals
+    and the scale's ``k`` and ``quiet`` were moved there too and dropped)."""
     init, best, kc, marks = stages
-    fit = best.fit
+    fit = off_volume(best.fit, marks.volumetric)
     chosen = np.where(fit.valid[:, None], fit.normals, best.input_normals)
     best = best._replace(fit=fit._replace(normals=chosen, rms=None, spread=None), input_normals=None)
     return init._replace(normals=None, has_normal=None), best, kc._replace(k=None, quiet=None, jets=None), marks

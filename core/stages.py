@@ -365,30 +365,31 @@ def _columns(a, dtype):
 
 
 def flags(fit: Fit, scores, plan, reference: Residuals | None, *, nb=None, confidence=None) -> Flags:
-    """Per-point flags: the outlier scores, creases judged on ``reference`` (the linear
-    fit at the initial scale, k="auto") or on the fit itself, and, given the neighbours
-    ``nb``, the border points among the valid ones (on the refined normals)."""
-    volume = invalidate_volumetric(fit, nb) if plan.auto else None  # first: border and creases count valid points
-    judged = fit if reference is None else reference
+    """Per-point flags: the outlier scores, with k="auto" and the neighbours ``nb`` the points on
+    no surface at any scale (:func:`core.volumetric.volumetric`; the result makes them invalid:
+    :func:`off_volume`), creases judged on ``reference`` (the linear fit at the initial scale,
+    k="auto") or on the fit itself, and, given ``nb``, the border points among the valid ones
+    (on the refined normals); the creases and the border count the valid points off the volume.
+    An integer k runs the paper's pipeline, whose wider searches the volume test would add
+    (+73 % at k = 15 on a cloud with noise of one spacing)."""
+    volume = volumetric(nb.points, nb) if plan.auto and nb is not None else None
+    valid = fit.valid if volume is None else fit.valid & ~volume
+    judged = Residuals(valid, fit.rms, fit.spread) if reference is None else reference
     crease, typical = _creases(judged.valid, judged.rms, judged.spread, plan.crease_typical)
     border = None  # without enough cached neighbours: computed on first use (CurvatureResult.border)
-    if served_by(nb, len(fit.valid)):
-        border = border_of_valid(nb.points, fit.normals, fit.valid, nb)
-    return Flags(outlier_score=scores, crease=fit.valid & crease, crease_typical=typical, border=border,
+    if served_by(nb, len(valid)):
+        border = border_of_valid(nb.points, fit.normals, valid, nb)
+    return Flags(outlier_score=scores, crease=valid & crease, crease_typical=typical, border=border,
                  orientation_confidence=confidence, crease_residual=crease_residuals(judged), volumetric=volume)
 
 
-def invalidate_volumetric(fit: Fit, nb) -> np.ndarray | None:
-    """The points on no surface at any scale (:func:`core.volumetric.volumetric`, on the
-    neighbours ``nb``; None without them) made invalid in ``fit`` in place: ``valid`` False
-    and NaN curvatures and directions there, as at any invalid point. With k="auto" only: an
-    integer k runs the paper's pipeline (whose wider searches this would add: +73 % at k = 15
-    on a cloud with noise of one spacing)."""
-    if nb is None:
-        return None
-    volume = volumetric(nb.points, nb)
-    if volume.any():
-        fit.valid[volume] = False
-        for values in (fit.k1, fit.k2, fit.e1, fit.e2):
-            values[volume] = np.nan
-    return volume
+def off_volume(fit: Fit, volume) -> Fit:
+    """``fit`` with the points on no surface at any scale (``volume``, :attr:`Flags.volumetric`;
+    None: none) invalid: ``valid`` False and NaN curvatures and directions there, as at any
+    invalid point (new arrays: the fits a tile keeps for its next pass are not changed)."""
+    if volume is None or not volume.any():
+        return fit
+    rows = volume[:, None]
+    return fit._replace(valid=fit.valid & ~volume, k1=np.where(volume, np.nan, fit.k1),
+                        k2=np.where(volume, np.nan, fit.k2), e1=np.where(rows, np.nan, fit.e1),
+                        e2=np.where(rows, np.nan, fit.e2))

@@ -14,10 +14,9 @@ most points of most clouds stop at), so the wider searches are made for the rest
 from __future__ import annotations
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
+from .components import pair_components
 from .kernels.surface_share import sees_surface
 from .tuning import JET_KS
 
@@ -78,8 +77,7 @@ def _regions_of_a_volume(flagged, search) -> np.ndarray:
     place[at] = np.arange(len(at))
     inside = place[rows] >= 0
     src = np.repeat(np.arange(len(at)), rows.shape[1])[inside.ravel()]
-    joins = coo_matrix((np.ones(len(src)), (src, place[rows][inside])), shape=(len(at), len(at)))
-    _, label = connected_components(joins, directed=False)
+    label = pair_components(len(at), src, place[rows][inside])
     out = np.zeros_like(flagged)
     out[at] = np.bincount(label)[label] >= MIN_VOLUME
     return out
