@@ -1,0 +1,123 @@
+"""Hostile files, fifth round: a seeded fuzz of every format (``io_fuzz_cases``: cut short,
+header counts too big, too small, negative or huge, binary header words overwritten, bytes
+flipped), read in a child process with limited memory; and what that round found: a file of
+another format read as delimited text (an ASCII PLY's normals taken as its points, an OFF's
+counts line as a point), a text line of millions of columns (a gigabyte, minutes), a PTX
+count beyond int64 (a TypeError), numpy's warnings leaking out of the readers, messages that
+quoted a whole names line, and paths that are empty or links that cannot be followed."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+import io_fuzz_cases as F
+from core.io import CloudFileError, read_cloud
+from io_testutils import refused
+
+
+def test_seeded_mutations_of_every_format_are_read_or_refused_by_name(tmp_path, helpers):
+    """Each mutation is read, or refused with a CloudFileError (a ValueError) naming the file;
+    any other exception, a crash or an allocation beyond the child's memory ends the child."""
+    rng = np.random.default_rng(2026)
+    paths = []
+    for name, (ext, data) in F.seeds(tmp_path, n=16, seed=1).items():
+        paths.append(tmp_path / f"{name}.{ext}")
+        paths[-1].write_bytes(data)
+        for i, (_, mutated) in enumerate(F.mutations(data, rng, count=8)):
+            paths.append(tmp_path / f"{name}_{i}.{ext}")
+            paths[-1].write_bytes(mutated)
+    answers = helpers.read_in_child(paths)
+    for path in paths:
+        answer = answers[str(path)]
+        assert isinstance(answer, list) or path.name in answer, (path, answer)
+    assert all(isinstance(answers[str(tmp_path / f"{name}.{ext}")], list)
+               for name, (ext, _) in F.seeds(tmp_path, n=16, seed=1).items())  # every seed reads
+
+
+def _ply_normals_first(points):
+    head = "ply\nformat ascii 1.0\nelement vertex {}\n".format(len(points)) + "".join(
+        f"property float {name}\n" for name in ("nx", "ny", "nz", "x", "y", "z")) + "end_header\n"
+    return (head + "".join(f"0 0 1 {x!r} {y!r} {z!r}\n" for x, y, z in points.tolist())).encode()
+
+
+@pytest.mark.parametrize("ext", ["xyz", "csv", "txt", "pts"])
+@pytest.mark.parametrize("kind", ["ply", "off"])
+def test_another_formats_file_named_as_text_is_refused_not_misread(tmp_path, ext, kind):
+    """The delimited text reader took an ASCII PLY's header for a title and read its rows
+    (normals listed first became the points), and an OFF's counts line "10 0 0" as a point."""
+    points = F.patch(10, seed=4)[0]
+    path = tmp_path / f"cloud.{ext}"
+    path.write_bytes(_ply_normals_first(points) if kind == "ply" else F.off(points, "OFF", faces=0))
+    refused(path, f"its content is a .{kind} file, not .{ext}: rename it to .{kind}")
+
+
+@pytest.mark.parametrize("value", [b"18446744073709551617", b"-99999999999999999999", b"1" + b"0" * 400])
+def test_ptx_count_beyond_int64_is_refused_exactly(tmp_path, value):
+    """An integer beyond int64 made an object array, and np.isfinite raised a TypeError."""
+    path = tmp_path / "big.ptx"
+    path.write_bytes(value + F.ptx(F.patch(10)[0])[1:])
+    refused(path, f"scan 0 declares {value.decode()[:40]}")
+
+
+@pytest.mark.parametrize("sep", [" ", ",", ";", "\t"])
+def test_text_line_of_too_many_columns_is_refused_before_splitting(tmp_path, sep):
+    """3 million columns on a 9 MB line took 1 GB and minutes, as that many per-point fields."""
+    path = tmp_path / "wide.csv"
+    path.write_text(sep.join(["0.5"] * 20_003) + "\n" + "1 2 3\n".replace(" ", sep))
+    refused(path, "line 1 has more than 10,000 columns")
+    path.write_text("x y z\n1 2 3\n" + " ".join(["0.5"] * 20_003) + "\n")
+    refused(path, "line 3 has more than 10,000 columns")
+
+
+def test_a_message_quoting_a_long_names_line_is_cut_in_its_middle(tmp_path):
+    path = tmp_path / "names.csv"
+    path.write_text("a,x,y,z," + ",".join(f"n{i}" for i in range(9000)) + "\n1,2,3\n4,5,6\n")
+    with pytest.raises(CloudFileError) as info:
+        read_cloud(path)
+    message = str(info.value)
+    assert len(message) < 1100 and "characters cut" in message, message
+    assert message.startswith(f"{path}: line 1 names 9004 columns") and message.endswith("or none (x y z first)")
+
+
+def _nan_bits_stl(tmp_path):
+    data = bytearray(F.stl(F.patch(12)[0]))
+    data[84 + 12 : 84 + 16] = b"\x01\x00\x80\x7f"  # a signalling NaN as the first corner's x
+    path = tmp_path / "nan.stl"
+    path.write_bytes(bytes(data))
+    return path
+
+
+def _empty_list_ply(tmp_path):
+    path = tmp_path / "lists.ply"
+    path.write_bytes(b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                     b"property list uchar float w\nend_header\n0 0 0 2 1 1\n1 0 0 0\n0 1 0 1 5\n")
+    return path
+
+
+@pytest.mark.parametrize("make, n", [(_nan_bits_stl, 11), (_empty_list_ply, 3)])
+def test_readers_leak_no_numpy_warning(tmp_path, make, n):
+    """A float32 NaN cast ("invalid value encountered in cast") and plyfile's loadtxt of an
+    empty list ("input contained no data") reached the caller as numpy's warnings."""
+    path = make(tmp_path)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        cloud = read_cloud(path, drop_nonfinite=True)
+    assert len(cloud) == n
+    assert all("dropped 1 of 12 points" in str(w.message) for w in caught), [str(w.message) for w in caught]
+
+
+def test_links_that_cannot_be_followed_are_named(tmp_path):
+    (tmp_path / "dangling.xyz").symlink_to(tmp_path / "gone.xyz")
+    (tmp_path / "loop.xyz").symlink_to(tmp_path / "loop.xyz")
+    refused(tmp_path / "dangling.xyz", "is a symbolic link to", "gone.xyz", "target is missing")
+    refused(tmp_path / "loop.xyz", "is a symbolic link to", "loop")
+
+
+@pytest.mark.parametrize("path, says", [("", "path is empty"), ("a\0b.xyz", "holds a NUL byte")])
+def test_empty_or_nul_path_is_refused_by_name(path, says):
+    """An empty path was the current folder ("is a directory"), a NUL "no such file"."""
+    with pytest.raises(ValueError, match=says):
+        read_cloud(path)
