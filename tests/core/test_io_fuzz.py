@@ -121,3 +121,21 @@ def test_empty_or_nul_path_is_refused_by_name(path, says):
     """An empty path was the current folder ("is a directory"), a NUL "no such file"."""
     with pytest.raises(ValueError, match=says):
         read_cloud(path)
+
+
+@pytest.mark.parametrize("at, value, says", [
+    (104, 99, "its header's point format 35 is none of the formats LAS defines (0-10)"),  # laspy said "35"
+    (24, 9, "its header says LAS version 9.2; versions 1.0 to 1.4 are read"),  # "unpack requires a buffer"
+    (25, 9, "its header says LAS version 1.9; versions 1.0 to 1.4 are read"),
+])
+def test_las_header_point_format_or_version_beyond_the_standard_named(tmp_path, at, value, says):
+    pytest.importorskip("laspy")
+    from core.io import las_stream
+
+    data = bytearray(F.las(F.patch(20)[0], tmp_path))
+    data[at] = value
+    path = tmp_path / "odd.las"
+    path.write_bytes(bytes(data))
+    refused(path, says)
+    with pytest.raises(CloudFileError, match=says.replace("(", r"\(").replace(")", r"\)")):
+        las_stream.open_las(path)  # the tiled and sampled readers' header
