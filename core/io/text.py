@@ -197,7 +197,8 @@ def _load_table(path, encoding, head):
 
 def diagnose_lines(path, encoding, head, exc, skip=frozenset()) -> CloudFileError:
     """Re-read the data lines in Python to name the first bad line (``head``: first, ncols,
-    delimiter; the line numbers ``skip`` are not data lines)."""
+    delimiter, and optionally ``declared``, where ncols comes from; the line numbers ``skip``
+    are not data lines)."""
     delimiter, ncols = head["delimiter"], head["ncols"]
     with open(path, encoding=encoding, errors="replace", newline=None) as f:
         for lineno, line in enumerate(f, start=1):
@@ -207,9 +208,8 @@ def diagnose_lines(path, encoding, head, exc, skip=frozenset()) -> CloudFileErro
             _check_width(path, lineno, text, delimiter)
             tokens = _split(text, delimiter)
             if len(tokens) != ncols:
-                return CloudFileError(
-                    path, f"line {lineno}: found {len(tokens)} columns but line {head['first']} has {ncols}"
-                )
+                said = head.get("declared", f"line {head['first']} has")  # a PCD's come from its header
+                return CloudFileError(path, f"line {lineno}: found {len(tokens)} columns but {said} {ncols}")
             bad = next((t for t in tokens if not _is_number(t)), None)
             if bad == "":
                 return CloudFileError(path, _empty_column(lineno, tokens))

@@ -139,3 +139,11 @@ def test_las_header_point_format_or_version_beyond_the_standard_named(tmp_path, 
     refused(path, says)
     with pytest.raises(CloudFileError, match=says.replace("(", r"\(").replace(")", r"\)")):
         las_stream.open_las(path)  # the tiled and sampled readers' header
+
+
+@pytest.mark.parametrize("mode", ["ascii", "binary"])
+def test_pcd_ascii_row_of_other_width_names_where_the_width_comes_from(tmp_path, mode):
+    """The first data line was compared with itself: "line 12: found 2 columns but line 12 has 4"."""
+    path = tmp_path / "twice.pcd"
+    path.write_bytes(F.pcd(F.patch(20)[0], mode).replace(b"DATA", b"DATA ascii\nDATA", 1))
+    refused(path, "line 12: found 2 columns but the header's FIELDS and COUNT declare 4")
