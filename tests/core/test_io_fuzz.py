@@ -147,3 +147,18 @@ def test_pcd_ascii_row_of_other_width_names_where_the_width_comes_from(tmp_path,
     path = tmp_path / "twice.pcd"
     path.write_bytes(F.pcd(F.patch(20)[0], mode).replace(b"DATA", b"DATA ascii\nDATA", 1))
     refused(path, "line 12: found 2 columns but the header's FIELDS and COUNT declare 4")
+
+
+@pytest.mark.parametrize("out, fmt, data", [
+    ("o.csv", "xyz", b"1 2 3\nx y\n"), ("o.csv", "ply", b"garbage"), ("o.las", "xyz", b"1 2 3\n4 5\n")])
+def test_cli_refusal_of_standard_input_names_stdin(tmp_path, monkeypatch, capsys, out, fmt, data):
+    """The message named the temporary copy (/tmp/darboux-stdin-x1y2/stdin.xyz: ...), a file the user never made."""
+    import io
+    import sys
+
+    from core.cli import main
+
+    monkeypatch.setattr(sys, "stdin", io.TextIOWrapper(io.BytesIO(data)))
+    assert main(["estimate", "-", "-o", str(tmp_path / out), "--input-format", fmt, "-q"]) == 2
+    said = capsys.readouterr().err
+    assert said.startswith("darboux-cli: error: stdin: ") and "darboux-stdin-" not in said, said
