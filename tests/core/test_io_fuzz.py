@@ -162,3 +162,20 @@ def test_cli_refusal_of_standard_input_names_stdin(tmp_path, monkeypatch, capsys
     assert main(["estimate", "-", "-o", str(tmp_path / out), "--input-format", fmt, "-q"]) == 2
     said = capsys.readouterr().err
     assert said.startswith("darboux-cli: error: stdin: ") and "darboux-stdin-" not in said, said
+
+
+def test_ascii_stl_cut_at_any_line_is_read_whole_or_refused(tmp_path):
+    """Cut inside a facet (after its vertices, or before them), an ASCII STL read the whole
+    triangles before the cut as the file; only a cut after a facet's ``endfacet`` (a missing
+    ``endsolid``) is read, with the facets it holds."""
+    data = F.stl(F.patch(12, seed=2)[0], binary=False)
+    ends = [i + 1 for i, byte in enumerate(data) if byte == ord("\n")]
+    path = tmp_path / "cut.stl"
+    for end in ends[:-1]:
+        path.write_bytes(data[:end])
+        last = data[:end].rstrip().rsplit(b"\n", 1)[-1].split()[0]
+        if last == b"endfacet":
+            assert len(read_cloud(path)) == 3 * data[:end].count(b"endfacet")
+        else:
+            with pytest.raises(CloudFileError, match="ends inside a facet|whole triangles|contains no points"):
+                read_cloud(path)
