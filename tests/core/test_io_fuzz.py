@@ -179,3 +179,26 @@ def test_ascii_stl_cut_at_any_line_is_read_whole_or_refused(tmp_path):
         else:
             with pytest.raises(CloudFileError, match="ends inside a facet|whole triangles|contains no points"):
                 read_cloud(path)
+
+
+def _many_arrays(tmp_path, kind, m):
+    pts = F.patch(20)[0]
+    path = tmp_path / f"many.{'vtp' if kind == 'vtp' else 'vtk'}"
+    if kind == "vtp":
+        from core.io import write_cloud
+
+        return write_cloud(path, pts, fields={f"f{i}": np.zeros(20) for i in range(m)})
+    binary = kind == "binary"
+    values = np.zeros(20, ">f4").tobytes() + b"\n" if binary else b"0 " * 20 + b"\n"
+    path.write_bytes(F.vtk_legacy(pts, binary) + b"POINT_DATA 20\n" + b"".join(
+        f"SCALARS s{i} float 1\nLOOKUP_TABLE default\n".encode() + values for i in range(m)))
+    return path
+
+
+@pytest.mark.parametrize("kind", ["ascii", "binary", "vtp"])
+def test_vtk_file_of_more_arrays_than_a_cloud_has_is_refused_before_vtk_reads_it(tmp_path, kind):
+    """VTK adds each array after a search of the names before it: 40,000 arrays in a 2.4 MB
+    legacy file took 19 s, 20,000 in a .vtp 7 s."""
+    pytest.importorskip("vtkmodules")
+    path = _many_arrays(tmp_path, kind, 10_050)
+    refused(path, "data arrays", "read with at most 10,000")
