@@ -104,7 +104,11 @@ def _run(relay: _Relay, ticket: LoadTicket, make, *, file: bool = False) -> None
             text = f"{ticket.label}: {text}"
         relay.failed.emit(ticket, text, "")
         return
-    except Exception as exc:  # noqa: BLE001 - a reader bug must not take the app down
-        relay.failed.emit(ticket, f"{ticket.label}: {type(exc).__name__}: {exc}", traceback.format_exc())
+    except (KeyboardInterrupt, SystemExit):
+        raise
+    except BaseException as exc:  # noqa: BLE001 - a reader bug, or a native library's panic (pyo3 raises a
+        # BaseException), must not take the app down nor end the loader's thread with the load pending forever
+        what = "not enough memory to load it" if isinstance(exc, MemoryError) else f"{type(exc).__name__}: {exc}"
+        relay.failed.emit(ticket, f"{ticket.label}: {what}", traceback.format_exc())
         return
     relay.done.emit(ticket, source)

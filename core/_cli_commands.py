@@ -119,13 +119,19 @@ def read_input(src: str, input_format: str, drop_nonfinite: bool):
 
 @contextlib.contextmanager
 def stdin_file(input_format: str):
-    """Standard input stored in a temporary file named for ``input_format`` (removed after)."""
+    """Standard input stored in a temporary file named for ``input_format`` (removed after);
+    a refusal of that file names it "stdin", as the user knows it (not /tmp/darboux-stdin-.../stdin.xyz)."""
     fmt = resolve_format(pathlib.Path("-"), input_format, READ_FORMATS, "reading")
     with tempfile.TemporaryDirectory(prefix="darboux-stdin-") as tmp:
         path = pathlib.Path(tmp) / f"stdin.{fmt}"
         with open(path, "wb") as f:
             shutil.copyfileobj(sys.stdin.buffer, f)
-        yield path
+        try:
+            yield path
+        except cio.CloudFileError as exc:
+            if exc.path != str(path):
+                raise
+            raise cio.CloudFileError("stdin", exc.problem) from None
 
 
 class ProgressBar:

@@ -21,7 +21,12 @@ def file_path(path, *, name: str = "path") -> pathlib.Path:
         path = os.fsdecode(path)
     if not isinstance(path, (str, os.PathLike)):
         raise TypeError(f"{name} must be a file path (str or os.PathLike), got {type(path).__name__}")
-    return pathlib.Path(os.fspath(path))
+    text = os.fspath(path)
+    if isinstance(text, bytes):
+        text = os.fsdecode(text)
+    if not text or "\0" in text:  # Path("") is the current folder, and a NUL ends a name in the system's calls
+        raise ValueError(f"{name} {'is empty' if not text else f'{text!r} holds a NUL byte'}; give a file's name")
+    return pathlib.Path(text)
 
 
 def require_points(path, n: int) -> None:
@@ -45,11 +50,24 @@ class CloudFileError(ValueError):
 
     def __init__(self, path, problem: str):
         self.path = str(path)
-        self.problem = problem
-        super().__init__(f"{self.path}: {problem}")
+        self.problem = _elided(problem)
+        super().__init__(f"{self.path}: {self.problem}")
 
     def __reduce__(self):
         return type(self), (self.path, self.problem)
+
+
+#: the longest problem a message spells out: a file's own text quoted in it (a names line of
+#: 9,000 names, a token of a megabyte) is cut in its middle, keeping where and what is allowed
+MAX_PROBLEM = 1000
+
+
+def _elided(problem: str) -> str:
+    """``problem`` cut to about :data:`MAX_PROBLEM` characters in its middle, saying how many went."""
+    if len(problem) <= MAX_PROBLEM:
+        return problem
+    head, tail = MAX_PROBLEM * 2 // 3, MAX_PROBLEM // 4
+    return f"{problem[:head]} ... [{len(problem) - head - tail:,} characters cut] ... {problem[-tail:]}"
 
 
 def check_memory(path, need: int, what: str, hint: str = "") -> None:

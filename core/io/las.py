@@ -14,7 +14,7 @@ import struct
 import numpy as np
 
 from .cloud import CloudFileError, RawCloud, check_memory, find_normals, split_components
-from .las_open import open_reader, point_count
+from .las_open import open_reader, point_count, unreadable
 
 
 def read_las(path) -> RawCloud:
@@ -43,7 +43,7 @@ def _read_las_data(path):
     except CloudFileError:
         raise
     except (laspy.errors.LaspyException, ValueError, EOFError, struct.error) as exc:
-        raise CloudFileError(path, f"not a readable LAS/LAZ file: {exc}") from None
+        raise unreadable(path, exc) from None
     except RuntimeError as exc:  # lazrs.LazrsError: corrupt or truncated LAZ chunks
         if type(exc).__module__.split(".")[0] != "lazrs":
             raise
@@ -116,6 +116,8 @@ def check_record_counts(path) -> None:
         head = f.read(255)
         if len(head) < 111 or not head.startswith(b"LASF"):
             return  # not a LAS header: laspy says what is wrong
+        if head[24] != 1 or head[25] > 4:  # laspy read a 1.9 header's fields past its end: "unpack requires ..."
+            raise CloudFileError(path, f"its header says LAS version {head[24]}.{head[25]}; versions 1.0 to 1.4 are read")
         header_size, offset, n_vlrs = struct.unpack_from("<HII", head, 94)
         if header_size + n_vlrs * _VLR_HEADER > size:
             raise CloudFileError(path, f"corrupt header: it declares {n_vlrs} variable-length records, more than "

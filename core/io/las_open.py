@@ -13,6 +13,8 @@ from __future__ import annotations
 import io
 import struct
 
+from .cloud import CloudFileError
+
 #: the header bytes that say how the file counts its points (the 64-bit count ends at 255)
 HEAD_BYTES = 255
 #: where the legacy 32-bit and the LAS 1.4 64-bit point counts are
@@ -87,6 +89,17 @@ def open_reader(path, **kwargs):
     if legacy is None:
         return laspy.open(path, **kwargs)
     return laspy.open(OverlaidFile(path, COUNT_AT, struct.pack("<Q", legacy)), closefd=True, **kwargs)
+
+
+def unreadable(path, exc: BaseException):
+    """The CloudFileError for laspy's refusal ``exc`` of a LAS/LAZ file; laspy says only "35"
+    of a point format it does not know (the header's byte 104 was 99, bits 6-7 its compression)."""
+    import laspy
+
+    problem = str(exc)
+    if isinstance(exc, laspy.errors.PointFormatNotSupported):
+        problem = f"its header's point format {exc} is none of the formats LAS defines (0-10)"
+    return CloudFileError(path, f"not a readable LAS/LAZ file: {problem}")
 
 
 def read(path):

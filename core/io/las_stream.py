@@ -20,7 +20,7 @@ import numpy as np
 
 from .cloud import CloudFileError, find_normals
 from .las import check_record_counts, rust_panics_refused
-from .las_open import open_reader
+from .las_open import open_reader, unreadable
 from .write import RESULT_FLAGS
 
 #: points per chunk read or written (about 30 MB of float64 coordinates)
@@ -76,7 +76,7 @@ def open_las(path) -> LasInfo:
     except CloudFileError:
         raise
     except (laspy.errors.LaspyException, ValueError, EOFError, OSError, struct.error) as exc:
-        raise CloudFileError(path, f"not a readable LAS/LAZ file: {exc}") from None
+        raise unreadable(path, exc) from None
 
 
 def iter_las(path, *, chunk: int = CHUNK):

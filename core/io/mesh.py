@@ -178,7 +178,22 @@ def _read_stl_ascii(path) -> np.ndarray:
         raise CloudFileError(path, "cannot parse the ASCII STL vertices") from None
     if len(corners) % 3:
         raise CloudFileError(path, f"truncated: {len(corners)} vertices do not make whole triangles")
+    if len(corners):  # none: perhaps a binary STL whose header begins with "solid" (read_stl decides)
+        _check_stl_end(path, data)
     return corners
+
+
+def _check_stl_end(path, data: bytes) -> None:
+    """Refuse an ASCII STL cut inside a facet: after its vertices (or before them) the whole
+    triangles before the cut were read as the file, the rest lost without a word. A file may
+    end with ``endsolid`` or, lacking it, with ``endfacet``."""
+    end = len(data)
+    while end and data[end - 1] in b" \t\r\n\v\f\0":  # the last line (NUL padding too), the text not copied
+        end -= 1
+    last = data[data.rfind(b"\n", 0, end) + 1 : end].strip()
+    if last.split()[:1] and last.split()[0].lower() not in (b"endsolid", b"endfacet"):
+        raise CloudFileError(path, f"truncated: the ASCII STL ends inside a facet, at "
+                                   f"{last[:60].decode('latin-1')!r}; a whole file ends with 'endsolid'")
 
 
 def _is_float(token) -> bool:

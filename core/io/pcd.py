@@ -169,7 +169,7 @@ def _load_ascii(path, skip, ncols, exact):
     try:
         return _loadtxt(path, skip, np.float64, ndmin=2), None
     except ValueError as exc:
-        head = dict(first=skip + 1, ncols=ncols, delimiter=None)
+        head = dict(first=skip + 1, ncols=ncols, delimiter=None, declared="the header's FIELDS and COUNT declare")
         raise diagnose_lines(path, "latin-1", head, exc) from None
 
 

@@ -16,6 +16,7 @@ from __future__ import annotations
 import io
 import re
 import sys
+import warnings
 
 import numpy as np
 from plyfile import PlyData, PlyElement, PlyListProperty, PlyParseError
@@ -268,7 +269,8 @@ def _read_vertex_plyfile(f, header, start: int, path):
     stream = io.TextIOWrapper(f, "ascii") if header.text else f
     name = None
     try:
-        with np.errstate(over="raise"):  # an ASCII 1e300 in a float became inf with numpy's warning
+        with np.errstate(over="raise"), warnings.catch_warnings():  # an ASCII 1e300 in a float: inf, and a warning
+            warnings.simplefilter("ignore", UserWarning)  # loadtxt's "input contained no data": an empty ASCII list
             for element in header.elements:
                 name = element.name
                 element._read(stream, header.text, header.byte_order, "c")  # what PlyData.read does

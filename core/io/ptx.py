@@ -13,6 +13,7 @@ applied the transform.
 from __future__ import annotations
 
 import itertools
+import math
 import os
 
 import numpy as np
@@ -72,14 +73,14 @@ class _Lines:
             raise CloudFileError(self.path, f"ends inside a scan's header: {where} is missing")
         parts = text.split()
         try:
-            values = np.array([int(p) if integer else float(p) for p in parts])
+            values = [int(p) if integer else float(p) for p in parts]
         except ValueError:
             values = None
-        if values is None or len(values) != count or not np.isfinite(values).all():
+        if values is None or len(values) != count or not all(integer or math.isfinite(v) for v in values):
             kind = "integer" if integer else "finite number"
             raise CloudFileError(self.path, f"{where} must hold {count} {kind}{'s' * (count > 1)}, found "
                                             f"{text.strip()[:60].decode('latin-1')!r}")
-        return values
+        return np.array(values, dtype=object if integer else np.float64)  # integers exact, beyond int64 too
 
 
 def _read_scan(reader: _Lines, index: int, size: int) -> Scan:

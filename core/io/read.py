@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import contextlib
 import os
 import pathlib
 import struct
@@ -10,7 +9,7 @@ import struct
 import numpy as np
 
 from . import e57, las, mesh, off, pcd, ply, ptx, text, vtk
-from .sniff import content_hint, refuse_misread_text
+from .sniff import refuse_misread_text, refuse_other_content
 from .._validate import check_bool
 from .cloud import Cloud, CloudFileError, RawCloud, file_path, finalize
 from .formats import READ_FORMATS, resolve_format
@@ -60,8 +59,7 @@ def read_cloud(path: str | os.PathLike, *, format: str | None = None, drop_nonfi
     """
     drop_nonfinite = check_bool(drop_nonfinite, name="drop_nonfinite")
     path, fmt = _path_and_format(path, format)
-    with _hinted(path, fmt):
-        return finalize(_read_raw(path, fmt), path, fmt, drop_nonfinite=drop_nonfinite)
+    return finalize(_read_raw(path, fmt), path, fmt, drop_nonfinite=drop_nonfinite)
 
 
 def describe(path: str | os.PathLike, *, format: str | None = None) -> dict:
@@ -77,11 +75,10 @@ def describe(path: str | os.PathLike, *, format: str | None = None) -> dict:
     a file without them).
     """
     path, fmt = _path_and_format(path, format)
-    with _hinted(path, fmt):
-        raw = _read_raw(path, fmt)
-        points = np.asarray(raw.points, dtype=np.float64).reshape(-1, 3)
-        if len(points) == 0:
-            raise CloudFileError(path, "contains no points")
+    raw = _read_raw(path, fmt)
+    points = np.asarray(raw.points, dtype=np.float64).reshape(-1, 3)
+    if len(points) == 0:
+        raise CloudFileError(path, "contains no points")
     finite = points[np.isfinite(points).all(axis=1)]
     low = finite.min(axis=0) if len(finite) else None
     high = finite.max(axis=0) if len(finite) else None
@@ -112,6 +109,9 @@ def readable_file(path):
     """``path`` as a Path, refused (:class:`CloudFileError`) unless it names a regular file."""
     path = file_path(path)
     if not path.exists():
+        if path.is_symlink():  # exists() follows the link
+            raise CloudFileError(path, f"is a symbolic link to {os.readlink(path)!r}, which cannot be followed (its "
+                                       "target is missing, or the links form a loop)")
         raise CloudFileError(path, "no such file")
     if path.is_dir():
         raise CloudFileError(path, "is a directory, not a file")
@@ -125,22 +125,12 @@ def readable_file(path):
 _EXTRAS = {"las": "las", "laz": "las", "vtk": "viewer", "vtp": "viewer"}  # E57 names its own (core.io.e57)
 
 
-@contextlib.contextmanager
-def _hinted(path, fmt):
-    """A refusal in the block says when the file is compressed or its content another format."""
-    try:
-        yield
-    except CloudFileError as exc:
-        hint = content_hint(path, fmt)
-        if not hint or hint in exc.problem:
-            raise
-        raise CloudFileError(exc.path, exc.problem + hint) from exc.__cause__
-
-
 def _read_raw(path, fmt) -> RawCloud:
     try:
+        refuse_other_content(path, fmt)
         refuse_misread_text(path, fmt)
-        return _READERS[fmt](path)
+        with np.errstate(all="ignore"):  # a NaN or inf cast (a float32 sNaN, 1e308 as float32) is finalize's to flag
+            return _READERS[fmt](path)
     except ModuleNotFoundError as exc:  # an optional reader dependency is not installed
         extra = _EXTRAS.get(fmt)
         hint = f"pip install 'darboux[{extra}]'" if extra else f"pip install {exc.name}"

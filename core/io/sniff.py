@@ -27,7 +27,7 @@ _CONTENT = (
 
 
 def content_hint(path, fmt: str) -> str:
-    """"; it is a gzip-compressed file: ..." or "; its content is a PLY file: ...", or ""
+    """"it is a gzip-compressed file: ..." or "its content is a .ply file, not .xyz: ...", or ""
     when the first bytes name no other format than ``fmt`` (or cannot be read)."""
     try:
         with open(path, "rb") as f:
@@ -36,11 +36,21 @@ def content_hint(path, fmt: str) -> str:
         return ""
     for magic, kind in _COMPRESSED.items():
         if head.startswith(magic):
-            return f"; it is a {kind}-compressed file: decompress it first and read the file inside"
+            return f"it is a {kind}-compressed file: decompress it first and read the file inside"
     for pattern, formats, ext in _CONTENT:
         if fmt not in formats and pattern.match(head):
-            return f"; its content is a .{ext} file, not .{fmt}: rename it to .{ext}"
+            return f"its content is a .{ext} file, not .{fmt}: rename it to .{ext}"
     return ""
+
+
+def refuse_other_content(path, fmt: str) -> None:
+    """Refuse, before reading, a compressed file or one whose first bytes are another format's
+    (a PLY, LAS, E57, VTK, PCD or OFF header) named as ``fmt``: the delimited text reader took
+    an ASCII PLY's or an OFF's header for a names line and read on, the normals of
+    ``nx ny nz x y z`` as the points, an OFF's counts line as a point."""
+    hint = content_hint(path, fmt)
+    if hint:
+        raise CloudFileError(path, hint)
 
 
 #: byte-order marks of the UTF-16 and UTF-32 encodings (UTF-32 first: FF FE begins both)

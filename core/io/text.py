@@ -33,6 +33,10 @@ from .text_head import split as _split
 from .text_rows import write_rows
 
 _MAX_HEADER_LINES = 1000
+#: columns a line may have: far beyond any per-point descriptor (3D shape context: 1,980
+#: values), and a bound on a line's tokens (3 million columns on one 9 MB line took 1 GB
+#: and minutes as per-point fields)
+MAX_COLUMNS = 10_000
 #: headerless columns are normals where, of the finite non-zero rows, this share has a
 #: length within _UNIT_TOL of 1 (colours 0-255 or 0-1, intensities do not)
 _UNIT_SHARE = 0.99
@@ -141,6 +145,7 @@ def _scan_head(path, encoding) -> dict:
                 continue
             text = text.split("#", 1)[0].strip()
             delimiter = _guess_delimiter(text)
+            _check_width(path, lineno, text, delimiter)
             tokens = _split(text, delimiter)
             if not all(_is_number(t) for t in tokens):
                 header.append(_header_line(path, lineno, text, tokens))
@@ -159,6 +164,13 @@ def _scan_head(path, encoding) -> dict:
                         count=count, count_line=count_line, usecols=range(len(tokens)) if trailing else None)
     _refuse_data_like(path, header, None)  # every line numbers in a style not taken (1.5D+00, 0x1.8p+0)
     raise CloudFileError(path, "contains no points (no numeric data lines)")
+
+
+def _check_width(path, lineno: int, text: str, delimiter) -> None:
+    """Refuse a line of more than :data:`MAX_COLUMNS` columns, counted without splitting it whole."""
+    if len(text.split(delimiter, MAX_COLUMNS)) > MAX_COLUMNS:
+        raise CloudFileError(path, f"line {lineno} has more than {MAX_COLUMNS:,} columns; a text point cloud is "
+                                   f"read with at most {MAX_COLUMNS:,} (x y z, normals and per-point fields)")
 
 
 def _load_table(path, encoding, head):
@@ -185,18 +197,19 @@ def _load_table(path, encoding, head):
 
 def diagnose_lines(path, encoding, head, exc, skip=frozenset()) -> CloudFileError:
     """Re-read the data lines in Python to name the first bad line (``head``: first, ncols,
-    delimiter; the line numbers ``skip`` are not data lines)."""
+    delimiter, and optionally ``declared``, where ncols comes from; the line numbers ``skip``
+    are not data lines)."""
     delimiter, ncols = head["delimiter"], head["ncols"]
     with open(path, encoding=encoding, errors="replace", newline=None) as f:
         for lineno, line in enumerate(f, start=1):
             text = line.split("#", 1)[0].strip()
             if lineno < head["first"] or not text or lineno in skip:
                 continue
+            _check_width(path, lineno, text, delimiter)
             tokens = _split(text, delimiter)
             if len(tokens) != ncols:
-                return CloudFileError(
-                    path, f"line {lineno}: found {len(tokens)} columns but line {head['first']} has {ncols}"
-                )
+                said = head.get("declared", f"line {head['first']} has")  # a PCD's come from its header
+                return CloudFileError(path, f"line {lineno}: found {len(tokens)} columns but {said} {ncols}")
             bad = next((t for t in tokens if not _is_number(t)), None)
             if bad == "":
                 return CloudFileError(path, _empty_column(lineno, tokens))

@@ -24,6 +24,9 @@ _POINTS = re.compile(rb"^[ \t]*points[ \t]", re.I | re.M)
 _WORD = re.compile(rb"[^ \t\r\n\v\f]")
 #: the line that ends an array's METADATA block, an empty one
 _BLANK = re.compile(rb"^\r?$", re.M)
+#: data arrays a file may hold: VTK adds each to its point or field data after a search of the
+#: names before it, so reading n of them takes n**2 (40,000 in a 2.4 MB file: 19 s)
+MAX_ARRAYS = 10_000
 #: bytes counted at a time (1 MB: its temporaries stay in the processor's cache)
 _CHUNK = 1 << 20
 #: each byte's class for counting numbers: 0 other, 1 white space, 2 sign, 3 digit or point
@@ -70,6 +73,7 @@ class _Walk:
         self.count, self.owner = None, ""  # the current POINT_DATA or CELL_DATA count and its line
         self.points = False  # a POINTS section was checked
         self.fields = []  # the dataset's FIELD sections: (start, end or None)
+        self.arrays = 0  # the arrays measured so far
 
     def walk(self, pos: int):
         """Check the sections from ``pos``: (None if the walk stopped, where the last one starts)."""
@@ -150,6 +154,7 @@ class _Walk:
         """(numbers, where the walk goes on) for the array whose header ``words`` (the first
         ``header`` of them its own) start at ``start``: refused if fewer than ``need`` numbers
         follow before the next keyword. VTK reads words: values on the header's line count."""
+        self.count_array(words)
         line_end = self._line(start)[0]
         if kind.lower().startswith(_STRINGS):  # the rest of the header's line, then a line each
             return None, _after_lines(self.data, line_end, need)
@@ -162,6 +167,13 @@ class _Walk:
             where = "before the file ends" if after is None else f"before {_shown(self._line(after)[1])!r}"
             self._short(words, need, f" but {have} follow {where}", field)
         return have, stop
+
+    def count_array(self, words) -> None:
+        """One array more; refused beyond :data:`MAX_ARRAYS`, before VTK's quadratic read of them."""
+        self.arrays += 1
+        if self.arrays > MAX_ARRAYS:
+            raise CloudFileError(self.path, f"holds more than {MAX_ARRAYS:,} data arrays (the next: {_shown(words)!r}); "
+                                            f"a point cloud's file is read with at most {MAX_ARRAYS:,}")
 
     def _short(self, words, need: int, held: str, field: str):
         """Refuse the array of header ``words`` that declares ``need`` values: ``held`` says what follows."""

@@ -117,6 +117,7 @@ class _BinaryWalk(_Walk):
         (the first ``header`` of them on the line at ``start``) declare ``need`` values of type
         ``kind``: its data start after the newline that ends that line, and it is refused if
         they run past the end of the file. (None, None) when the walk cannot follow it."""
+        self.count_array(words)
         size, last = _item_size(b"" if field else words[0].lower(), kind), self._header_end(start, header)
         if size is None or last is None or need < 0:
             return None, None

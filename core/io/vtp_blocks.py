@@ -23,6 +23,7 @@ import sys
 from dataclasses import dataclass
 
 from .cloud import CloudFileError
+from .vtk_ascii import MAX_ARRAYS
 
 _TAG = re.compile(rb"<(/?)([A-Za-z][\w.:-]*)((?:[^<>\"']|\"[^\"<]*\"|'[^'<]*')*)>")
 _ATTR = re.compile(rb"([\w.:-]+)\s*=\s*(?:\"([^\"]*)\"|'([^']*)')")
@@ -70,6 +71,9 @@ def check_binary_headers(data, tags: "Tags", available: int, path) -> None:
     act on to its harm (see the module docstring). ``data``: the file, memory-mapped;
     ``tags``: what expat read of its XML (:mod:`core.io.xml_scan`, the one parse
     :func:`core.io.vtk.check_vtp` shares); ``available``: the memory available."""
+    if len(tags.arrays) > MAX_ARRAYS:  # VTK's read of n arrays takes n**2 (20,000: 7 s)
+        raise CloudFileError(path, f"holds {len(tags.arrays):,} data arrays; a point cloud's file is read with at "
+                                   f"most {MAX_ARRAYS:,}")
     end = data.find(b"<AppendedData")
     layout = _layout(data, len(data) if end < 0 else end, available, tags.vtkfile)
     if layout is None:

@@ -55,3 +55,31 @@ def test_a_file_with_nothing_to_estimate_or_draw_is_refused_at_load(make_window,
     note = window.notifier.last
     assert note.level == "error" and name in note.message and says in note.message
     assert window.state.source is shown and window.output is not None  # the cloud and its result stay
+
+
+class _Panic(BaseException):
+    """What pyo3 raises for a native library's panic: no ``Exception`` base."""
+
+
+def test_a_reader_panic_is_a_load_failure_and_the_loader_goes_on(qtbot, monkeypatch, scan):
+    """A BaseException from a reader passed the loader's ``except Exception``: it ended the
+    loader's thread, the load stayed pending for ever and no later file was read."""
+    from app import loader as loader_module
+
+    real = loader_module.load_file
+
+    def panics(path):
+        raise _Panic("called `Result::unwrap()` on an `Err` value")
+
+    loader = loader_module.CloudLoader()
+    try:
+        monkeypatch.setattr(loader_module, "load_file", panics)
+        with qtbot.waitSignal(loader.failed, timeout=10_000) as failed:
+            loader.open_file(scan)
+        assert "scan.ply: _Panic: called `Result::unwrap()`" in failed.args[1]
+        monkeypatch.setattr(loader_module, "load_file", real)
+        with qtbot.waitSignal(loader.loaded, timeout=30_000) as loaded:
+            loader.open_file(scan)
+        assert loaded.args[1].n_points == 1500
+    finally:
+        loader.shutdown(2.0)

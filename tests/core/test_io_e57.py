@@ -203,7 +203,7 @@ def _no_scans(path):
 
 HOSTILE = {
     "ply bytes": (lambda p: p.write_bytes(b"ply\nformat ascii 1.0\n" + b"0 0 0\n" * 500) and p,
-                  "is not an E57 file (it does not start with 'ASTM-E57')"),
+                  "its content is a .ply file, not .e57: rename it to .ply"),
     "four bytes": (lambda p: p.write_bytes(b"ASTM") and p, "is not an E57 file"),
     "truncated": (lambda p: p.write_bytes(_scan(p).read_bytes()[:3000]) and p, "is not a readable E57 file"),
     "flipped byte": (_flipped, "checksum mismatch"),
