@@ -66,7 +66,7 @@ def degree_scratch(n_models, n_sizes):
                          np.zeros(rows, dtype=np.bool_), np.empty((2, 3)), np.ones(1, dtype=np.bool_))
 
 
-@njit(**OPTS)
+@njit(**OPTS, inline="always")
 def start_chain(ds):
     """Forget the previous centre's models: none fitted, the intersection everything."""
     ds.ok[:] = False
@@ -75,7 +75,7 @@ def start_chain(ds):
     ds.alive[0] = True
 
 
-@njit(**OPTS)
+@njit(**OPTS, inline="always")
 def _narrow(lo, hi, fit, gamma):
     """Intersect [lo, hi] (3,) with ``fit``'s Hessian interval (+-gamma sd); True if not empty."""
     meet = True
@@ -86,7 +86,7 @@ def _narrow(lo, hi, fit, gamma):
     return meet
 
 
-@njit(**OPTS)
+@njit(**OPTS, inline="always")
 def _fit_degree(G, b, acc, degree, rcond, sigma2, mats, vecs, out):
     """Jet of ``degree`` from its sums (:func:`_sums`): out = (f_uu, f_uv, f_vv, their sd
     at noise sigma2, residual variance per degree of freedom); False if rank deficient.
@@ -126,7 +126,7 @@ def _degree_out(L, d, x, b, ww, n, p, sigma2, tmp, out):
     out[6] = max(rss, 0.0) / (n - p)
 
 
-@njit(**OPTS)
+@njit(**OPTS, inline="always")
 def grow(uvw, j0, j1, deg, row, G, b, acc, sigma2, rcond, ds):
     """Sums of neighbours j0 <= j < j1 (offsets in ``uvw``) added onto G, b, acc (with the
     count in acc[1]): of degree ``deg.dmax`` up to ``deg.kmax``, cubic after, and each model
@@ -151,7 +151,7 @@ def grow(uvw, j0, j1, deg, row, G, b, acc, sigma2, rcond, ds):
     _sums(uvw, j, j1, 3, row, G, b, acc)
 
 
-@njit(**OPTS)
+@njit(**OPTS, inline="always")
 def stash_cubic(L, d, x, b, acc, sigma2, row, ds):
     """Keep, as ``ds``'s row ``row``, what :func:`_fit_degree` gives the cubic whose factor
     (L, d) and solution x the intervals computed on the sums b, acc (the same factor:
@@ -163,7 +163,7 @@ def stash_cubic(L, d, x, b, acc, sigma2, row, ds):
     ds.keep[row, :] = x[:6]
 
 
-@njit(**OPTS)
+@njit(**OPTS, inline="always")
 def walk(ds, deg, c, bounds):
     """:func:`_walk_down` over the models of ``deg`` and the cubic at its size index c (kept by
     :func:`stash_cubic` in row n_models + c)."""
