@@ -94,11 +94,11 @@ def sign_evidence(points, normals, spread, weight, idx, ok, gate, out, first, ra
                 first[i, m] = True
             if j == i or not ok[i] or not ok[j]:
                 continue
-            if want_first and rank[j] < rank[i]:
+            if want_first:  # the whole row j read without a branch: whether it holds i is a coin flip
+                held = False
                 for q in range(k):
-                    if idx[j, q] == i:  # a row holds i once
-                        first[i, m] = False
-                        break
+                    held |= idx[j, q] == i
+                first[i, m] = not (held & (rank[j] < rank[i]))
             cx = points[j, 0] - points[i, 0]
             cy = points[j, 1] - points[i, 1]
             cz = points[j, 2] - points[i, 2]
