@@ -20,68 +20,27 @@ from numba import njit, prange
 
 from ._base import BLOCK, OPTS
 from .algebra import add_outer, smallest_eigvec_sym3
+from .network import SHORT, sorted_short
 from .pool import linear_quantile, selected_quantile
 from .robust import MAD_SIGMA, TUKEY_C, root_median, selected_root_median
 
-
-def _merged(lo, hi, r):
-    """Batcher's odd-even merge of places lo..hi (inclusive) at stride r: compare-exchanges."""
-    if 2 * r < hi - lo:
-        yield from _merged(lo, hi, 2 * r)
-        yield from _merged(lo + r, hi, 2 * r)
-        yield from ((i, i + r) for i in range(lo + r, hi - r, 2 * r))
-    else:
-        yield lo, lo + r
-
-
-def _sorting_network(lo, hi):
-    """Batcher's odd-even merge sort of places lo..hi (inclusive): compare-exchanges in order."""
-    if hi > lo:
-        mid = (lo + hi) // 2
-        yield from _sorting_network(lo, mid)
-        yield from _sorting_network(mid + 1, hi)
-        yield from _merged(lo, hi, 1)
-
-
-#: rows of up to SHORT values (the 14-15 of k = 15) are sorted by a fixed network of
-#: compare-exchanges (Batcher's, 63 for 16 places, the smaller value to the lower place)
-#: instead of a quickselect: the same order statistics, without its data-dependent branches
-#: (a row of 14 at 100k points, one thread: 10 -> 6 ms a kernel; the three kernels here take
-#: one each). Longer rows (k="auto"'s wider initial rows) keep the quickselect.
-SHORT = 16
-NETWORK = np.array(list(_sorting_network(0, SHORT - 1)), dtype=np.int64)
-
-
-@njit(**OPTS)
-def _sorted_short(a, m):
-    """a[:m] sorted in place, m <= :data:`SHORT` (``a`` holds SHORT values; a[m:] become
-    +inf, which stay above every value). The values hold no NaN (squares, distances and
-    their ratios of finite points), so every order statistic is the quickselect's, bit for
-    bit (no -0.0 either: each is a square or an absolute value over a positive unit)."""
-    for j in range(m, SHORT):
-        a[j] = math.inf
-    for c in range(NETWORK.shape[0]):
-        p, q = NETWORK[c, 0], NETWORK[c, 1]
-        x, y = a[p], a[q]
-        a[p] = min(x, y)
-        a[q] = max(x, y)
-
-
 @njit(**OPTS)
 def _root_median(a, m):
-    """:func:`core.kernels.robust.root_median` of a[:m], by :func:`_sorted_short` where it is short."""
+    """:func:`core.kernels.robust.root_median` of a[:m], by :func:`core.kernels.network.sorted_short`
+    where it is short (its values hold no NaN: squares of finite offsets, a row's scales)."""
     if m > SHORT:
         return root_median(a, m)
-    _sorted_short(a, m)
+    sorted_short(a, m)
     return selected_root_median(a, m)
 
 
 @njit(**OPTS)
 def _quantile(a, m, q):
-    """:func:`core.kernels.pool.linear_quantile` of a[:m], by :func:`_sorted_short` where it is short."""
+    """:func:`core.kernels.pool.linear_quantile` of a[:m], by :func:`core.kernels.network.sorted_short`
+    where it is short (its values hold no NaN: distances of finite points over positive units)."""
     if m > SHORT:
         return linear_quantile(a, m, q)
-    _sorted_short(a, m)
+    sorted_short(a, m)
     return selected_quantile(a, m, q)
 
 
@@ -101,7 +60,7 @@ def robust_planes(points, idx, floor, reweightings, standout, planes):
     n, k = idx.shape
     for b in prange((n + BLOCK - 1) // BLOCK):
         rows = np.empty((k, 3))
-        w, r, a = np.empty(k), np.empty(k), np.empty(max(k, SHORT))
+        w, r, a = np.empty(k), np.empty(k), np.empty(k)
         for i in range(b * BLOCK, min(n, (b + 1) * BLOCK)):
             for c in range(8):
                 planes[i, c] = math.nan
@@ -166,7 +125,7 @@ def pooled_units(idx, planes, units):
     leave the point out of most of them, not widened by an outlier among them."""
     n, k = idx.shape
     for b in prange((n + BLOCK - 1) // BLOCK):
-        a = np.empty(max(k, SHORT))
+        a = np.empty(k)
         for i in range(b * BLOCK, min(n, (b + 1) * BLOCK)):
             m = 0
             for j in range(1, k):
@@ -185,7 +144,7 @@ def off_planes(points, idx, planes, units, quantile, out):
     are), a unit of 0 gives 0 on the plane and inf off it."""
     n, k = idx.shape
     for b in prange((n + BLOCK - 1) // BLOCK):
-        d = np.empty(max(k, SHORT))
+        d = np.empty(k)
         for i in range(b * BLOCK, min(n, (b + 1) * BLOCK)):
             m = 0
             for j in range(k):
