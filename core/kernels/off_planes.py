@@ -20,8 +20,28 @@ from numba import njit, prange
 
 from ._base import BLOCK, OPTS
 from .algebra import add_outer, smallest_eigvec_sym3
-from .pool import linear_quantile
-from .robust import MAD_SIGMA, TUKEY_C, root_median
+from .network import SHORT, sorted_short
+from .pool import linear_quantile, selected_quantile
+from .robust import MAD_SIGMA, TUKEY_C, root_median, selected_root_median
+
+@njit(**OPTS)
+def _root_median(a, m):
+    """:func:`core.kernels.robust.root_median` of a[:m], by :func:`core.kernels.network.sorted_short`
+    where it is short (its values hold no NaN: squares of finite offsets, a row's scales)."""
+    if m > SHORT:
+        return root_median(a, m)
+    sorted_short(a, m)
+    return selected_root_median(a, m)
+
+
+@njit(**OPTS)
+def _quantile(a, m, q):
+    """:func:`core.kernels.pool.linear_quantile` of a[:m], by :func:`core.kernels.network.sorted_short`
+    where it is short (its values hold no NaN: distances of finite points over positive units)."""
+    if m > SHORT:
+        return linear_quantile(a, m, q)
+    sorted_short(a, m)
+    return selected_quantile(a, m, q)
 
 
 @njit(**OPTS, parallel=True)
@@ -93,7 +113,7 @@ def _weighted_plane(rows, w, r, a, floor, out):
         worst = max(worst, abs(r[j]))
         spread += math.sqrt(dx * dx + dy * dy + dz * dz)
     out[0], out[1], out[2], out[3], out[4], out[5] = cx, cy, cz, nx, ny, nz
-    out[6], out[7] = MAD_SIGMA * root_median(a, k - 1), floor * spread / (k - 1)
+    out[6], out[7] = MAD_SIGMA * _root_median(a, k - 1), floor * spread / (k - 1)
     return worst
 
 
@@ -113,7 +133,7 @@ def pooled_units(idx, planes, units):
                 if q >= 0 and math.isfinite(planes[q, 6]):
                     a[m] = planes[q, 6] * planes[q, 6]
                     m += 1
-            units[i] = root_median(a, m) + planes[i, 7] if m and math.isfinite(planes[i, 7]) else math.nan
+            units[i] = _root_median(a, m) + planes[i, 7] if m and math.isfinite(planes[i, 7]) else math.nan
 
 
 @njit(**OPTS, parallel=True)
@@ -136,4 +156,4 @@ def off_planes(points, idx, planes, units, quantile, out):
                 unit = units[q]
                 d[m] = dist / unit if unit > 0.0 else (0.0 if dist == 0.0 else math.inf)
                 m += 1
-            out[i] = linear_quantile(d, m, quantile) if m else math.nan
+            out[i] = _quantile(d, m, quantile) if m else math.nan

@@ -55,7 +55,7 @@ def flip_patches(points, normals, idx, ok, sign, evidence, min_cos, max_tilt, ma
     patch, size = _patches(points, normals, idx, ok, sign, min_cos, max_tilt)
     seam = np.zeros(n)
     for i in range(n):
-        if ok[i]:
+        if ok[i] and size[patch[i]] <= max_size:  # a larger patch stays as it is: its seam is not read
             for m in range(k):
                 j = idx[i, m]
                 if patch[j] != patch[i]:

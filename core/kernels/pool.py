@@ -99,9 +99,15 @@ def _row_quantile(v, pool, r, q, row):
 def linear_quantile(a, m, q):
     """The q-quantile of a[:m] (m >= 1; a is reordered) by selection, as numpy's linear
     interpolation gives it, bit for bit."""
+    select(a, 0, m, int(math.floor(q * (m - 1))))
+    return selected_quantile(a, m, q)
+
+
+@njit(**OPTS)
+def selected_quantile(a, m, q):
+    """:func:`linear_quantile` of a[:m] once it is selected at floor(q (m - 1)) (or sorted)."""
     at = q * (m - 1)
     lo = int(math.floor(at))
-    select(a, 0, m, lo)
     low = a[lo]
     if lo + 1 >= m:
         return low

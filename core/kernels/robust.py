@@ -61,6 +61,12 @@ def root_median(a, m):
     """Median of sqrt(a[:m]) for a[:m] >= 0 (reorders a), without the copy np.median makes:
     the square root is monotone, so only the one or two middle values need it."""
     select(a, 0, m, m // 2)
+    return selected_root_median(a, m)
+
+
+@njit(**OPTS)
+def selected_root_median(a, m):
+    """:func:`root_median` of a[:m] once it is selected at m // 2 (or sorted)."""
     upper = math.sqrt(a[m // 2])
     if m % 2:
         return upper

@@ -132,3 +132,38 @@ def test_the_score_is_invariant_under_rotation_translation_and_scale():
     rot = np.linalg.qr(np.random.default_rng(5).normal(size=(3, 3)))[0]
     for moved in (pts + [5e5, 4e6, 100.0], 1e3 * pts @ rot.T, 1e-3 * pts):
         np.testing.assert_allclose(off_surface(moved, idx), base, rtol=1e-6, atol=1e-9)
+
+
+def test_the_sorting_network_sorts_every_row_of_zeros_and_ones():
+    """kernels.network.sorted_short sorts any m <= SHORT values: a network of compare-exchanges
+    that sorts every 0/1 input sorts every input (Knuth's 0-1 principle), so all 2^m are tried."""
+    from core.kernels.network import SHORT, sorted_short
+    for m in range(SHORT + 1):
+        rows = ((np.arange(2 ** m)[:, None] >> np.arange(m)) & 1).astype(float)
+        for row in rows:
+            sorted_short(row, m)
+        assert (np.diff(rows, axis=1) >= 0).all(), m
+
+
+def test_short_rows_give_the_quickselects_order_statistics_bit_for_bit():
+    """The off-surface kernels' medians and quantiles of rows up to SHORT values (the network)
+    and the orientation's spread (a median by the network, sign_evidence._median) are those of
+    the quickselect (robust.root_median, pool.linear_quantile), with ties, zeros,
+    inf and rows of every length, longer rows included (which keep the quickselect)."""
+    from core.kernels.network import SHORT
+    from core.kernels.off_planes import _quantile, _root_median
+    from core.kernels.pool import linear_quantile
+    from core.kernels.robust import root_median
+    from core.kernels.sign_evidence import _median
+    rng = np.random.default_rng(3)
+    for m in range(1, SHORT + 6):
+        for trial in range(200):
+            row = np.full(m, np.nan)
+            draw = rng.integers(0, 4, m) * 0.25 if trial % 2 else rng.random(m) ** 2 * 10.0 ** rng.integers(-8, 8)
+            row[:m] = np.where(rng.random(m) < 0.05, np.inf, draw)
+            assert np.float64(_root_median(row.copy(), m)).tobytes() == np.float64(root_median(row.copy(), m)).tobytes()
+            for q in (0.0, 0.25, 0.5, 0.9, 1.0):  # NaN where inf meets a finite value in numpy's lerp: both
+                got, want = _quantile(row.copy(), m, q), linear_quantile(row.copy(), m, q)
+                assert np.float64(got).tobytes() == np.float64(want).tobytes()
+            if np.isfinite(row).all():
+                assert _median(row.copy()) == np.median(row)
