@@ -74,7 +74,7 @@ def _initial_normals(pts, nb, plan, outlier, report) -> tuple[Initial, np.ndarra
     if ratios is None and plan.initial == "jet":  # the noise given: the small jets' heights measure the regions
         ratios = noise_ratios(height, idx_p, dist_p, outlier)
     levels = None if ratios is None else _levels(pts, nb, plan, (idx_p, dist_p), small, ratios, k_init)
-    sizes = parts.part_sizes(nb, plan.k_initial)  # no more than a share of the object a point lies on
+    sizes = parts.part_sizes(pts, nb, plan.k_initial)  # no more than a share of the object a point lies on
     levels = parts.initial_levels(levels, k_init, sizes, plan.k_initial)
     init, refused = _at_cloud_scale(pts, nb, plan, outlier, report, (ok, idx_p, noise, k_init), (small, height))
     init = init._replace(part_sizes=sizes)

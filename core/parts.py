@@ -9,14 +9,17 @@ chose 28-40; spheres of 50 points reached into the next sphere. Here a part is a
 component of the :data:`core.tuning.SEARCH_WIDTH`-nearest graph cut where a neighbour lies more
 than :data:`GAP` x the point's ``k_initial``-th nearest away, and a point's initial and chosen
 neighbourhoods are capped as if its part were the whole cloud. A cloud of one part (any
-ordinary surface) and parts of fewer than :data:`MIN_PART` points (specks of outliers) keep
-the cloud's caps.
+ordinary surface), parts of fewer than :data:`MIN_PART` points (specks of outliers) and parts
+that are curves or flat as a whole (scan lines or rings farther apart than the graph reaches:
+the end rings of a sphere scanned in rings, the rings of a LiDAR's ground; also a coin or a
+leaf) keep the cloud's caps.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from .clump_surfaces import SURFACE_NEAREST, SURFACE_WIDE, _bent
 from .kernels.parts import gap_components
 from .tuning import INITIAL_SHARE, SEARCH_WIDTH
 
@@ -26,17 +29,44 @@ from .tuning import INITIAL_SHARE, SEARCH_WIDTH
 GAP = 3.0
 #: parts smaller than this keep the cloud's caps (a speck of outliers is no object)
 MIN_PART = 30
+#: ... and so do parts flat as a whole, their smallest covariance eigenvalue below this share of
+#: the middle one (a ring of a scan: ~1e-3; a torus of tube radius 0.45 of its ring's 0.18,
+#: an ellipsoid 1.5 x 1 x 0.75 0.56, a sphere or a box ~1)
+PART_THICK = 0.05
 
 
-def part_sizes(nb, k_min: int) -> np.ndarray | None:
+def part_sizes(pts, nb, k_min: int) -> np.ndarray | None:
     """(N,) the number of points of the part each point lies on (the cloud's size on parts
-    under :data:`MIN_PART`), or None where one part holds every point of ``MIN_PART`` or more."""
+    under :data:`MIN_PART` and on curves, :func:`_curves`), or None where one part holds every
+    point of an object."""
     idx, dist = nb.take(min(nb.width, SEARCH_WIDTH))
     roots = gap_components(idx, dist, k_min, GAP)
     size = np.bincount(roots)[roots]
     n = len(size)
     size = np.where(size < MIN_PART, n, size)
+    if (size == n).all():
+        return None
+    size[_curves(pts, idx, roots, size < n)] = n
+    rows = np.flatnonzero(size < n)
+    if len(rows):  # and flat as a whole: a ring of a scan, noisy enough to span planes locally
+        ids, group = np.unique(roots[rows], return_inverse=True)
+        size[rows[~_bent(pts[rows], group.ravel(), len(ids), flat=PART_THICK)[group.ravel()]]] = n
     return None if (size == n).all() else size
+
+
+def _curves(pts, idx, roots, tested) -> np.ndarray:
+    """(N,) bool: the ``tested`` points whose part is a curve, most of its points' nearest
+    (:data:`core.clump_surfaces.SURFACE_NEAREST`) along a line (their covariance's middle
+    eigenvalue below SURFACE_WIDE of the largest): a scan line or a ring farther from the next
+    than the graph reaches is no object (the lines are one surface, :mod:`core.plane_spread`)."""
+    rows = np.flatnonzero(tested)
+    near = pts[idx[rows, :SURFACE_NEAREST]]
+    near = near - near.mean(axis=1, keepdims=True)
+    _, mid, high = np.linalg.eigvalsh(np.einsum("nki,nkj->nij", near, near)).T
+    line = np.zeros(len(pts))
+    line[rows] = mid <= SURFACE_WIDE * high
+    share = np.bincount(roots, weights=line) / np.maximum(np.bincount(roots), 1)
+    return tested & (share[roots] > 0.5)
 
 
 def initial_levels(levels, k_init: int, sizes, k_min: int):
