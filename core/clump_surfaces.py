@@ -61,9 +61,9 @@ def object_clumps(points: np.ndarray, label: np.ndarray) -> np.ndarray:
     return out
 
 
-def _bent(points, group, count):
+def _bent(points, group, count, flat=SURFACE_FLAT):
     """Whether each of ``count`` groups of ``points`` (``group`` (M,)) is thick as a whole,
-    its smallest covariance eigenvalue at least :data:`SURFACE_FLAT` of its middle one: a
+    its smallest covariance eigenvalue at least ``flat`` (:data:`SURFACE_FLAT`) of its middle one: a
     surface that bends round (a sphere ~1, a cube ~1), not a flat patch (a coin, a leaf; or
     copies jittered across the view ray only, a disc, which a flat test alone takes for an object)."""
     size = np.maximum(np.bincount(group, minlength=count), 1).astype(float)
@@ -72,4 +72,4 @@ def _bent(points, group, count):
     cov = np.stack([np.bincount(group, weights=d[:, i] * d[:, j], minlength=count)
                     for i in range(3) for j in range(3)], axis=1).reshape(count, 3, 3)
     low, mid, _ = np.linalg.eigvalsh(cov).T
-    return low >= SURFACE_FLAT * mid
+    return low >= flat * mid

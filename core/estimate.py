@@ -286,7 +286,7 @@ def prepare(pts, normals, plan, neighbours, report, *, cache=None, near=False, s
                                                                 report.sub(0.45, 0.47)))
     inliers = init.has_normal & ~outlier if plan.robust else init.has_normal  # outliers sit out the choice of k
     kc = run("scale", lambda: choose_scale(pts, init.normals, fit_nb, inliers, plan, report.sub(0.47, 0.7),
-                                           scores=scores, k_initial=init.k))
+                                           scores=scores, k_initial=init.k, part_sizes=init.part_sizes))
     return Prepared(pts, nb, scores, outlier, init, repaired, confidence, reference, kc, order, fit_nb, turn)
 
 

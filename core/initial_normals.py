@@ -9,7 +9,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import anchors, kernels, local_noise, plane_spread, reach, scale, tuning
+from . import anchors, kernels, local_noise, parts, plane_spread, reach, scale, tuning
 from .kernels.knn import unflagged_first
 from .normals import jet_normals, pca_jet_at, pca_normals
 
@@ -18,7 +18,8 @@ class Initial(NamedTuple):
     """Initial normals: ``normals`` (N, 3), ``has_normal`` (N,) bool, and with k="auto"
     the measured (or given) ``noise`` ratio, the ``k`` it chose and the ``fold_typical``
     spread folds were judged against (:func:`unfolded`; None otherwise), and the share
-    of points whose region's noise gave them another initial k (:mod:`core.local_noise`)."""
+    of points whose region's noise gave them another initial k (:mod:`core.local_noise`)
+    or their part's size (``part_sizes``, :func:`core.parts.part_sizes`)."""
 
     normals: np.ndarray
     has_normal: np.ndarray
@@ -26,6 +27,7 @@ class Initial(NamedTuple):
     k: int | None = None
     fold_typical: float | None = None
     local: float = 0.0
+    part_sizes: np.ndarray | None = None
 
 
 def initial_normals(pts, nb, plan, outlier, report, views=None) -> Initial:
@@ -40,11 +42,12 @@ def initial_normals(pts, nb, plan, outlier, report, views=None) -> Initial:
     init, refused = _initial_normals(pts, nb, plan, outlier, report)
     if not plan.auto:
         return init
-    nrm, ok = plane_spread.spanning_normals(pts, init.normals, init.has_normal, nb, init.k, plan.candidates,
-                                            plane_spread.ray_sheets(pts, init.normals, plan.mode(views)))
-    left = refused & ok & (nrm == init.normals).all(axis=1)  # not widened as a line already
-    nrm = plane_spread.determined_normals(pts, nrm, left, nb, init.k, plan.candidates)
-    return init._replace(normals=nrm, has_normal=ok)
+    sheets, nrm, ok = plane_spread.ray_sheets(pts, init.normals, plan.mode(views)), init.normals, init.has_normal
+    for members, k, ks in parts.groups(init.part_sizes, init.k, plan.candidates):  # each part as if alone
+        nrm, _ = plane_spread.spanning_normals(pts, nrm, ok & members, nb, k, ks, sheets)
+        left = refused & ok & members & (nrm == init.normals).all(axis=1)  # not widened as a line already
+        nrm = plane_spread.determined_normals(pts, nrm, left, nb, k, ks)
+    return init._replace(normals=nrm)
 
 
 def _initial_normals(pts, nb, plan, outlier, report) -> tuple[Initial, np.ndarray]:
@@ -71,10 +74,13 @@ def _initial_normals(pts, nb, plan, outlier, report) -> tuple[Initial, np.ndarra
     if ratios is None and plan.initial == "jet":  # the noise given: the small jets' heights measure the regions
         ratios = noise_ratios(height, idx_p, dist_p, outlier)
     levels = None if ratios is None else _levels(pts, nb, plan, (idx_p, dist_p), small, ratios, k_init)
+    sizes = parts.part_sizes(pts, nb, plan.k_initial)  # no more than a share of the object a point lies on
+    levels = parts.initial_levels(levels, k_init, sizes, plan.k_initial)
     init, refused = _at_cloud_scale(pts, nb, plan, outlier, report, (ok, idx_p, noise, k_init), (small, height))
+    init = init._replace(part_sizes=sizes)
     if levels is None:
         return init, refused
-    return _at_levels(pts, nb, plan, outlier, levels, init, refused, (small, height, idx_p))
+    return _at_levels(pts, nb, plan, outlier, levels, init, refused, (small, height, idx_p, ok))
 
 
 def _at_cloud_scale(pts, nb, plan, outlier, report, cloud, smalls) -> tuple[Initial, np.ndarray]:
@@ -142,13 +148,16 @@ def _levels(pts, nb, plan, small_rows, small, ratios, k_init):
 
 def _at_levels(pts, nb, plan, outlier, levels, init, refused, smalls) -> tuple[Initial, np.ndarray]:
     """``init`` and ``refused`` with the points whose region asks for another initial k
-    (``levels`` (N,), :func:`_levels`) fitted on it, each level's fold test against the
-    typical agreement of its own points; ``smalls`` = (the small normals, their jets'
-    heights, their rows)."""
-    small, height, idx_p = smalls
+    (``levels`` (N,), :func:`_levels`, or whose part caps it, :mod:`core.parts`) fitted on it,
+    each level's fold test against the typical agreement of its own points; ``smalls`` = (the
+    small normals, their jets' heights, their rows, where they have a normal)."""
+    small, height, idx_p, small_ok = smalls
     nrm, ok, refused = init.normals.copy(), init.has_normal.copy(), refused.copy()
-    for k in np.unique(levels[levels != init.k]):  # above the cloud's (core.local_noise), so above plan.k_initial
+    for k in np.unique(levels[levels != init.k]):  # above the cloud's (core.local_noise) or below (core.parts)
         c = np.flatnonzero(levels == k)
+        if k == plan.k_initial and not (plan.robust and outlier.any()):  # the small normals, as on the part alone
+            nrm[c], ok[c], refused[c] = small[c], small_ok[c], _refused(small_ok[c], height[c], plan)
+            continue
         idx, dist, clean = _level_rows(nb, c, int(k), outlier, plan)
         n_c, ok_c, wide = pca_jet_at(pts, c, idx, dist, jet=plan.initial == "jet")
         spread = np.empty(len(c))
@@ -156,7 +165,7 @@ def _at_levels(pts, nb, plan, outlier, levels, init, refused, smalls) -> tuple[I
         n_c, _, folded = unfolded(n_c, small[c], spread, clean, pts=pts, small_rows=idx_p[c])
         wide = np.where(folded, height[c], wide)
         if plan.initial == "jet":  # nor around a bend (core.reach)
-            n_c, ok_c, wide = _within_reach(pts, nb, plan, outlier, (n_c, ok_c, wide), smalls, int(k), ~folded,
+            n_c, ok_c, wide = _within_reach(pts, nb, plan, outlier, (n_c, ok_c, wide), smalls[:3], int(k), ~folded,
                                             centres=c)
         nrm[c], ok[c], refused[c] = n_c, ok_c, _refused(ok_c, wide, plan)
     return init._replace(normals=nrm, has_normal=ok, local=float(np.mean(levels != init.k))), refused

@@ -9,7 +9,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import anchors, kernels, plane_spread, scale
+from . import anchors, kernels, parts, plane_spread, scale
 from .anchor_blend import blended
 from .frame import darboux_frame
 from .kernels.permute import put_rows
@@ -213,7 +213,7 @@ class Scale(NamedTuple):
     priority: np.ndarray | None = None
 
 
-def choose_scale(pts, nrm, nb, inliers, plan, report, *, scores=None, k_initial=None) -> Scale:
+def choose_scale(pts, nrm, nb, inliers, plan, report, *, scores=None, k_initial=None, part_sizes=None) -> Scale:
     """Neighbourhood size and model per point: with k="auto" by
     :func:`core.scale.choose_model` (only ``inliers`` take part, and in robust mode not
     the points whose outlier ``scores`` exceed :data:`core.tuning.JET_SCORE`), else ``plan.k``.
@@ -224,7 +224,9 @@ def choose_scale(pts, nrm, nb, inliers, plan, report, *, scores=None, k_initial=
     suspects take their nearest anchor's size (it was the floor: k = 40 amid 320). Where
     NR's neighbours do not span the tangent plane, k="auto" takes the smallest candidate
     whose neighbours do (:mod:`core.plane_spread`; the jets judge their own lever arms,
-    through the variance of their Hessian); ``Scale.spans`` tells where none does."""
+    through the variance of their Hessian); ``Scale.spans`` tells where none does. With
+    ``part_sizes`` (:func:`core.parts.part_sizes`) no fit holds more than its part allows
+    (:func:`core.parts.chosen_cap`), nor is lifted past the part's initial k."""
     n = len(pts)
     if not plan.auto:
         kc, none = np.full(n, plan.k, dtype=np.int64), np.zeros(n, dtype=bool)
@@ -236,15 +238,19 @@ def choose_scale(pts, nrm, nb, inliers, plan, report, *, scores=None, k_initial=
     prio = anchors.priority(pts, nb.take_indices(anchors.RATIOS + 1)) if anchors.shares_scale(plan) else None
     if prio is not None and hasattr(nb, "keep_rows"):  # the anchors' fits read the rows their jets search
         nb.keep_rows(ks[-1])
-    kc, on_jet, quiet, jets, degree = scale.choose_model(pts, masked, nb, steady, ks, report, priority=prio,
-                                                         sat_out=inliers & suspect)
-    floor = np.full(n, ks[min(int(np.searchsorted(ks, k_initial or 0)), len(ks) - 1)])  # a candidate >= k_initial
+    kc, on_jet, quiet, jets, degree = parts.choose_within(
+        lambda sizes, usable: scale.choose_model(pts, masked, nb, usable, sizes, report, priority=prio,
+                                                 sat_out=inliers & suspect), ks, part_sizes, steady)
+    k0 = parts.initial_ks(part_sizes, k_initial or 0, ks[0], n)
+    floor = np.asarray(ks)[np.minimum(np.searchsorted(ks, k0), len(ks) - 1)]  # a candidate >= k_initial
     lifted = np.flatnonzero(steady & ~quiet & (kc < floor))
     if len(lifted):  # but not across a fold (the far side of a thin part)
-        floor[lifted] = scale.fold_capped(pts, masked, nb, lifted, ks, floor[0])
+        capped_at = scale.fold_capped(pts, masked, nb, lifted, ks, int(floor[lifted].max()))
+        floor[lifted] = np.minimum(floor[lifted], capped_at)
     fit_k = np.maximum(kc, np.where(quiet, ks[0], floor))
     wide = plane_spread.widened(pts, nrm, nb, fit_k, ks)
     fit_k = np.where(wide > 0, wide, fit_k)
+    on_jet, fit_k = parts.capped(part_sizes, ks, kc, on_jet, fit_k)  # within the part a point lies on
     return Scale(fit_k, np.where(on_jet, kc, fit_k), on_jet, quiet, jets, np.where(on_jet, degree, -1),
                  spans=on_jet | (wide > 0), priority=prio)
 
