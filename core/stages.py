@@ -214,9 +214,8 @@ class Scale(NamedTuple):
 
 
 def choose_scale(pts, nrm, nb, inliers, plan, report, *, scores=None, k_initial=None, part_sizes=None) -> Scale:
-    """Neighbourhood size and model per point: with k="auto" by
-    :func:`core.scale.choose_model` (only ``inliers`` take part, and in robust mode not
-    the points whose outlier ``scores`` exceed :data:`core.tuning.JET_SCORE`), else ``plan.k``.
+    """Neighbourhood size and model per point: with k="auto" by :func:`core.scale.choose_model`
+    (only ``inliers`` take part, in robust mode not those whose ``scores`` exceed :data:`core.tuning.JET_SCORE`), else ``plan.k``.
     NR's own fits are at least ``plan.candidates[0]`` wide, and with noise at least the
     candidate >= ``k_initial``: a jet stopped early by a noise tail or an outlier is no
     reason to fit fewer points; a fold is (:func:`core.scale.fold_capped`: the far side
