@@ -179,6 +179,12 @@ def _straight_runs(points: np.ndarray, frame: np.ndarray) -> bool:
     return bool((width2 <= (LINE_JITTER * gap) ** 2).all())
 
 
+def min_k_asked(asked: dict) -> int:
+    """The fewest points one fit of the asked method (with its options) needs."""
+    method = get_method(asked["method"])
+    return method.min_k_for(check_options(method, asked["options"]))
+
+
 def checked_plan(n: int, asked: dict, make_plan, *, planned: bool):
     """:func:`core.estimate`'s request on ``n`` points checked as on any cloud, degenerate or
     not: ``make_plan(n, asked)`` (its ``_plan``: the given plan, or one built from ``asked``;
@@ -189,8 +195,7 @@ def checked_plan(n: int, asked: dict, make_plan, *, planned: bool):
     (all of them searched, as k="auto" does). ``planned``: a plan was given."""
     k = asked["k"]
     if not planned and not isinstance(k, str):
-        method = get_method(asked["method"])
-        low = method.min_k_for(check_options(method, asked["options"]))
+        low = min_k_asked(asked)
         if n < low:
             k = check_int(k, name="k", low=1)
             least = make_plan(low, {**asked, "k": low})

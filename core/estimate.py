@@ -208,6 +208,8 @@ def _on_distinct(merged: Merged, pts, kept, normals, asked, *, plan, neighbours,
     m, extra = len(merged.first), {"duplicates": merged.copies, "dropped": int(np.count_nonzero(~kept))}
     # m >= 3: one or two places are caught before, as identical or collinear points
     given = None if normals is None else _given_rows(normals, kept)[merged.first]
+    if m < degenerate.min_k_asked(asked):  # fewer places than one fit needs: all invalid, as on so few points
+        return expand(estimate(merged.points, given, **asked), merged, pts, extra)
     if isinstance(asked["k"], (int, np.integer)) and not isinstance(asked["k"], (bool, np.bool_)) and asked["k"] > m:
         raise ValueError(f"k={asked['k']} exceeds the {m} distinct positions of the cloud ({merged.copies} of its "
                          f"{len(pts)} points are copies of others)")
