@@ -29,7 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import kernels
-from .kernels.spread import curve_shares, plane_spread, weighted_plane_spread
+from .kernels.spread import curve_shares, plane_spread, thin_shapes
 from .linalg import tangent_basis
 from .normals import pca_normals_at
 from .tuning import FOLD_FLAT, INITIAL_JET_PIVOT, THETA_REACH, THIN_SPREAD
@@ -91,7 +91,7 @@ def widened(pts, normals, nb, k, ks) -> np.ndarray:
 def spanning_normals(pts, normals, ok, nb, k: int, ks, suspect=None):
     """Initial normals where a point's ``k`` nearest lie along one curved line (a scan line,
     its neighbours' lines farther than k reach), or in a tube as wide both ways across
-    (a noisy scan line, :func:`_tubes`): the weighted-PCA normal (eqs. 13-14) of the
+    (a noisy scan line, :func:`_thin_shapes`): the weighted-PCA normal (eqs. 13-14) of the
     smallest of ``ks`` above k whose neighbours span the plane of that normal, lie near one
     plane (:data:`FLAT_SHARE`) and are not the line's own (:data:`LINE_TURN`); as they were
     where none does. Returns ``(normals, ok)``
@@ -103,9 +103,11 @@ def spanning_normals(pts, normals, ok, nb, k: int, ks, suspect=None):
     no normal and keeps none, and a widened neighbourhood that is not flat is not taken:
     wires and a cube's wireframe are curves, not a surface (widened without those tests, 3.3
     and 5.5x as many of a wireframe's points got normals, and |k| of 1e5)."""
-    line = ok & (~spans_plane(pts, normals, nb, np.full(len(pts), k), LINE_SPREAD) | _tubes(pts, nb, k))
+    spread, weighted, flat = _thin_shapes(pts, normals, nb, k)
+    spans = ~(spread < LINE_SPREAD) if k <= nb.width else spans_plane(pts, normals, nb, np.full(len(pts), k), LINE_SPREAD)
+    line = ok & (~spans | (flat > FOLD_FLAT))
     sheet = np.zeros(len(pts), dtype=bool) if suspect is None else ok & suspect
-    thin = np.flatnonzero(line | sheet | (ok & _weighted_thin(pts, normals, nb, k)))
+    thin = np.flatnonzero(line | sheet | (ok & (weighted < LINE_SPREAD)))
     if not len(thin):
         return normals, ok
     normals = normals.copy()
@@ -305,24 +307,6 @@ FLAT_SHARE = 0.3
 CURVE_SHARE = 0.35
 
 
-def _tubes(pts, nb, k) -> np.ndarray:
-    """(N,) bool: each point's ``k`` nearest are about as wide in two directions across
-    their plane (sqrt(lambda_min / lambda_mid) of their scatter above
-    :data:`core.tuning.FOLD_FLAT`): a noisy scan line's tube, whose PCA plane is any plane
-    through the line (a sphere in rings with noise 0.1 of their spacing: normals 27 degrees
-    off at the 90th percentile, 14 widened; corpus: 1 better, none worse). A fold or a
-    corner is not flat either, but no widened neighbourhood of it is flat, so it keeps its
-    normal."""
-    out = np.zeros(len(pts), dtype=bool)
-    idx = nb.take_indices(k)  # once: a graph served from another (one_sheet) copies it per call
-    for start in range(0, len(pts), 131_072):
-        rows = np.ascontiguousarray(idx[start:start + 131_072])
-        flat, line = np.empty(len(rows)), np.empty(len(rows))
-        kernels.scatter_shapes(pts, rows, flat, line)
-        out[start:start + len(rows)] = flat > FOLD_FLAT
-    return out
-
-
 def ray_sheets(pts, normals, view) -> np.ndarray | None:
     """(N,) bool: the plane of a point's normal holds the ray from the scanner's viewpoint
     ``view`` (a (3,) tuple, or each point's own, (N, 3); None for any other orientation:
@@ -339,21 +323,31 @@ def ray_sheets(pts, normals, view) -> np.ndarray | None:
         return np.abs(np.einsum("ij,ij->i", ray, np.nan_to_num(normals))) < np.sin(np.radians(RAY_SHEET))
 
 
-def _weighted_thin(pts, normals, nb, k) -> np.ndarray:
-    """(N,) bool: the plane spread of each point's ``k`` nearest weighted as its PCA normal
-    weighs them (eq. 14) is below :data:`LINE_SPREAD`. Where a scan line's k nearest reach
-    the next line by a few points, those are the farthest and weigh about 1e-3: they span
-    the plane, but the normal is the line's alone (stripes 10 apart with noise 0.1: 86 %
-    of the initial normals more than 5 degrees off, half of them not thin unweighted).
-    Honest samplings at 15-28 neighbours, noise 0-0.5: below 0.3 at most 0.08 %."""
-    out = np.zeros(len(pts), dtype=bool)
-    rows = nb.take(k)  # once, as in :func:`_tubes`
+def _thin_shapes(pts, normals, nb, k):
+    """(spread, weighted, flat), (N,) each, of every point's ``k`` nearest, in one read of
+    each row (:func:`core.kernels.spread.thin_shapes`; three passes before, the same bits):
+
+    - spread: the plane spread (:func:`spreads`), below :data:`LINE_SPREAD` on a line;
+    - weighted: the plane spread with each neighbour weighted as the PCA normal weighs it
+      (eq. 14), below :data:`LINE_SPREAD` where a scan line's k nearest reach the next line by
+      a few points: those are the farthest and weigh about 1e-3, so they span the plane but
+      the normal is the line's alone (stripes 10 apart with noise 0.1: 86 % of the initial
+      normals more than 5 degrees off, half of them not thin unweighted; honest samplings at
+      15-28 neighbours, noise 0-0.5: below 0.3 at most 0.08 %);
+    - flat: sqrt(lambda_min / lambda_mid) of the scatter, above :data:`core.tuning.FOLD_FLAT`
+      where the k nearest are about as wide both ways across their plane: a noisy scan
+      line's tube, whose PCA plane is any plane through the line (a sphere in rings with
+      noise 0.1 of their spacing: normals 27 degrees off at the 90th percentile, 14 widened;
+      corpus: 1 better, none worse). A fold or a corner is not flat either, but no widened
+      neighbourhood of it is flat, so it keeps its normal."""
+    out = np.empty((3, len(pts)))
+    rows = nb.take(k)  # once: a graph served from another (one_sheet) copies it per call
+    normals = np.ascontiguousarray(normals, dtype=np.float64)
     for start in range(0, len(pts), 131_072):
         idx, dist = (np.ascontiguousarray(a[start:start + 131_072]) for a in rows)
-        spread = np.empty(len(idx))
-        weighted_plane_spread(pts, np.ascontiguousarray(normals, dtype=np.float64), start, idx, dist, THETA_REACH, spread)
-        out[start:start + len(idx)] = spread < LINE_SPREAD
-    return out
+        stop = start + len(idx)
+        thin_shapes(pts, normals, start, idx, dist, THETA_REACH, out[0, start:stop], out[1, start:stop], out[2, start:stop])
+    return out[0], out[1], out[2]
 
 
 def _surface(pts, idx, *, curve=True) -> np.ndarray:

@@ -39,28 +39,38 @@ def plane_spread(points, normals, centres, idx, rows, kc, out):
 
 
 @njit(**OPTS, parallel=True)
-def weighted_plane_spread(points, normals, start, idx, dist, reach, out):
-    """:func:`plane_spread` of points ``start + i`` over row i of ``idx``, each neighbour
-    weighted by eq. 14 as in the weighted PCA (:func:`core.kernels.pca.pca_normals`, h =
-    ``reach`` x the row's last distance): the spread the PCA normal was fitted on, where the
-    farthest neighbours, weighed about 1e-3, count for little."""
+def thin_shapes(points, normals, start, idx, dist, reach, spread, weighted, flat):
+    """Three shapes of the neighbours of points ``start + i`` (row i of ``idx``, distances
+    ``dist``), each row read once (three kernels before; the same operations, the same bits):
+    spread[i] as :func:`plane_spread`; weighted[i] the same with each neighbour weighted by
+    eq. 14 as in the weighted PCA (:func:`core.kernels.pca.pca_normals`, h = ``reach`` x the
+    row's last distance), the spread the PCA normal was fitted on, where the farthest
+    neighbours, weighed about 1e-3, count for little; flat[i] as :func:`scatter_shapes`.
+    spread and weighted are NaN where the normal is not finite, weighted also where h <= 0."""
     k = idx.shape[1]
     for i in prange(idx.shape[0]):
+        _, _, _, c00, c01, c02, c11, c12, c22 = row_scatter(points, idx, i, 0, k)
+        l0, l1, _, _, _, _ = smallest_eigvec_sym3(c00, c01, c02, c11, c12, c22)
+        flat[i] = math.sqrt(max(l0, 0.0) / l1) if l1 > 0.0 else math.nan
         g = start + i
         nx, ny, nz = normals[g, 0], normals[g, 1], normals[g, 2]
         h = dist[i, k - 1] * reach
-        if not (math.isfinite(nx) and math.isfinite(ny) and math.isfinite(nz) and h > 0.0):
-            out[i] = math.nan
+        if not (math.isfinite(nx) and math.isfinite(ny) and math.isfinite(nz)):
+            spread[i] = weighted[i] = math.nan
             continue
         m00 = m01 = m02 = m11 = m12 = m22 = 0.0
+        w00 = w01 = w02 = w11 = w12 = w22 = 0.0
         for j in range(k):
             q = idx[i, j]
-            w = theta(dist[i, j] / h)
             dx, dy, dz = points[q, 0] - points[g, 0], points[q, 1] - points[g, 1], points[q, 2] - points[g, 2]
             s = dx * nx + dy * ny + dz * nz
             dx, dy, dz = dx - s * nx, dy - s * ny, dz - s * nz
-            m00, m01, m02, m11, m12, m22 = add_outer(m00, m01, m02, m11, m12, m22, w, dx, dy, dz)
-        out[i] = _spread(m00, m01, m02, m11, m12, m22)
+            m00, m01, m02, m11, m12, m22 = add_outer(m00, m01, m02, m11, m12, m22, 1.0, dx, dy, dz)
+            if h > 0.0:
+                w = theta(dist[i, j] / h)
+                w00, w01, w02, w11, w12, w22 = add_outer(w00, w01, w02, w11, w12, w22, w, dx, dy, dz)
+        spread[i] = _spread(m00, m01, m02, m11, m12, m22)
+        weighted[i] = _spread(w00, w01, w02, w11, w12, w22) if h > 0.0 else math.nan
 
 
 @njit(**OPTS, inline="always")

@@ -129,30 +129,54 @@ def test_curve_share_is_small_along_one_curve_and_one_across_a_surface():
     assert (flat < 0.05).all()
 
 
+def _thin_shapes(pts, nrm, idx, dist):
+    """core.kernels.spread.thin_shapes of every row: (spread, weighted, flat)."""
+    from core.kernels.spread import thin_shapes
+    from core.tuning import THETA_REACH
+
+    out = np.empty((3, len(idx)))
+    thin_shapes(pts, nrm, 0, np.ascontiguousarray(idx), np.ascontiguousarray(dist), THETA_REACH, out[0], out[1], out[2])
+    return out
+
+
 def test_weighted_spread_counts_neighbours_as_the_pca_weighs_them():
     """A line of 17 points and two points off it at the far end of the neighbourhood: they
     span the plane unweighted, but weigh ~1e-3 in the PCA (eq. 14), and the weighted spread
     is about that small; all around a point both are 1."""
-    from core.kernels.spread import weighted_plane_spread
-    from core.tuning import THETA_REACH
-
     line = np.c_[np.linspace(-1, 1, 17), np.zeros(17), np.zeros(17)]
     pts = np.vstack([line, [[0.0, 1.05, 0.0], [0.0, -1.05, 0.0]]])
     nb = core.build_neighbours(pts, 19)
     nrm = np.tile([0.0, 0.0, 1.0], (len(pts), 1))
-    idx, dist = nb.take(19)
-    out = np.empty(len(pts))
-    weighted_plane_spread(pts, nrm, 0, np.ascontiguousarray(idx), np.ascontiguousarray(dist), THETA_REACH, out)
-    assert plane_spread.spreads(pts, nrm, nb, 19, [8])[0] > 0.5
-    assert out[8] < 0.1
+    spread, weighted, _ = _thin_shapes(pts, nrm, *nb.take(19))
+    assert spread[8] == plane_spread.spreads(pts, nrm, nb, 19, [8])[0] > 0.5
+    assert weighted[8] < 0.1
     t = np.linspace(0, 2 * np.pi, 8, endpoint=False)
     ring = np.vstack([[0.0, 0.0, 0.0], np.c_[np.cos(t), np.sin(t), 0 * t]])
     nb = core.build_neighbours(ring, 9)
-    idx, dist = nb.take(9)
-    out = np.empty(9)
-    weighted_plane_spread(ring, np.tile([0.0, 0.0, 1.0], (9, 1)), 0, np.ascontiguousarray(idx), np.ascontiguousarray(dist),
-                          THETA_REACH, out)
-    assert out[0] == pytest.approx(1.0)
+    assert _thin_shapes(ring, np.tile([0.0, 0.0, 1.0], (9, 1)), *nb.take(9))[1, 0] == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_three_shapes_read_in_one_pass_are_those_of_their_own_kernels(seed):
+    """thin_shapes' spread and flat are plane_spread's and scatter_shapes' bit for bit (noisy
+    planes, lines and blobs at several scales, some normals NaN, rows of coincident points)."""
+    from core.kernels.spread import scatter_shapes
+
+    rng = np.random.default_rng(seed)
+    pts = np.vstack([rng.normal(size=(300, 3)) * [1.0, 1.0, 0.01] * 10.0 ** (seed - 1),
+                     np.c_[np.linspace(0, 1, 100), rng.normal(size=(100, 2)) * 1e-3], rng.normal(size=(200, 3)),
+                     np.zeros((20, 3))])
+    nrm = rng.normal(size=pts.shape)
+    nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
+    nrm[::17] = np.nan
+    nb = core.build_neighbours(pts, 15)
+    spread, weighted, flat = _thin_shapes(pts, nrm, *nb.take(15))
+    assert np.array_equal(spread, plane_spread.spreads(pts, nrm, nb, 15), equal_nan=True)
+    alone, line = np.empty(len(pts)), np.empty(len(pts))
+    scatter_shapes(pts, np.ascontiguousarray(nb.take(15)[0]), alone, line)
+    assert np.array_equal(flat, alone, equal_nan=True)
+    assert np.isnan(weighted[::17]).all() and np.isnan(weighted[-20:]).all()  # no normal; h = 0
+    assert np.isfinite(weighted[1:300]).any()
 
 
 def test_widening_searches_twice_and_reads_the_rows_each_candidate_would():

@@ -396,7 +396,7 @@ def test_scan_lines_whose_nearest_barely_reach_the_next_line_are_widened(turned)
     weights (eq. 14) all but drop: their spread spans the plane, the weighted fit is the
     noisy line's own (86 % of the initial normals more than 5 degrees off), and NR kept a
     common tilt (normals 0.6-2 degrees off at the median, mean |H error| 0.34-0.53 where
-    |H| is about 0.18). The spread under the PCA's weights (core.plane_spread._weighted_thin)
+    |H| is about 0.18). The spread under the PCA's weights (core.plane_spread._thin_shapes)
     sends them to the widening: 0.03 degrees, 0.009."""
     from core import shapes_thin
 
