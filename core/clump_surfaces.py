@@ -52,16 +52,23 @@ def object_clumps(points: np.ndarray, label: np.ndarray) -> np.ndarray:
     rows = np.flatnonzero(tested)
     k = min(SURFACE_NEAREST, len(points))
     _, idx = cKDTree(points).query(points[rows], k=k, workers=-1)
-    near = points[idx] - points[idx].mean(axis=1, keepdims=True)
-    low, mid, high = np.linalg.eigvalsh(np.einsum("nki,nkj->nij", near, near)).T
+    low, mid, high = scatter_eigenvalues(points, idx).T
     flat = (low < SURFACE_FLAT * mid) & (mid > SURFACE_WIDE * high)
     votes = np.bincount(at[rows], weights=flat.astype(float), minlength=len(ids))
-    surface = (2.0 * votes > size) & _bent(points[rows], at[rows], len(ids))
+    surface = (2.0 * votes > size) & bent(points[rows], at[rows], len(ids))
     out[rows] = surface[at[rows]]
     return out
 
 
-def _bent(points, group, count, flat=SURFACE_FLAT):
+def scatter_eigenvalues(points, rows) -> np.ndarray:
+    """(M, 3) the eigenvalues, ascending, of the scatter of each row of ``points[rows]`` ((M, k)
+    indices) about its centroid."""
+    near = points[rows]
+    near = near - near.mean(axis=1, keepdims=True)
+    return np.linalg.eigvalsh(np.einsum("nki,nkj->nij", near, near))
+
+
+def bent(points, group, count, flat=SURFACE_FLAT):
     """Whether each of ``count`` groups of ``points`` (``group`` (M,)) is thick as a whole,
     its smallest covariance eigenvalue at least ``flat`` (:data:`SURFACE_FLAT`) of its middle one: a
     surface that bends round (a sphere ~1, a cube ~1), not a flat patch (a coin, a leaf; or

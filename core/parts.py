@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .clump_surfaces import SURFACE_NEAREST, SURFACE_WIDE, _bent
+from .clump_surfaces import SURFACE_NEAREST, SURFACE_WIDE, bent, scatter_eigenvalues
 from .kernels.parts import gap_components
 from .tuning import INITIAL_SHARE, SEARCH_WIDTH
 
@@ -50,7 +50,7 @@ def part_sizes(pts, nb, k_min: int) -> np.ndarray | None:
     rows = np.flatnonzero(size < n)
     if len(rows):  # and flat as a whole: a ring of a scan, noisy enough to span planes locally
         ids, group = np.unique(roots[rows], return_inverse=True)
-        size[rows[~_bent(pts[rows], group.ravel(), len(ids), flat=PART_THICK)[group.ravel()]]] = n
+        size[rows[~bent(pts[rows], group.ravel(), len(ids), flat=PART_THICK)[group.ravel()]]] = n
     return None if (size == n).all() else size
 
 
@@ -60,9 +60,7 @@ def _curves(pts, idx, roots, tested) -> np.ndarray:
     eigenvalue below SURFACE_WIDE of the largest): a scan line or a ring farther from the next
     than the graph reaches is no object (the lines are one surface, :mod:`core.plane_spread`)."""
     rows = np.flatnonzero(tested)
-    near = pts[idx[rows, :SURFACE_NEAREST]]
-    near = near - near.mean(axis=1, keepdims=True)
-    _, mid, high = np.linalg.eigvalsh(np.einsum("nki,nkj->nij", near, near)).T
+    _, mid, high = scatter_eigenvalues(pts, idx[rows, :SURFACE_NEAREST]).T
     line = np.zeros(len(pts))
     line[rows] = mid <= SURFACE_WIDE * high
     share = np.bincount(roots, weights=line) / np.maximum(np.bincount(roots), 1)
