@@ -139,7 +139,7 @@ def groups(sizes, k_init: int, ks):
     if sizes is None:
         yield True, k_init, ks
         return
-    level = np.minimum(k_init, np.maximum(ks[0], sizes // INITIAL_SHARE))
+    level = initial_ks(sizes, k_init, ks[0], len(sizes))
     top = chosen_cap(sizes, ks)
     for k, cap in sorted(set(zip(level.tolist(), top.tolist()))):
         yield (level == k) & (top == cap), int(k), tuple(c for c in ks if c <= cap)
