@@ -29,6 +29,8 @@ _LEFT_COUNT = re.compile(rb"NumberOf(?:Verts|Lines|Strips|Polys)(?=[\s=])(?!\s*=
 # document type (whose entities could spell an element without writing it)
 _LEFT = re.compile(rb"<(?:" + _UNUSED + rb"|Piece)(?=[\s/>])|<!DOCTYPE")
 _CHUNK = 1 << 24
+#: the root element's close, at the end of the file (white space and NUL padding after it)
+_CLOSED, _TAIL = re.compile(rb"</VTKFile\s*>[\s\0]*\Z"), 4096
 
 
 @contextlib.contextmanager
@@ -72,6 +74,16 @@ def _copy(path) -> str | None:
             raise
         os.close(fd)
         return copy
+
+
+def check_closed(data, path) -> None:
+    """Refuse a file that does not end with its root element's closing tag: one cut after
+    its points (in the cells, or in the appended data after the points) was read as it
+    was, VTK reading the points and the copy taking no cells; an XML document ends with
+    the close of its root, and every VTK writer ends a .vtp with ``</VTKFile>``."""
+    if _CLOSED.search(data, max(0, len(data) - _TAIL)) is None:
+        raise CloudFileError(path, "truncated: it does not end with the closing </VTKFile> tag a .vtp file ends "
+                                   "with (the file was cut short)")
 
 
 def _parts(data, end: int, path) -> list:
