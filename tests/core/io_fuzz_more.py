@@ -17,6 +17,8 @@ import io_fuzz_cases as F
 #: into or deleted from their data must be refused, or leave the points read unchanged
 FIXED_RECORDS = ("ply_le_odd", "ply_be_faces", "ply_le_plain", "pcd_binary", "stl_binary", "las12_pf3",
                  "las14_pf6_odd")
+#: seeds whose points are found by sizes and offsets a splice shifts: refused too, or read unchanged
+SHIFT_CHECKED = FIXED_RECORDS + ("vtp",)
 #: seeds that are text throughout (re-encoded and given other line ends)
 TEXT = ("ply_ascii", "ply_ascii_faces", "xyz", "xyz_comment", "csv_header", "csv_semicolon", "txt_crlf_bom",
         "pts_count", "pcd_ascii", "off", "noff", "obj", "stl_ascii", "ptx", "vtk_ascii")

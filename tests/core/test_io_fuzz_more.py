@@ -32,7 +32,8 @@ def _same(a, b) -> bool:
 def test_new_mutation_classes_of_every_format_are_read_or_refused_by_name(tmp_path, helpers):
     """Each mutation is read, or refused by a CloudFileError naming the file (in a child with
     limited memory); a gzip'd file is named as such; bytes spliced into the fixed-size records
-    of a binary PLY, PCD, STL or LAS are refused unless the points read are the seed's."""
+    of a binary PLY, PCD, STL or LAS, or a .vtp's appended data, are refused unless the points
+    read are the seed's."""
     rng = np.random.default_rng(2027)
     cases = []  # (path, class, seed name)
     for name, (ext, data) in F.seeds(tmp_path, n=16, seed=2).items():
@@ -51,7 +52,7 @@ def test_new_mutation_classes_of_every_format_are_read_or_refused_by_name(tmp_pa
         assert isinstance(answer, list) or path.name in answer, (path, answer)
         if kind == "gzip":
             assert "gzip-compressed" in answer, (path, answer)
-        if kind == "splice" and name in M.FIXED_RECORDS:
+        if kind == "splice" and name in M.SHIFT_CHECKED:
             assert isinstance(answer, str) or _same(answer, seeds[name]), (path, "read shifted records")
         if kind == "extreme":  # read_in_child drops non-finite rows: 1e308 beyond float32 is inf too
             assert isinstance(answer, str) or len(answer) in (15, 16), (path, answer)
@@ -206,3 +207,22 @@ def test_legacy_vtk_cells_cut_at_a_line_end_name_the_cell_left_without_entries(t
     path = tmp_path / "cells.vtk"
     path.write_bytes(data[: at + sum(len(f"1 {i}\n") for i in range(11))])
     refused(path, "corrupt VERTICES section: cell 11 of 20 has no entries left: 22 of the 40 declared entries follow")
+
+
+@pytest.mark.parametrize("k", [1, 4, 9])
+@pytest.mark.parametrize("where", ["points", "cells"])
+def test_vtp_bytes_spliced_into_its_appended_arrays_are_refused(tmp_path, k, where):
+    """An array's header keeps its length when bytes are inserted into (or lost from) its data:
+    VTK read the points shifted (1e+291), and the arrays after began elsewhere than their
+    offsets say. The raw appended arrays must lie end to end."""
+    pytest.importorskip("vtkmodules")
+    data = F.vtp(F.patch(20)[0], tmp_path)
+    start = data.index(b"_", data.index(b"<AppendedData")) + 1
+    at = start + (100 if where == "points" else 500)  # the points take 8 + 480 bytes
+    path = tmp_path / "spliced.vtp"
+    for spliced in (data[:at] + b"\x3f" * k + data[at:], data[:at] + data[at + k :]):
+        path.write_bytes(spliced)
+        with pytest.raises(CloudFileError, match="spliced.vtp: (its appended data do not hold their arrays end to "
+                                                 "end|array '(connectivity|offsets)' declares .* past the end)"):
+            read_cloud(path)
+
