@@ -54,6 +54,8 @@ def expand_inputs(patterns) -> list[str]:
 def plan_outputs(inputs, output: str, out_format) -> list[tuple[str, str]]:
     """``[(output path or '-', format)]``, one per input, all checked before any estimate:
     the format, the folder, and that no output replaces an input."""
+    if not output:  # Path("") is the current folder: ".: no file extension" named no output
+        raise ValueError("-o is empty; give the output file's name (e.g. -o out.ply), a folder, or - for standard output")
     if output == STDIO:
         if len(inputs) > 1:
             raise ValueError("-o - (standard output) takes a single input")

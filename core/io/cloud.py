@@ -227,6 +227,12 @@ def finalize(raw: RawCloud, path: pathlib.Path, fmt: str, *, drop_nonfinite: boo
     return Cloud(points=points, normals=normals, path=path, format=fmt, fields=fields, viewpoints=views)
 
 
+def is_padding(tail, allowed: bytes = b" \t\r\n\0") -> bool:
+    """Whether the bytes after a binary file's last record are a writer's padding: NULs and
+    white space (a newline) only by default, or none."""
+    return not bytes(tail).strip(allowed)
+
+
 def remaining_bytes(f) -> int:
     """Bytes between the position of the open binary file ``f`` and its end."""
     return os.fstat(f.fileno()).st_size - f.tell()

@@ -15,6 +15,7 @@ import numpy as np
 
 from .cloud import CloudFileError, RawCloud, check_memory, find_normals, split_components
 from .las_open import open_reader, point_count, unreadable
+from .las_tail import check_partial_record
 
 
 def read_las(path) -> RawCloud:
@@ -137,14 +138,17 @@ def check_record_counts(path) -> None:
 
 def _check_point_count(path, head: bytes, offset: int, size: int) -> None:
     """The header's point count against the records the file holds: laspy reads only the
-    points a header declares (more records after them were dropped without a word). A LAS
-    1.4 count of 0 with a legacy count is read with the legacy count (:mod:`.las_open`)."""
+    points a header declares (more records after them were dropped without a word), and a
+    part of a record more is checked for shifted records (:mod:`.las_tail`). A LAS 1.4 count
+    of 0 with a legacy count is read with the legacy count (:mod:`.las_open`)."""
     minor, record = head[25], struct.unpack_from("<H", head, 105)[0]
     count = point_count(head)
     if head[104] & 0xC0 or record == 0:  # LAZ: the count is checked while decompressing
         return
-    ends = [size] + [start for start in _later_records(head, minor) if start >= offset + count * record]
-    held = (min(ends) - offset) // record
+    end = min([size] + [start for start in _later_records(head, minor) if start >= offset + count * record])
+    held = (end - offset) // record
+    if held == count:
+        check_partial_record(path, head, offset, count, record, end)
     if held > count:
         raise CloudFileError(path, f"the header declares {count} points but the point data holds {held} records of "
                                    f"{record} bytes; the header's point count is wrong (the file was not finished, "

@@ -8,7 +8,7 @@ import warnings
 
 import numpy as np
 
-from .cloud import CloudFileError, RawCloud
+from .cloud import CloudFileError, RawCloud, is_padding
 from .sniff import UTF8_BOM
 
 _STL_RECORD = np.dtype([("normal", "<f4", (3,)), ("vertices", "<f4", (3, 3)), ("attribute", "<u2")])
@@ -17,6 +17,8 @@ _STL_VERTEX = re.compile(rb"(?<![^\r\n])[ \t]*vertex[ \t]+(\S+)[ \t]+(\S+)[ \t]+
 _STL_VERTEX_WORD = re.compile(rb"(?<![^\r\n])[ \t]*vertex(?![^ \t\r\n])", re.IGNORECASE)
 #: bytes a binary STL may have after its last triangle (some writers pad or add a newline)
 _STL_SLACK = 50
+#: a binary STL triangle's stored normal is zero or of length 1 within this
+_UNIT_NORMAL_TOL = 1e-3
 
 
 # ---------------------------------------------------------------------------------- OBJ
@@ -153,7 +155,49 @@ def _read_stl_binary(path, n: int, size: int) -> np.ndarray:
             path, f"the binary STL header declares {n} triangles ({84 + 50 * n} bytes) but the file has {size} bytes, "
             f"room for {(size - 84) // 50}; the triangle count (bytes 80-83) does not match the data"
         )
-    return np.fromfile(path, dtype=_STL_RECORD, count=n, offset=84)["vertices"].reshape(-1, 3)
+    records = np.fromfile(path, dtype=_STL_RECORD, count=n, offset=84)
+    if size > 84 + 50 * n:
+        _check_stl_alignment(path, records, size)
+    return records["vertices"].reshape(-1, 3)
+
+
+def _check_stl_alignment(path, records, size: int) -> None:
+    """A binary STL longer than its count's 84 + 50 n bytes: bytes inserted into its data
+    shift every triangle after them (read as garbage, 1e38), bytes after its last triangle
+    are a writer's padding (NULs, a newline: read) or not (refused, as trimesh does). Where
+    the first triangle's stored normal is a unit vector, the writer stores unit normals
+    (zero only for a degenerate triangle): a later triangle of another normal marks a shift
+    behind padding-like bytes, and the file is refused naming it. Bytes inserted into the
+    last triangle that leave a padding-like end (its attribute's zeros) cannot be told."""
+    n, extra = len(records), size - 84 - 50 * len(records)
+    said = f"the binary STL header declares {n} triangles ({84 + 50 * n} bytes) but the file has {size} bytes"
+    with open(path, "rb") as f:
+        f.seek(84 + 50 * n)
+        tail_data = not is_padding(f.read(1 << 16))
+    fine = _stored_normals_fit(records)
+    if n and fine[0] and not fine.all():
+        i = int(np.argmin(fine))
+        raise CloudFileError(path, f"{said}, {extra} more, and triangle {i}'s normal "
+                                   f"({' '.join(f'{v:.6g}' for v in records['normal'][i])}) is not a unit vector (nor "
+                                   "zero on a degenerate triangle) as those before it are: bytes were inserted into "
+                                   "the data before it, shifting the triangles after; the file is damaged")
+    if tail_data:
+        raise CloudFileError(path, f"{said}, {extra} more, which are not padding (NULs, a newline): bytes were inserted "
+                                   "into its data or its triangle count (bytes 80-83) is wrong; the file is damaged")
+
+
+def _stored_normals_fit(records) -> np.ndarray:
+    """Per triangle: whether its stored normal is a unit vector, or zero on a degenerate
+    triangle (False everywhere when the first is not a unit vector)."""
+    with np.errstate(all="ignore"):
+        normals = records["normal"].astype(np.float64)
+        length = np.sqrt((normals ** 2).sum(axis=1))
+        corners = records["vertices"].astype(np.float64)
+        edges = corners[:, 1:] - corners[:, :1]
+        area = np.linalg.norm(np.cross(edges[:, 0], edges[:, 1]), axis=1)
+        degenerate = area == 0  # a repeated corner: a shifted record's garbage is never exactly flat
+        fit = (np.abs(length - 1) < _UNIT_NORMAL_TOL) | ((length == 0) & degenerate)
+    return fit if len(fit) and abs(length[0] - 1) < _UNIT_NORMAL_TOL else np.zeros(len(fit), bool)
 
 
 def _stl_tail_holds_data(path, start: int) -> bool:

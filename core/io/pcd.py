@@ -14,7 +14,7 @@ import warnings
 
 import numpy as np
 
-from .cloud import (CloudFileError, RawCloud, check_memory, find_normals, format_number, remaining_bytes,
+from .cloud import (CloudFileError, RawCloud, check_memory, find_normals, format_number, is_padding, remaining_bytes,
                     split_components)
 from .text import diagnose_lines
 
@@ -277,7 +277,12 @@ def _read_binary(f, path, fields, n):
             path, f"the header declares {n} points ({need} bytes) but {have} bytes follow, "
             f"{have // dtype.itemsize} points of {dtype.itemsize} bytes; the point count does not match the data"
         )
-    data = np.frombuffer(f.read(need), dtype=dtype)
+    body = f.read(have)
+    if not is_padding(body[need:], b"\r\n"):  # bytes inserted into the records shifted those after them
+        raise CloudFileError(path, f"the header declares {n} points ({need} bytes) but {have} bytes follow, "
+                                   f"{have - need} more, less than a point and not a newline: bytes "
+                                   "were inserted into the data, shifting the points after them; the file is damaged")
+    data = np.frombuffer(body, dtype=dtype, count=n)
     return {name: data[name] for name in dtype.names}
 
 

@@ -21,7 +21,7 @@ import warnings
 import numpy as np
 from plyfile import PlyData, PlyElement, PlyListProperty, PlyParseError
 
-from .cloud import NORMAL_NAMES, CloudFileError, RawCloud, remaining_bytes
+from .cloud import NORMAL_NAMES, CloudFileError, RawCloud, is_padding, remaining_bytes
 from .ply_ascii import check_ascii_rows, declared as _declared, plural as _plural, read_ascii_vertex
 from .ply_types import refuse_repeated_names, restore_types, stand_in_types
 from .sniff import UTF8_BOM
@@ -133,6 +133,10 @@ def _check_binary_layout(path, header, start: int) -> None:
     if extra >= max(_min_row_bytes(header["vertex"], header), 1):  # a vertex of no properties takes 0 bytes
         raise CloudFileError(path, _layout_problem(data, header, vstart, f"{extra} bytes are left after the "
                                                    f"last {header.elements[-1].name} row"))
+    if not is_padding(data[pos : pos + (1 << 16)], b"\r\n"):  # bytes inserted into the rows shifted those after them
+        raise CloudFileError(path, f"{extra} bytes are left after the last {header.elements[-1].name} row, less than "
+                                   "a row and not a newline: bytes were inserted into the data, shifting "
+                                   "the rows after them, or the header's counts are wrong; the file is damaged")
 
 
 def _layout_problem(data, header, vstart: int, what: str) -> str:

@@ -21,7 +21,7 @@ _CONTENT = (
     (re.compile(rb"ASTM-E57"), ("e57",), "e57"),
     (re.compile(rb"# vtk DataFile"), ("vtk",), "vtk"),
     (re.compile(b"(" + re.escape(UTF8_BOM) + rb")?\s*(<\?xml[^>]*>\s*)?<VTKFile"), ("vtp", "vtk"), "vtp"),
-    (re.compile(rb"(#[^\n]*\n)*\s*VERSION\s+\.?\d"), ("pcd",), "pcd"),
+    (re.compile(rb"(#[^\n]*\n)*\s*VERSION[ \t]+\.?\d[^\n]*\n(\s*#[^\n]*\n)*\s*FIELDS\s"), ("pcd",), "pcd"),  # not "VERSION 2" alone
     (re.compile(rb"(#[^\n]*\n)*\s*(ST)?C?N?4?n?OFF(\s|\d)"), ("off",), "off"),
 )
 

@@ -31,6 +31,7 @@ from .text_head import is_number as _is_number
 from .text_head import refuse_data_like as _refuse_data_like
 from .text_head import split as _split
 from .text_rows import write_rows
+from .text_tail import warn_if_cut
 
 _MAX_HEADER_LINES = 1000
 #: columns a line may have: far beyond any per-point descriptor (3D shape context: 1,980
@@ -55,6 +56,7 @@ def read_text(path, fmt: str) -> RawCloud:
             path, f"line {head['count_line']} declares {head['count']} points but {len(table)} data lines follow"
         )
     raw = _raw_from_table(table, head["names"], fmt, path)
+    warn_if_cut(path, encoding, head["delimiter"])
     if scan is not None:
         raw.fields.setdefault("scan", scan)
     return raw

@@ -22,7 +22,7 @@ from .._memory import available_memory
 from .cloud import CloudFileError, RawCloud, check_memory, split_components
 from .vtk_binary import LINE_BUFFER, WORDS, check_arrays, new_cells
 from .vtp_blocks import Tags, check_binary_headers
-from .vtp_points import points_only
+from .vtp_points import check_closed, points_only
 from .xml_scan import scan_xml
 
 
@@ -248,8 +248,10 @@ def _cell_runs_problem(ids, n_cells: int, size: int) -> str | None:
     ids = ids.tolist()
     i = 0
     for cell in range(n_cells):
-        count = ids[i] if i < len(ids) else None
-        if count is None or count < 0 or i + 1 + count > len(ids):
+        if i >= len(ids):  # it said "cell 11 declares None point ids"
+            return f"cell {cell} of {n_cells} has no entries left: {len(ids)} of the {size} declared entries follow"
+        count = ids[i]
+        if count < 0 or i + 1 + count > len(ids):
             return (f"cell {cell} declares {count} point ids where {max(len(ids) - i - 1, 0)} of the {size} "
                     "entries remain")
         i += 1 + count
@@ -319,6 +321,7 @@ def check_vtp(path, available: int) -> None:
         scan_xml(data, _Both(sizes, tags), path)
         sizes.check()
         check_binary_headers(data, tags, available, path)
+        check_closed(data, path)  # after the checks above, which say more of a file cut in its arrays
 
 
 class _Both:

@@ -20,6 +20,7 @@ import re
 import tempfile
 
 from .cloud import CloudFileError
+from .vtp_tiling import check_tiling
 
 _UNUSED = rb"Verts|Lines|Strips|Polys|CellData|FieldData"
 _ELEMENT = re.compile(rb"<(" + _UNUSED + rb"|Piece)(?=[\s/>])((?:[^<>\"']|\"[^\"<]*\"|'[^'<]*')*)>")
@@ -29,6 +30,8 @@ _LEFT_COUNT = re.compile(rb"NumberOf(?:Verts|Lines|Strips|Polys)(?=[\s=])(?!\s*=
 # document type (whose entities could spell an element without writing it)
 _LEFT = re.compile(rb"<(?:" + _UNUSED + rb"|Piece)(?=[\s/>])|<!DOCTYPE")
 _CHUNK = 1 << 24
+#: the root element's close, at the end of the file (white space and NUL padding after it)
+_CLOSED, _TAIL = re.compile(rb"</VTKFile\s*>[\s\0]*\Z"), 4096
 
 
 @contextlib.contextmanager
@@ -49,6 +52,7 @@ def _copy(path) -> str | None:
     if os.path.getsize(path) == 0:
         return None
     with open(path, "rb") as f, mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as data:
+        check_tiling(data, path)  # on the file itself: the copy names no cell arrays
         end = data.find(b"<AppendedData")
         end = len(data) if end < 0 else end
         parts = _parts(data, end, path)
@@ -72,6 +76,17 @@ def _copy(path) -> str | None:
             raise
         os.close(fd)
         return copy
+
+
+def check_closed(data, path) -> None:
+    """Refuse a file that does not end with its root element's closing tag: one cut after
+    its points (in the cells, or in the appended data after the points) was read as it
+    was, VTK reading the points and the copy taking no cells; an XML document ends with
+    the close of its root, and every VTK writer ends a .vtp with ``</VTKFile>`` (a file
+    without the root's start is VTK's to name)."""
+    if data.find(b"<VTKFile", 0, 1 << 16) >= 0 and _CLOSED.search(data, max(0, len(data) - _TAIL)) is None:
+        raise CloudFileError(path, "truncated: it does not end with the closing </VTKFile> tag a .vtp file ends "
+                                   "with (the file was cut short)")
 
 
 def _parts(data, end: int, path) -> list:
