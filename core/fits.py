@@ -1,7 +1,7 @@
 """One fit of a method over all points (:func:`fit_all`): the chunks of centres, the frames
 (:func:`core.frame.darboux_frame`) stored into a :class:`Fit`, and with k="auto" the followers
-reading their anchors' fits (:mod:`core.anchors`). The stages of :mod:`core.stages` and
-the passes of :mod:`core.refinement` fit through it."""
+reading their anchors' fits (:mod:`core.anchors`); :func:`invalid_at` makes points invalid.
+The stages of :mod:`core.stages` and the passes of :mod:`core.refinement` fit through it."""
 
 from __future__ import annotations
 
@@ -155,3 +155,14 @@ def _columns(a, dtype):
     a = np.ascontiguousarray(a, dtype=dtype)
     return a.reshape(len(a), -1)
 
+
+#: the fields an invalid point holds NaN in besides its normal (see :func:`invalid_at`)
+CURVATURES = ("k1", "k2", "e1", "e2")
+
+
+def invalid_at(fit: Fit, where, fields=CURVATURES) -> Fit:
+    """``fit`` with the points ``where`` (N,) bool invalid: ``valid`` False and NaN in ``fields``
+    there (new arrays: a fit kept for a later pass is not changed)."""
+    cleared = {name: np.where(where.reshape((-1,) + (1,) * (getattr(fit, name).ndim - 1)), np.nan, getattr(fit, name))
+               for name in fields}
+    return fit._replace(**cleared, valid=fit.valid & ~where)

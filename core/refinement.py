@@ -14,7 +14,7 @@ from .frame import turned_over
 from .orientation import resettle
 from .passes import PassRule, few_fits
 from .initial_normals import Initial
-from .fits import Fit, Fitter, empty_fit
+from .fits import CURVATURES, Fit, Fitter, empty_fit, invalid_at
 from .stages import Scale
 from .tuning import ANCHOR_REACH, DRIFT_POOL, HOLD_TURN, IRLS_LATER, PASS_DECAY, RESETTLE_K, ROWS_LATER
 from .wide_rows import held_h, rows_at_least
@@ -140,12 +140,9 @@ def _with_jets(best: Refined, sc: Scale) -> Refined:
 
 def _drop_outliers(best: Refined, outlier) -> Refined:
     """Outliers are not estimated in robust mode (a kept first fit still estimated them)."""
-    fit = best.fit
-    if not fit.valid[outlier].any():
+    if not best.fit.valid[outlier].any():
         return best
-    cleared = {name: np.where(outlier.reshape((-1,) + (1,) * (a.ndim - 1)), np.nan, a)
-               for name, a in zip(Fit._fields[:5], fit[:5])}
-    return best._replace(fit=fit._replace(**cleared, valid=fit.valid & ~outlier))
+    return best._replace(fit=invalid_at(best.fit, outlier, ("normals", *CURVATURES)))
 
 
 class _Held:

@@ -19,7 +19,7 @@ from .orientation import orient
 from ._progress import Progress
 from .spatial_order import SpatialOrder, given_in_spatial_order
 from .wide_neighbours import search_in_spatial_order
-from .fits import Fit, fit_all
+from .fits import Fit, fit_all, invalid_at
 from .creases import crease_residuals, judge_creases as _creases
 from .off_surface import off_surface
 from .volumetric import volumetric
@@ -252,7 +252,4 @@ def off_volume(fit: Fit, volume) -> Fit:
     invalid point (new arrays: the fits a tile keeps for its next pass are not changed)."""
     if volume is None or not volume.any():
         return fit
-    rows = volume[:, None]
-    return fit._replace(valid=fit.valid & ~volume, k1=np.where(volume, np.nan, fit.k1),
-                        k2=np.where(volume, np.nan, fit.k2), e1=np.where(rows, np.nan, fit.e1),
-                        e2=np.where(rows, np.nan, fit.e2))
+    return invalid_at(fit, volume)
