@@ -28,6 +28,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from . import kernels
+
 #: a clump is told only from this many points (fewer: a 12-point sphere's neighbourhoods are
 #: as round as a blob's, lambda3 / lambda2 0.51 / 0.26)
 SURFACE_MIN_POINTS = 20
@@ -39,10 +41,12 @@ SURFACE_FLAT = 0.2
 SURFACE_WIDE = 0.1
 
 
-def object_clumps(points: np.ndarray, label: np.ndarray) -> np.ndarray:
+def object_clumps(points: np.ndarray, label: np.ndarray, nearest: np.ndarray | None = None) -> np.ndarray:
     """The points whose clump (``label`` (N,), -1 outside any clump) holds at least
     :data:`SURFACE_MIN_POINTS` points, most of them with nearest that span a plane (see the
-    module): small objects, not copies of one place."""
+    module): small objects, not copies of one place. ``nearest`` (N, m): each point's nearest
+    in order, the point first (the clump search's rows, :func:`core.clumps._agreed_clumps`);
+    searched here if None or narrower than :data:`SURFACE_NEAREST` (and the cloud wider)."""
     ids, at, size = np.unique(label, return_inverse=True, return_counts=True)
     at = at.ravel()
     tested = (ids[at] >= 0) & (size[at] >= SURFACE_MIN_POINTS)
@@ -51,21 +55,27 @@ def object_clumps(points: np.ndarray, label: np.ndarray) -> np.ndarray:
         return out
     rows = np.flatnonzero(tested)
     k = min(SURFACE_NEAREST, len(points))
-    _, idx = cKDTree(points).query(points[rows], k=k, workers=-1)
-    low, mid, high = scatter_eigenvalues(points, idx).T
-    flat = (low < SURFACE_FLAT * mid) & (mid > SURFACE_WIDE * high)
-    votes = np.bincount(at[rows], weights=flat.astype(float), minlength=len(ids))
+    if nearest is not None and nearest.shape[1] >= k:
+        idx = nearest[rows, :k]
+    else:
+        idx = cKDTree(points).query(points[rows], k=k, workers=-1)[1].astype(np.int32)
+    flat, line = scatter_shapes(points, idx)
+    plane = (flat < np.sqrt(SURFACE_FLAT)) & (line > np.sqrt(SURFACE_WIDE))
+    votes = np.bincount(at[rows], weights=plane.astype(float), minlength=len(ids))
     surface = (2.0 * votes > size) & bent(points[rows], at[rows], len(ids))
     out[rows] = surface[at[rows]]
     return out
 
 
-def scatter_eigenvalues(points, rows) -> np.ndarray:
-    """(M, 3) the eigenvalues, ascending, of the scatter of each row of ``points[rows]`` ((M, k)
-    indices) about its centroid."""
-    near = points[rows]
-    near = near - near.mean(axis=1, keepdims=True)
-    return np.linalg.eigvalsh(np.einsum("nki,nkj->nij", near, near))
+def scatter_shapes(points, rows) -> tuple[np.ndarray, np.ndarray]:
+    """``(flat, line)`` (M,) of each row of ``points[rows]`` ((M, k) int32 indices): sqrt(l0 / l1)
+    and sqrt(l1 / l2) of the eigenvalues l0 <= l1 <= l2 of their scatter about its centroid, NaN
+    where degenerate (:func:`core.kernels.spread.scatter_shapes`), which the thresholds above
+    compare squared: lambda3 < SURFACE_FLAT lambda2 is flat < sqrt(SURFACE_FLAT)."""
+    rows = np.ascontiguousarray(rows)
+    flat, line = np.empty(len(rows)), np.empty(len(rows))
+    kernels.scatter_shapes(np.ascontiguousarray(points, dtype=np.float64), rows, flat, line)
+    return flat, line
 
 
 def bent(points, group, count, flat=SURFACE_FLAT):

@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .clump_surfaces import object_clumps
+from .clump_surfaces import SURFACE_NEAREST, object_clumps
 from .components import pair_components
 
 #: a cloud may be clumps where a quarter of its sampled points (:func:`screened`) have a gap of this
@@ -161,9 +161,11 @@ def _agreed_clumps(points, rank, wide):
     n, k = len(points), min(wide, len(points))
     tree = cKDTree(points)
     inside, sure, label = np.empty(n, dtype=np.int64), np.empty(n, dtype=bool), np.empty(n, dtype=np.int64)
+    nearest = np.empty((n, min(k, SURFACE_NEAREST)), dtype=np.int32)  # the rows the object test reads
     for start in range(0, n, CLUMP_BLOCK):
         block = slice(start, min(n, start + CLUMP_BLOCK))
         dist, idx = tree.query(points[block], k=k, workers=-1)
+        nearest[block] = idx[:, :SURFACE_NEAREST]
         inside[block], sure[block], _ = clump_gaps(dist)
         within = np.arange(k)[None, :] <= inside[block][:, None]
         lowest = np.argmin(np.where(within, rank[idx], np.iinfo(np.int64).max), axis=1)
@@ -171,7 +173,7 @@ def _agreed_clumps(points, rank, wide):
     # a clump seen alike by most of its copies: more than half of its size name its lowest row and its size
     _, at, count = np.unique(label * (k + 1) + inside, return_inverse=True, return_counts=True)
     agreed = (2 * count[at.ravel()] > inside + 1) & sure
-    agreed &= ~object_clumps(points, np.where(agreed, label, -1))  # small objects keep their points
+    agreed &= ~object_clumps(points, np.where(agreed, label, -1), nearest)  # small objects keep their points
     return np.where(agreed, label, -1)
 
 

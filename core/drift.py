@@ -28,7 +28,7 @@ from __future__ import annotations
 import numpy as np
 
 from .kernels import pool as pool_kernels
-from .stages import Fit
+from .fits import Fit
 from .tuning import DRIFT_POOL, DRIFT_SHARE
 
 

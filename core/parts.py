@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .clump_surfaces import SURFACE_NEAREST, SURFACE_WIDE, bent, scatter_eigenvalues
+from .clump_surfaces import SURFACE_NEAREST, SURFACE_WIDE, bent, scatter_shapes
 from .kernels.parts import gap_components
 from .tuning import INITIAL_SHARE, SEARCH_WIDTH
 
@@ -60,9 +60,9 @@ def _curves(pts, idx, roots, tested) -> np.ndarray:
     eigenvalue below SURFACE_WIDE of the largest): a scan line or a ring farther from the next
     than the graph reaches is no object (the lines are one surface, :mod:`core.plane_spread`)."""
     rows = np.flatnonzero(tested)
-    _, mid, high = scatter_eigenvalues(pts, idx[rows, :SURFACE_NEAREST]).T
+    _, wide = scatter_shapes(pts, idx[rows, :SURFACE_NEAREST])
     line = np.zeros(len(pts))
-    line[rows] = mid <= SURFACE_WIDE * high
+    line[rows] = ~(wide > np.sqrt(SURFACE_WIDE))  # lambda2 <= SURFACE_WIDE lambda1, or all on one spot
     share = np.bincount(roots, weights=line) / np.maximum(np.bincount(roots), 1)
     return tested & (share[roots] > 0.5)
 

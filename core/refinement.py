@@ -14,7 +14,8 @@ from .frame import turned_over
 from .orientation import resettle
 from .passes import PassRule, few_fits
 from .initial_normals import Initial
-from .stages import Fit, Scale, _empty_fit, _Fitter
+from .fits import CURVATURES, Fit, Fitter, empty_fit, invalid_at
+from .stages import Scale
 from .tuning import ANCHOR_REACH, DRIFT_POOL, HOLD_TURN, IRLS_LATER, PASS_DECAY, RESETTLE_K, ROWS_LATER
 from .wide_rows import held_h, rows_at_least
 
@@ -75,12 +76,12 @@ def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n
     nrm, has_normal = initial.normals, initial.has_normal
     if sc.on_jet.any():  # the jets' normals are the neighbours' input where the jet is kept
         nrm = np.where(sc.on_jet[:, None], sc.jets[0], nrm)
-    fitter = _Fitter(pts, idx, kc, h, plan.method, dict(plan.options), anchor)
+    fitter = Fitter(pts, idx, kc, h, plan.method, dict(plan.options), anchor)
     share = 1.0 if first is None else float(first.mean())
     held = _Held(len(pts)) if plan.adaptive else None
     for p in range(n_fits):
         sub = report.sub(p / n_fits, (p + 1) / n_fits)
-        fit = _empty_fit(len(pts))
+        fit = empty_fit(len(pts))
         centres = has_normal & ~sc.on_jet & sc.spans if fitted is None else has_normal & ~sc.on_jet & sc.spans & fitted[p]
         kept = fitter.into(fit, nrm, centres if first is None else centres & first, sub.sub(0.0, share))
         complete = _Rest(fitter, (fit, nrm, None if first is None else centres & ~first, sub.sub(share, 1.0), kept),
@@ -107,7 +108,7 @@ def _anchors(pts, nb, kc, h, sc: Scale, outlier, plan):
     return anchors.assign(pts, nb.take_indices(min(ANCHOR_REACH + 1, plan.k_search)), kc, eligible, sc.priority)
 
 
-def _refining(fitter: _Fitter, plan) -> _Fitter:
+def _refining(fitter: Fitter, plan) -> Fitter:
     """The fitter of the refinement passes: a robust fit reweights :data:`~core.tuning.IRLS_LATER`
     times (its input normals are the previous fit's, cleaned by that fit's weights); with
     k="auto" a neighbourhood of at least twice :data:`~core.tuning.ROWS_LATER` is thinned
@@ -139,12 +140,9 @@ def _with_jets(best: Refined, sc: Scale) -> Refined:
 
 def _drop_outliers(best: Refined, outlier) -> Refined:
     """Outliers are not estimated in robust mode (a kept first fit still estimated them)."""
-    fit = best.fit
-    if not fit.valid[outlier].any():
+    if not best.fit.valid[outlier].any():
         return best
-    cleared = {name: np.where(outlier.reshape((-1,) + (1,) * (a.ndim - 1)), np.nan, a)
-               for name, a in zip(Fit._fields[:5], fit[:5])}
-    return best._replace(fit=fit._replace(**cleared, valid=fit.valid & ~outlier))
+    return best._replace(fit=invalid_at(best.fit, outlier, ("normals", *CURVATURES)))
 
 
 class _Held:

@@ -1,11 +1,15 @@
-"""Image checks shared by the viewer tests."""
+"""Shared by the viewer tests: image checks, waiting for a result, an estimate held until let go,
+and what holds the GUI thread (:class:`GuiBeat`)."""
 
 from __future__ import annotations
 
 import contextlib
+import gc
 import os
 import subprocess
 import sys
+import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -96,3 +100,66 @@ def on_next_preview(window, action):
 
     window.preview_shown.connect(slot)
     return seen
+
+
+class GuiBeat:
+    """A 0 ms timer on the GUI thread, one beat a turn of the event loop. ``longest_block()``:
+    the most CPU seconds the GUI thread spent between two beats (``time.thread_time``): the work
+    that held the event loop, not the wall time a loaded machine made it wait, so a busy CI
+    machine does not stretch it; compare it with :func:`full_frames_cpu` of the same run.
+    The collector is off from :meth:`start` to :meth:`stop` (its pauses block no view)."""
+
+    def __init__(self):
+        from PySide6.QtCore import QTimer
+
+        self.cpu = []
+        self.timer = QTimer()
+        self.timer.setInterval(0)
+        self.timer.timeout.connect(lambda: self.cpu.append(time.thread_time()))
+
+    def start(self) -> None:
+        gc.disable()
+        self.timer.start()
+
+    def stop(self) -> None:
+        self.timer.stop()
+        gc.enable()
+
+    def longest_block(self) -> float:
+        return float(np.max(np.diff(self.cpu))) if len(self.cpu) > 1 else 0.0
+
+
+def full_frames_cpu(plotters, repeats: int = 3) -> float:
+    """The GUI thread's CPU seconds to render each of ``plotters`` once as it stands (the
+    median of ``repeats``): the yardstick of a frame on this machine, in this run."""
+    spent = []
+    for _ in range(repeats):
+        start = time.thread_time()
+        for plotter in plotters:
+            plotter.render_window.Render()
+        spent.append(time.thread_time() - start)
+    return float(np.median(spent))
+
+
+def hold_first_estimate(monkeypatch):
+    """The viewer's ``core.estimate``: the first call runs until it is cancelled, however fast
+    the machine, then ends only when the test sets the event returned (or after 30 s); the
+    later calls are real. Returns ``(event, states)``: the first call's "running", then "ended"."""
+    import app.worker
+    import core
+
+    real, states, release = core.estimate, [], threading.Event()
+
+    def hold_first(*args, progress=None, **kwargs):
+        if states:
+            return real(*args, progress=progress, **kwargs)
+        states.append("running")
+        t0 = time.monotonic()
+        while progress(0.0, "held") is not False and time.monotonic() - t0 < 30:
+            time.sleep(0.02)
+        release.wait(30)
+        states.append("ended")
+        raise core.Cancelled("held until cancelled")
+
+    monkeypatch.setattr(app.worker.core, "estimate", hold_first)
+    return release, states

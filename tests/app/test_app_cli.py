@@ -63,9 +63,8 @@ def test_ctrl_c_quits_the_viewer_with_130(tmp_path):
 def test_ctrl_c_before_the_event_loop_runs_still_quits(qapp):
     """Ctrl-C between the handler's installation and ``exec()`` (the window being built, the
     first cloud opening) quits once the loop starts: a plain ``quit()`` there was lost and
-    the viewer ran on, deaf to Ctrl-C."""
+    the viewer ran on, deaf to Ctrl-C (here until a 5 s guard quit the loop)."""
     import signal
-    import time
 
     from PySide6.QtCore import QTimer
 
@@ -76,18 +75,16 @@ def test_ctrl_c_before_the_event_loop_runs_still_quits(qapp):
     timer = _quit_on_sigint(qapp, outcome)
     guard = QTimer()
     guard.setSingleShot(True)
-    guard.timeout.connect(qapp.quit)
+    guard.timeout.connect(lambda: (outcome.update(guard=True), qapp.quit()))
     try:
         signal.raise_signal(signal.SIGINT)  # the Python handler runs here, before exec()
         guard.start(5000)
-        start = time.perf_counter()
         qapp.exec()
-        took = time.perf_counter() - start
     finally:
         timer.stop()
         guard.stop()
         signal.signal(signal.SIGINT, before)
-    assert outcome["code"] == 130 and took < 2.0, took
+    assert outcome == {"code": 130}, outcome  # quit by Ctrl-C's quit, not the guard
 
 
 def test_run_ends_the_process_at_once_when_a_job_is_still_running(monkeypatch):

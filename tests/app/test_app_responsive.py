@@ -4,12 +4,11 @@ from __future__ import annotations
 
 import gc
 import os
-import time
 import weakref
 
 import numpy as np
 import pytest
-from app_testutils import wait_result
+from app_testutils import hold_first_estimate, wait_result
 from PySide6.QtCore import QCoreApplication, QEvent, QSettings
 
 from app.source import make_shape
@@ -84,30 +83,15 @@ def test_border_flags_are_computed_on_the_job_thread(make_window, qtbot, monkeyp
 
 
 def test_cancel_idles_at_once_and_a_cancelled_first_estimate_stays_usable(make_window, qtbot, monkeypatch):
-    import app.worker
-    import core
-
-    real, held = core.estimate, []
-
-    def hold_first(*args, progress=None, **kwargs):
-        """The first estimate runs until it is cancelled, however fast the machine (CI finished
-        a 20k sphere inside the 300 ms this test waits); the later ones are real."""
-        if not held:
-            held.append(True)
-            t0 = time.monotonic()
-            while progress(0.0, "held") is not False and time.monotonic() - t0 < 30:
-                time.sleep(0.02)
-            raise core.Cancelled("held until cancelled")
-        return real(*args, progress=progress, **kwargs)
-
-    monkeypatch.setattr(app.worker.core, "estimate", hold_first)
+    release, held = hold_first_estimate(monkeypatch)
     big = make_shape("sphere", 20000)
     window = make_window(big, wait=False)
     qtbot.waitUntil(lambda: window.estimator.busy, timeout=10_000)
-    qtbot.wait(300)  # inside the estimate
-    t0 = time.perf_counter()
+    qtbot.wait(300)
+    qtbot.waitUntil(lambda: bool(held), timeout=10_000)  # inside the estimate
     window.progress.cancel.click()
-    assert time.perf_counter() - t0 < 0.3 and not window.estimator.busy
+    assert not window.estimator.busy and held == ["running"]  # idle without waiting for the job
+    release.set()
     assert not window.progress.shown
     assert "not estimated" in window.status_label.text()
     assert window.output is None

@@ -9,7 +9,6 @@ zoom-detail selection computed on another view's clipping range was applied with
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
 import numpy as np
@@ -23,10 +22,10 @@ BUNNY = Path(__file__).resolve().parents[2] / "resources" / "bunny.ply"
 
 class _Frames:
     """Every frame of the main and compare views, with the turn of the event loop it came in
-    (a 0 ms timer counts the turns), and the longest gap between heartbeats."""
+    (a 0 ms timer counts the turns)."""
 
     def __init__(self, window):
-        self.turn, self.frames, self.beats = 0, [], []
+        self.turn, self.frames = 0, []
         self.timer = QTimer()
         self.timer.setInterval(0)
         self.timer.timeout.connect(self._beat)
@@ -36,7 +35,6 @@ class _Frames:
 
     def _beat(self):
         self.turn += 1
-        self.beats.append(time.perf_counter())
 
     def _frame(self, view):
         self.frames.append((view, self.turn))
@@ -49,9 +47,6 @@ class _Frames:
         self.timer.stop()
         for rw, tag in self.tags:
             rw.RemoveObserver(tag)
-
-    def longest_gap(self) -> float:
-        return float(np.max(np.diff(self.beats))) if len(self.beats) > 1 else 0.0
 
 
 def _toggle_compare(window, qtbot, watch: _Frames, method="ct"):
@@ -82,15 +77,17 @@ def test_compare_view_paints_one_view_a_turn_and_each_once(make_window, qtbot):
 
 
 def test_compare_view_with_200k_points_keeps_the_gui_responsive(make_window, qtbot):
-    """The heartbeat's longest gap while the compare view comes on at 200k points. Before:
-    0.69-1.76 s (this 2-core VM, load 2.6-5); after: 0.17-0.33 s under the same load, one
-    frame of half the still budget per turn. The bound leaves room for a loaded machine."""
+    """The compare view comes on at 200k points one frame a turn of the event loop, each of
+    half the still budget. Before: 2-3 turns held 9 frames of 100k sprites (a heartbeat gap
+    of 0.69-1.76 s on this 2-core VM, 0.17-0.33 s after; a bound on that wall time failed
+    on a loaded machine, the frames a turn do not depend on its load)."""
     window = make_window(make_shape("torus", 200_000), size=(1440, 900), timeout=240_000)
     qtbot.waitUntil(lambda: not window._frame_due and not window.histogram.draw_pending, timeout=20_000)
     qtbot.wait(500)
     watch = _Frames(window)
     _toggle_compare(window, qtbot, watch)
-    assert watch.longest_gap() < 0.45, watch.longest_gap()
+    turns = [turn for _view, turn in watch.frames]
+    assert turns and len(turns) == len(set(turns)), watch.frames  # one frame a turn
     from app.lod import STILL_POINTS
 
     assert {len(window.scene.drawn), len(window.compare.scene.drawn)} == {STILL_POINTS // 2}

@@ -11,7 +11,7 @@ from __future__ import annotations
 import time
 
 import numpy as np
-from app_testutils import wait_result
+from app_testutils import GuiBeat, full_frames_cpu, wait_result
 from PySide6.QtCore import QEvent, QPoint, QPointF, Qt, QTimer
 from PySide6.QtGui import QMouseEvent, QWheelEvent
 from PySide6.QtWidgets import QApplication
@@ -21,19 +21,16 @@ from app.source import make_shape
 
 class _Drag:
     """A left-button drag across ``view``, one step every ``interval`` ms from a timer (as a
-    user's mouse comes), with a 0 ms heartbeat and every frame of both views recorded as
-    (view, seconds, main stand-in on, compare stand-in on)."""
+    user's mouse comes), with a heartbeat (:class:`GuiBeat`) and every frame of both views
+    recorded as (view, seconds, main stand-in on, compare stand-in on)."""
 
     def __init__(self, window, view, steps: int = 24, interval: int = 30):
         self.window, self.view, self.steps, self.step = window, view, steps, 0
-        self.frames, self.beats, self._started, self._tags = [], [], {}, []
+        self.frames, self.beat, self._started, self._tags = [], GuiBeat(), {}, []
         for name, plotter in (("main", window.plotter), ("compare", window.compare.plotter)):
             rw = plotter.render_window
             self._tags += [(rw, rw.AddObserver("StartEvent", lambda *_a, n=name: self._start(n))),
                            (rw, rw.AddObserver("EndEvent", lambda *_a, n=name: self._end(n)))]
-        self.heart = QTimer()
-        self.heart.setInterval(0)
-        self.heart.timeout.connect(lambda: self.beats.append(time.perf_counter()))
         self.mover = QTimer()
         self.mover.setInterval(interval)
         self.mover.timeout.connect(self._move)
@@ -59,24 +56,23 @@ class _Drag:
             self.mover.stop()
 
     def run(self, qtbot):
-        self.heart.start()
-        self._send(QEvent.Type.MouseButtonPress, 0, Qt.MouseButton.LeftButton)
-        self.mover.start()
-        qtbot.waitUntil(lambda: not self.mover.isActive(), timeout=60_000)
-        qtbot.wait(100)  # the last step's frames
-        self.moving = list(self.frames)
-        self._send(QEvent.Type.MouseButtonRelease, self.step, Qt.MouseButton.NoButton)
-        qtbot.wait(600)
-        self.heart.stop()
+        self.beat.start()
+        try:
+            self._send(QEvent.Type.MouseButtonPress, 0, Qt.MouseButton.LeftButton)
+            self.mover.start()
+            qtbot.waitUntil(lambda: not self.mover.isActive(), timeout=60_000)
+            qtbot.wait(100)  # the last step's frames
+            self.moving = list(self.frames)
+            self._send(QEvent.Type.MouseButtonRelease, self.step, Qt.MouseButton.NoButton)
+            qtbot.wait(600)
+        finally:
+            self.beat.stop()
         for rw, tag in self._tags:
             rw.RemoveObserver(tag)
         return self
 
     def frame_times(self, name) -> np.ndarray:
         return np.array([f[1] for f in self.moving if f[0] == name])
-
-    def longest_gap(self) -> float:
-        return float(np.max(np.diff(self.beats)))
 
 
 def _compare_window(make_window, qtbot, n):
@@ -92,7 +88,12 @@ def _compare_window(make_window, qtbot, n):
 def test_dragging_either_view_shows_both_stand_ins_and_draws_each_step_once(make_window, qtbot):
     """200k points, compare on. Old code: the compare view drew a still frame of 50k spheres
     at every step (median 0.045-0.07 s against 0.02-0.03 s for the stand-in, this 2-core VM
-    under load 4) and the dragged view rendered each step twice."""
+    under load 4) and the dragged view rendered each step twice. Nothing but frames holds the
+    GUI thread: no turn of the event loop, the release's two full frames included, takes
+    more of its CPU than three full frames of both views measured after the drag and 0.05 s
+    (a turn's own work, whatever the GL driver leaves on the thread); a wall-time bound of
+    0.6 s failed at load 5-7 on a 2-core machine. Measured: 0.022-0.028 s against frames of
+    0.018 s; a 0.1 s CPU block at each step: 0.129 s."""
     window = _compare_window(make_window, qtbot, 200_000)
     for view in (window.plotter, window.compare.plotter):
         drag = _Drag(window, view).run(qtbot)
@@ -103,10 +104,12 @@ def test_dragging_either_view_shows_both_stand_ins_and_draws_each_step_once(make
         assert 0 < counts["main"] <= drag.steps + 1 and 0 < counts["compare"] <= drag.steps + 1, counts
         print(f"\ndrag in the {'main' if view is window.plotter else 'compare'} view: {drag.steps} steps, "
               f"frames {counts}, median main {np.median(drag.frame_times('main')):.3f} s, "
-              f"compare {np.median(drag.frame_times('compare')):.3f} s, longest gap {drag.longest_gap():.3f} s")
-        assert drag.longest_gap() < 0.6, drag.longest_gap()  # (the release draws both full frames)
+              f"compare {np.median(drag.frame_times('compare')):.3f} s")
         # released: both views back to their full clouds
         assert not window.scene.lod.active and not window.compare.scene.lod.active
+        frames = full_frames_cpu((window.plotter, window.compare.plotter))
+        print(f"longest block {drag.beat.longest_block():.3f} s CPU, full frames {frames:.3f} s CPU")
+        assert drag.beat.longest_block() < 3 * frames + 0.05, (drag.beat.longest_block(), frames)
         assert window.scene._actor.GetVisibility() and window.compare.scene._actor.GetVisibility()
 
 

@@ -7,10 +7,10 @@ import pytest
 from scipy.spatial import cKDTree
 
 import core
-from core import anchor_blend, anchors, noise, refinement, scale, shapes, stages, wide_rows
+from core import anchor_blend, anchors, fits, noise, refinement, scale, shapes, wide_rows
 from core._progress import Progress
 from core.methods import METHODS
-from core.stages import _empty_fit, _Fitter
+from core.fits import Fitter, empty_fit
 
 CUBIC = dict(weights="uniform", constraint="project", robust=None, degree=3)
 
@@ -22,8 +22,8 @@ def _graph(pts, k):
 
 def _fit(pts, nrm, k, anchor):
     idx, h = _graph(pts, k)
-    out = _empty_fit(len(pts))
-    _Fitter(pts, idx, np.full(len(pts), k), h, METHODS["nr"], dict(CUBIC), anchor).into(
+    out = empty_fit(len(pts))
+    Fitter(pts, idx, np.full(len(pts), k), h, METHODS["nr"], dict(CUBIC), anchor).into(
         out, nrm, np.ones(len(pts), dtype=bool), Progress(None))
     return out
 
@@ -44,8 +44,8 @@ def test_the_compiled_blend_is_the_numpy_reference(constraint, monkeypatch):
     idx, h = _graph(pts, 80)
     nrm = core.estimate(pts, k=15).normals
     kept = anchors.Kept(anchor)
-    fitter = _Fitter(pts, idx, np.full(len(pts), 80), h, METHODS["nr"], dict(CUBIC, constraint=constraint), anchor)
-    fitter._fit(_empty_fit(len(pts)), nrm, np.isin(np.arange(len(pts)), kept.points), Progress(None), kept)
+    fitter = Fitter(pts, idx, np.full(len(pts), 80), h, METHODS["nr"], dict(CUBIC, constraint=constraint), anchor)
+    fitter._fit(empty_fit(len(pts)), nrm, np.isin(np.arange(len(pts)), kept.points), Progress(None), kept)
     points = np.flatnonzero(anchors.followers(anchor))
     picked = anchor[points]
     got, good, r = anchor_blend.blended(kept, pts, nrm, points, picked, constraint)
@@ -203,14 +203,14 @@ def test_a_follower_whose_anchor_fails_fits_its_own_on_rows_searched_then(monkey
     where its anchor's fit fails it fits its own on rows searched then: the same numbers as
     with every row searched first."""
     pts = noise.add_noise(shapes.torus(6000, seed=5).points, 0.2, seed=6)
-    real, failed = stages.blended, []
+    real, failed = fits.blended, []
 
     def failing(kept, pts_, nrm, points, picked, constraint):
         frame, good, r = real(kept, pts_, nrm, points, picked, constraint)
         failed.append(int((good & (points % 7 == 0)).sum()))
         return frame, good & (points % 7 != 0), r
 
-    monkeypatch.setattr(stages, "blended", failing)
+    monkeypatch.setattr(fits, "blended", failing)
     lazy = core.estimate(pts)
     assert min(failed) > 100
     monkeypatch.setattr(refinement, "rows_at_least", lambda nb, kc, fits=None: wide_rows.rows_at_least(nb, kc))

@@ -7,7 +7,7 @@ import numpy as np
 
 import core
 from core import drift, metrics, noise, shapes
-from core.stages import Fit
+from core.fits import Fit
 
 
 def _fit(h, normals=None, valid=None):

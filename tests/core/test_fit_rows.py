@@ -8,7 +8,7 @@ import pytest
 import core
 from core.methods import get_method
 from core.patch import Chunk
-from core.stages import _Fitter
+from core.fits import Fitter
 
 
 def _cloud():
@@ -36,7 +36,7 @@ def test_rows_in_place_are_the_copy_bit_for_bit(opts):
 def test_the_fitter_reads_a_contiguous_graph_in_place():
     p, nrm, idx, dist = _cloud()
     n = len(p)
-    fitter = _Fitter(p, idx, np.full(n, 60), dist[:, -1], get_method("nr"), {})
+    fitter = Fitter(p, idx, np.full(n, 60), dist[:, -1], get_method("nr"), {})
     c = np.arange(10, 20)
     [chunk] = fitter._chunks(nrm, c, True)
     assert chunk.idx is idx and np.array_equal(chunk.rows, c)

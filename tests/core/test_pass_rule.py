@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import core
-from core import passes, stages
+from core import fits, passes
 
 
 def test_rule_sample_is_every_point_of_a_small_cloud_and_spread_over_a_large_one():
@@ -31,7 +31,7 @@ def test_judging_on_a_sample_keeps_the_passes_and_the_numbers(noisy, monkeypatch
     whole = core.estimate(noisy)
     assert whole.params["passes_run"] >= 2  # the rule had passes to judge
     seen = []
-    real_into = stages._Fitter.into
+    real_into = fits.Fitter.into
 
     def into(self, out, nrm, has_normal, report, *kept):
         seen.append(int(has_normal.sum()))
@@ -39,7 +39,7 @@ def test_judging_on_a_sample_keeps_the_passes_and_the_numbers(noisy, monkeypatch
 
     whole_cloud_rule = passes.rule_sample
     monkeypatch.setattr(passes, "rule_sample", lambda pts, n=None: whole_cloud_rule(pts, n, size=1000))
-    monkeypatch.setattr(stages._Fitter, "into", into)
+    monkeypatch.setattr(fits.Fitter, "into", into)
     part = core.estimate(noisy)
     assert part.params["passes_run"] == whole.params["passes_run"]
     for name in ("normals", "k1", "k2", "e1"):

@@ -134,14 +134,15 @@ def test_the_flags_leave_the_fit_they_read_unchanged(seed):
     into its input normals (in 3 tiles of a uniform cube, 3 % of the normals' signs differed
     from the in-memory estimate's; 0.03 % now)."""
     from core.planning import plan as make_plan
-    from core.stages import _empty_fit, flags, off_volume
+    from core.fits import empty_fit
+    from core.stages import flags, off_volume
     from core.wide_neighbours import search_in_spatial_order
 
     for name, pts in _volumes(seed).items():
         plan = make_plan(len(pts), k="auto")
         nb, _ = search_in_spatial_order(pts, plan.k_search, width=40)
         rng = np.random.default_rng(seed)
-        fit = _empty_fit(len(pts))._replace(valid=np.ones(len(pts), dtype=bool))
+        fit = empty_fit(len(pts))._replace(valid=np.ones(len(pts), dtype=bool))
         for values in fit[:5] + fit[6:8]:
             values[...] = rng.normal(size=values.shape)
         before = [np.copy(values) for values in fit]
