@@ -43,73 +43,86 @@ class DegreeRule(NamedTuple):
 
 
 class DegreeScratch(NamedTuple):
-    """Per-block scratch of the rule: the factor (mats[1]) and vectors of :func:`_fit_degree`,
-    and per model (then per cubic size, rows len(kd) + c) its ``fits`` row (f_uu, f_uv,
-    f_vv, their sd, residual variance per degree of freedom), first 6 coefficients and ``ok``;
-    ``chain`` (2, 3) the intersection of the richer models' intervals so far, ``alive[0]`` while
-    it is not empty (:func:`grow` fits no model past the first that leaves it)."""
+    """Per-block scratch of the rule, whole arrays only (a row or a record taken inside the loop
+    over sizes costs an atomic reference count, :mod:`core.kernels.jets`): the factor ``L`` and
+    vectors ``d``, ``x`` of :func:`_fit_degree`; ``table`` (rows + 5, P5): per model (then per
+    cubic size, rows n_models + c) its fit in columns :data:`FIT` (f_uu, f_uv, f_vv, their sd,
+    residual variance per degree of freedom) and its first 6 coefficients in :data:`KEEP`, then
+    (rows :data:`CHAIN` past them) the intersection of the richer models' intervals so far (lower,
+    upper ends) and 3 rows of scratch; ``flags`` (rows + 1,): each row's ``ok``, then whether that
+    intersection is not empty (:func:`grow` fits no model past the first that leaves it)."""
 
-    mats: np.ndarray
-    vecs: np.ndarray
-    fits: np.ndarray
-    keep: np.ndarray
-    ok: np.ndarray
-    chain: np.ndarray
-    alive: np.ndarray
+    L: np.ndarray
+    d: np.ndarray
+    x: np.ndarray
+    table: np.ndarray
+    flags: np.ndarray
+
+
+#: columns of a model's row of ``DegreeScratch.table``: its fit, its first 6 coefficients
+FIT, KEEP = 0, 7
+#: rows of the table past the models' and sizes': the chain's ends (2), the fits' scratch (3)
+CHAIN, TMP = 0, 2
 
 
 @njit(**OPTS)
 def degree_scratch(n_models, n_sizes):
     """A :class:`DegreeScratch` for ``n_models`` models and ``n_sizes`` cubic sizes."""
     rows = n_models + n_sizes
-    return DegreeScratch(np.empty((2, P5, P5)), np.empty((8, P5)), np.empty((rows, 7)), np.empty((rows, 6)),
-                         np.zeros(rows, dtype=np.bool_), np.empty((2, 3)), np.ones(1, dtype=np.bool_))
+    return DegreeScratch(np.empty((P5, P5)), np.empty(P5), np.empty(P5), np.empty((rows + 5, P5)),
+                         np.zeros(rows + 1, dtype=np.bool_))
 
 
 @njit(**OPTS, inline="always")
-def start_chain(ds):
+def start_chain(table, flags):
     """Forget the previous centre's models: none fitted, the intersection everything."""
-    ds.ok[:] = False
-    ds.chain[0, :] = -math.inf
-    ds.chain[1, :] = math.inf
-    ds.alive[0] = True
+    rows = len(flags) - 1
+    flags[:] = False
+    for t in range(3):
+        table[rows + CHAIN, t] = -math.inf
+        table[rows + CHAIN + 1, t] = math.inf
+    flags[rows] = True
 
 
 @njit(**OPTS, inline="always")
-def _narrow(lo, hi, fit, gamma):
-    """Intersect [lo, hi] (3,) with ``fit``'s Hessian interval (+-gamma sd); True if not empty."""
+def _narrow(table, ends, fit, gamma):
+    """Intersect [lo, hi] (table rows ends, ends + 1) with row ``fit``'s Hessian interval (+-gamma
+    sd); True if not empty."""
     meet = True
     for t in range(3):
-        lo[t] = max(lo[t], fit[t] - gamma * fit[3 + t])
-        hi[t] = min(hi[t], fit[t] + gamma * fit[3 + t])
-        meet = meet and lo[t] <= hi[t]
+        table[ends, t] = max(table[ends, t], table[fit, FIT + t] - gamma * table[fit, FIT + 3 + t])
+        table[ends + 1, t] = min(table[ends + 1, t], table[fit, FIT + t] + gamma * table[fit, FIT + 3 + t])
+        meet = meet and table[ends, t] <= table[ends + 1, t]
     return meet
 
 
 @njit(**OPTS, inline="always")
-def _fit_degree(G, b, acc, degree, rcond, sigma2, mats, vecs, out):
-    """Jet of ``degree`` from its sums (:func:`_sums`): out = (f_uu, f_uv, f_vv, their sd
-    at noise sigma2, residual variance per degree of freedom); False if rank deficient.
-    The coefficients stay in vecs[2] (x), the first p of them used."""
+def _fit_degree(G, b, acc, degree, rcond, sigma2, L, d, x, table, out):
+    """Jet of ``degree`` from its sums (:func:`_sums`): row ``out`` of ``table`` gets (f_uu,
+    f_uv, f_vv, their sd at noise sigma2, residual variance per degree of freedom) and the first
+    6 coefficients; False if rank deficient. The coefficients stay in x, the first p of them
+    used; (L, d, x, table) as :class:`DegreeScratch` holds them."""
     p = (degree + 1) * (degree + 2) // 2
-    L = mats[1]
-    x, d = vecs[2], vecs[3]
     n = int(acc[1])
-    if n <= p or not cholesky(G, p, rcond, d, L):
-        return False
-    chol_solve(L, d, p, b, x)
-    _degree_out(L, d, x, b, acc[0], n, p, sigma2, vecs[5:8], out)
-    return True
+    fitted = n > p and cholesky(G, p, rcond, d, L)
+    if fitted:
+        chol_solve(L, d, p, b, x)
+        _degree_out(L, d, x, b, acc[0], n, p, sigma2, table, out)
+    for a in range(6):
+        table[out, KEEP + a] = x[a]
+    return fitted
 
 
 @njit(**OPTS)
-def _degree_out(L, d, x, b, ww, n, p, sigma2, tmp, out):
-    """:func:`_fit_degree`'s ``out`` from the factor (L, d) of p terms, the solution x, the
-    sums b and ww = sum w^2 of n neighbours; ``tmp`` (3, p) scratch."""
+def _degree_out(L, d, x, b, ww, n, p, sigma2, table, out):
+    """:func:`_fit_degree`'s row ``out`` of ``table`` from the factor (L, d) of p terms, the
+    solution x, the sums b and ww = sum w^2 of n neighbours; the table's last 3 rows scratch."""
+    tmp = len(table) - 5 + TMP
     rss = ww
     for a in range(p):
         rss -= x[a] * b[a]
-    out[3:6] = 0.0  # the variances first: (G^-1)_ii = |L^-1 e_i|^2 / d_i^2, L^-1 e_i zero above i,
+    for t in range(3):  # the variances first: (G^-1)_ii = |L^-1 e_i|^2 / d_i^2, L^-1 e_i zero above i,
+        table[out, FIT + 3 + t] = 0.0
     for a in range(3, p):  # three short forward passes (rows of tmp), interleaved: the same operations
         for t in range(3):
             i = 3 + t
@@ -117,34 +130,37 @@ def _degree_out(L, d, x, b, ww, n, p, sigma2, tmp, out):
                 continue
             acc_ = 1.0 if a == i else 0.0
             for c in range(i, a):
-                acc_ -= L[a, c] * tmp[t, c]
-            tmp[t, a] = acc_ / L[a, a]
-            out[3 + t] += tmp[t, a] * tmp[t, a]
+                acc_ -= L[a, c] * table[tmp + t, c]
+            table[tmp + t, a] = acc_ / L[a, a]
+            table[out, FIT + 3 + t] += table[tmp + t, a] * table[tmp + t, a]
     for t in range(3):
-        out[3 + t] = (2.0 if t != 1 else 1.0) * math.sqrt(out[3 + t] * sigma2) / d[3 + t]
-    out[0], out[1], out[2] = 2.0 * x[3], x[4], 2.0 * x[5]
-    out[6] = max(rss, 0.0) / (n - p)
+        table[out, FIT + 3 + t] = (2.0 if t != 1 else 1.0) * math.sqrt(table[out, FIT + 3 + t] * sigma2) / d[3 + t]
+    table[out, FIT], table[out, FIT + 1], table[out, FIT + 2] = 2.0 * x[3], x[4], 2.0 * x[5]
+    table[out, FIT + 6] = max(rss, 0.0) / (n - p)
 
 
 @njit(**OPTS, inline="always")
-def grow(uvw, j0, j1, deg, row, G, b, acc, sigma2, rcond, ds):
-    """Sums of neighbours j0 <= j < j1 (offsets in ``uvw``) added onto G, b, acc (with the
-    count in acc[1]): of degree ``deg.dmax`` up to ``deg.kmax``, cubic after, and each model
-    of ``deg`` fitted (into ``ds``) when they reach its ``kd``, until one's interval (``deg.gamma``
-    sd) leaves those before it (the walk ends there: the wider ones are not needed). Every entry
-    adds the same products in the same order as a pass of its own."""
+def grow(uvw, j0, j1, deg, sums, sigma2, rcond, L, d, x, table, flags):
+    """Sums of neighbours j0 <= j < j1 (offsets in ``uvw``) added onto ``sums`` = (row, G, b,
+    acc) (with the count in acc[1]): of degree ``deg.dmax`` up to ``deg.kmax``, cubic after, and
+    each model of ``deg`` fitted (into the :class:`DegreeScratch` arrays L, d, x, table, flags)
+    when they reach its ``kd``, until one's interval (``deg.gamma`` sd) leaves those before it
+    (the walk ends there: the wider ones are not needed). Every entry adds the same products in
+    the same order as a pass of its own."""
+    row, G, b, acc = sums
+    alive = len(flags) - 1
+    ends = alive + CHAIN
     j = j0
     for t in range(len(deg.by_k)):
         mi = deg.by_k[t]
         k = deg.kd[mi]
-        if ds.alive[0] and j0 < k <= j1:
+        if flags[alive] and j0 < k <= j1:
             _sums(uvw, j, k, deg.dmax, row, G, b, acc)
             j = k
-            ds.ok[mi] = _fit_degree(G, b, acc, deg.degrees[mi], rcond, sigma2, ds.mats, ds.vecs, ds.fits[mi])
-            ds.keep[mi, :] = ds.vecs[2, :6]
-            if ds.ok[mi]:
-                ds.alive[0] = _narrow(ds.chain[0], ds.chain[1], ds.fits[mi], deg.gamma)
-    top = min(j1, deg.kmax) if ds.alive[0] else j
+            flags[mi] = _fit_degree(G, b, acc, deg.degrees[mi], rcond, sigma2, L, d, x, table, mi)
+            if flags[mi]:
+                flags[alive] = _narrow(table, ends, mi, deg.gamma)
+    top = min(j1, deg.kmax) if flags[alive] else j
     if j < top:
         _sums(uvw, j, top, deg.dmax, row, G, b, acc)
         j = top
@@ -152,27 +168,27 @@ def grow(uvw, j0, j1, deg, row, G, b, acc, sigma2, rcond, ds):
 
 
 @njit(**OPTS, inline="always")
-def stash_cubic(L, d, x, b, acc, sigma2, row, ds):
-    """Keep, as ``ds``'s row ``row``, what :func:`_fit_degree` gives the cubic whose factor
-    (L, d) and solution x the intervals computed on the sums b, acc (the same factor:
-    the same sums and the same :func:`cholesky`)."""
+def stash_cubic(L, d, x, b, acc, sigma2, row, table, flags):
+    """Keep, as row ``row`` of a :class:`DegreeScratch`'s ``table`` and ``flags``, what
+    :func:`_fit_degree` gives the cubic whose factor (L, d) and solution x the intervals
+    computed on the sums b, acc (the same factor: the same sums and the same :func:`cholesky`)."""
     n = int(acc[1])
-    ds.ok[row] = n > P3
+    flags[row] = n > P3
     if n > P3:
-        _degree_out(L, d, x, b, acc[0], n, P3, sigma2, ds.vecs[5:8], ds.fits[row])
-    ds.keep[row, :] = x[:6]
+        _degree_out(L, d, x, b, acc[0], n, P3, sigma2, table, row)
+    for a in range(6):
+        table[row, KEEP + a] = x[a]
 
 
-@njit(**OPTS, inline="always")
-def walk(ds, deg, c, bounds):
+@njit(**OPTS)
+def walk(table, flags, deg, c):
     """:func:`_walk_down` over the models of ``deg`` and the cubic at its size index c (kept by
-    :func:`stash_cubic` in row n_models + c)."""
+    :func:`stash_cubic` in row n_models + c) of a :class:`DegreeScratch`'s table and flags."""
     n_models = len(deg.kd)
     top = n_models + c
-    ds.fits[n_models, :] = ds.fits[top]
-    ds.keep[n_models, :] = ds.keep[top]
-    ds.ok[n_models] = ds.ok[top]
-    return _walk_down(ds.fits[:n_models + 1], ds.ok[:n_models + 1], deg.gamma, bounds, deg.misfit)
+    table[n_models, :] = table[top]
+    flags[n_models] = flags[top]
+    return _walk_down(table, flags, n_models + 1, deg.gamma, deg.misfit)
 
 
 @njit(**OPTS, parallel=True)
@@ -205,41 +221,38 @@ def _degrees_block(f, degrees, kd, k3, sigma2, rule, chosen, coef, start, stop):
     rcond, misfit, gamma = rule
     kmax = min(max(kd.max(), k3.max()), f.idx.shape[1])
     uvw = np.empty((3, kmax))
-    mats, vecs = np.empty((2, P5, P5)), np.empty((8, P5))
     nm = len(degrees) + 1
-    fits, ok = np.empty((nm, 7)), np.empty(nm, dtype=np.bool_)
-    keep, bounds = np.empty((nm, 6)), np.empty((2, 3))
+    L, d, x, table, ok = degree_scratch(nm - 1, 1)
+    G, row, b = np.empty((P5, P5)), np.empty(P5), np.empty(P5)
     G3, b3, accs = np.empty((P3, P3)), np.empty(P3), np.empty((2, 2))  # accs: model 0's sums, the cubic's
     for r in range(start, stop):
         _offsets(f, r, 0, min(max(kd.max(), k3[r]), kmax), uvw)
         shared = nm > 1 and degrees[0] >= 3 and kd[0] <= kmax  # the cubic's sums come with those of model 0
         for mi in range(nm - 1):
             grows = mi == 0 or k3[r] >= kd[0]  # past the first model only where the cubic reached it
-            ok[mi] = kd[mi] <= kmax and grows and _higher_fit(uvw, degrees[mi], kd[mi], k3[r] if mi == 0 and shared
-                                                              else 0, sigma2[r], rcond, mats, vecs, accs, G3, b3,
-                                                              fits[mi])
-            keep[mi, :] = vecs[2, :6]
+            ok[mi] = False
+            if kd[mi] <= kmax and grows:
+                _higher_sums(uvw, degrees[mi], kd[mi], k3[r] if mi == 0 and shared else 0, (row, G, b, accs[0]),
+                             G3, b3, accs[1])
+                ok[mi] = _fit_degree(G, b, accs[0], degrees[mi], rcond, sigma2[r], L, d, x, table, mi)
         if not shared:  # the cubic's sums from nothing
             G3[:, :] = 0.0
             b3[:] = 0.0
             accs[1, :] = 0.0
-            _sums(uvw, 0, k3[r], 3, vecs[0], G3, b3, accs[1])
-        ok[nm - 1] = _fit_degree(G3, b3, accs[1], 3, rcond, sigma2[r], mats, vecs, fits[nm - 1])
-        keep[nm - 1, :] = vecs[2, :6]
-        chosen[r] = _walk_down(fits, ok, gamma, bounds, misfit)
-        if chosen[r] >= 0:
-            coef[r, :] = keep[chosen[r]]
-        else:
-            coef[r, :] = math.nan
+            _sums(uvw, 0, k3[r], 3, row, G3, b3, accs[1])
+        ok[nm - 1] = _fit_degree(G3, b3, accs[1], 3, rcond, sigma2[r], L, d, x, table, nm - 1)
+        chosen[r] = _walk_down(table, ok, nm, gamma, misfit)
+        for a in range(6):
+            coef[r, a] = table[chosen[r], KEEP + a] if chosen[r] >= 0 else math.nan
 
 
 @njit(**OPTS)
-def _higher_fit(uvw, degree, k, k3, sigma2, rcond, mats, vecs, accs, G3, b3, out):
-    """:func:`_fit_degree` of ``degree`` on k neighbours (its sum of w^2 and count in
-    accs[0]); with k3 > 0 also the cubic's sums on k3 into G3, b3, accs[1], taken from the
-    same pass: the leading block of these sums after min(k, k3) neighbours, then grown
-    alone (each sum adds the same terms in the same order as a pass of its own)."""
-    G, b, row, acc, acc3 = mats[0], vecs[1], vecs[0], accs[0], accs[1]
+def _higher_sums(uvw, degree, k, k3, sums, G3, b3, acc3):
+    """The sums (:func:`_sums`) of ``degree`` on k neighbours into ``sums`` = (row, G, b, acc);
+    with k3 > 0 also the cubic's sums on k3 into G3, b3, acc3, taken from the same pass: the
+    leading block of these sums after min(k, k3) neighbours, then grown alone (each sum adds
+    the same terms in the same order as a pass of its own)."""
+    row, G, b, acc = sums
     p = (degree + 1) * (degree + 2) // 2
     G[:p, :p] = 0.0
     b[:p] = 0.0
@@ -252,26 +265,26 @@ def _higher_fit(uvw, degree, k, k3, sigma2, rcond, mats, vecs, accs, G3, b3, out
         acc3[:] = acc
         _sums(uvw, shared, k3, 3, row, G3, b3, acc3)
     _sums(uvw, shared, k, degree, row, G, b, acc)
-    return _fit_degree(G, b, acc, degree, rcond, sigma2, mats, vecs, out)
 
 
 @njit(**OPTS)
-def _walk_down(fits, ok, gamma, bounds, misfit):
-    """The last model of the walk (see :func:`jet_degrees`), -1 if none fits; ``bounds``
-    (2, 3) scratch for the intersection's lower and upper ends."""
-    nm = len(ok)
-    cubic_var = fits[nm - 1, 6] if ok[nm - 1] else math.inf
-    lo, hi = bounds[0], bounds[1]
-    lo[:] = -math.inf
-    hi[:] = math.inf
+def _walk_down(table, ok, nm, gamma, misfit):
+    """The last of the nm models of the walk (see :func:`jet_degrees`; rows of a
+    :class:`DegreeScratch`'s table and ok), -1 if none fits; the table's chain rows hold the
+    intersection's lower and upper ends."""
+    cubic_var = table[nm - 1, FIT + 6] if ok[nm - 1] else math.inf
+    ends = len(ok) - 1 + CHAIN
+    for t in range(3):
+        table[ends, t] = -math.inf
+        table[ends + 1, t] = math.inf
     chosen = -1
     mi = 0
     while mi < nm:
-        if ok[mi] and mi < nm - 1 and fits[mi, 6] > misfit * cubic_var:
+        if ok[mi] and mi < nm - 1 and table[mi, FIT + 6] > misfit * cubic_var:
             mi = nm - 1  # an edge or a fold in its neighbourhood: no wider richer model, the cubic next
             continue
         if ok[mi]:
-            if not _narrow(lo, hi, fits[mi], gamma) and chosen >= 0:
+            if not _narrow(table, ends, mi, gamma) and chosen >= 0:
                 break
             chosen = mi
         mi += 1

@@ -18,7 +18,7 @@ P3 = 10
 P5 = 21
 
 
-@njit(**OPTS)
+@njit(**OPTS, inline="always")
 def _offsets(f, r, j0, j1, uvw):
     """Neighbours j0 <= j < j1 of centre r in its frame, lengths in units of f.h[r]; the
     height uvw[2, j] is NaN for a neighbour without a normal (a known outlier), which the
@@ -38,10 +38,10 @@ def _offsets(f, r, j0, j1, uvw):
 
 
 @njit(**OPTS)
-def ring_sums(uvw, j0, j1, G, b, acc, packed, R):
+def ring_sums(uvw, j0, j1, G, b, acc, pu, pv, pw, R):
     """Cubic sums of the neighbours j0 <= j < j1 added onto G (lower triangle), b and acc[0] =
-    sum w^2 (NaN heights left out), by moments: those neighbours packed into ``packed`` (3,
-    >= j1 - j0), their monomials row by row (:func:`core.kernels.lstsq.monomials`), then each
+    sum w^2 (NaN heights left out), by moments: those neighbours packed into ``pu``, ``pv``, ``pw``
+    (>= j1 - j0 each), their monomials row by row (:func:`core.kernels.lstsq.monomials`), then each
     of the 28 distinct moments of G as one dot product over them (:func:`_moments`). Adding
     the 55 products of each neighbour into G one at a time (as :func:`_sums` does) took twice
     as long (320 neighbours in the jet rule's 10 rings: 7.5 -> 3.8 us). The same sums to
@@ -51,10 +51,10 @@ def ring_sums(uvw, j0, j1, G, b, acc, packed, R):
     for j in range(j0, j1):
         w = uvw[2, j]
         if math.isfinite(w):
-            packed[0, n], packed[1, n], packed[2, n] = uvw[0, j], uvw[1, j], w
+            pu[n], pv[n], pw[n] = uvw[0, j], uvw[1, j], w
             n += 1
-    monomials(packed[0], packed[1], n, 3, R)
-    _moments(R, packed[2], n, G, b, acc)
+    monomials(pu, pv, n, 3, R)
+    _moments(R, pw, n, G, b, acc)
 
 
 @njit(**OPTS, fastmath=True)

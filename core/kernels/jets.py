@@ -11,12 +11,14 @@ quiet the intervals also run the degree rule (:mod:`core.kernels.jet_degree`) on
 sums: one pass over the neighbours, not two (the degree rule alone cost 0.40 CPU s of a
 100k torus, one thread; fused, the intervals went 0.29 -> 0.59 s; the same bits).
 
-The helpers called once per size, or per point, that take records or views of the scratch
-(:func:`_grows`, :func:`_ici_point` and :mod:`~core.kernels.jet_degree`'s ``grow``,
-``stash_cubic``, ``walk``, ``_fit_degree``, ``_narrow``, ``start_chain``) are inlined by numba:
-a call increments and decrements the reference count of each array it receives (an atomic
-instruction each, ~23 % of this kernel's samples in ``perf``); inlined, the intervals of a
-100k torus took 5 % less CPU time (noise-free and at 0.2 spacing; the same bits).
+The helpers called once per size (:func:`_grows`, :func:`_meet`, :func:`_ici_point` and
+:mod:`~core.kernels.jet_degree`'s ``grow``, ``stash_cubic``, ``_fit_degree``, ``_narrow``) are
+inlined by numba and take whole arrays and row indices only: a call increments and decrements
+the reference count of each array it receives (an atomic instruction each), and so does each
+record field or row view taken inside the loop over sizes. The scratch is unpacked once a
+point, the degree rule's packed into one float table and one bool array
+(:class:`~core.kernels.jet_degree.DegreeScratch`); see docs/performance-log.md for the counts
+and the time they took.
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ from numba import njit, prange
 
 from ._base import BLOCK, OPTS
 from .algebra import chol_solve, cholesky
-from .jet_degree import DegreeRule, degree_scratch, grow, jet_degrees, start_chain, stash_cubic, walk
+from .jet_degree import KEEP, DegreeRule, degree_scratch, grow, jet_degrees, start_chain, stash_cubic, walk
 from .jet_sums import P3, P5, _offsets, ring_sums
 from .scale import _folded, _local_reference
 
@@ -58,7 +60,7 @@ def _residuals_block(f, ks, rcond, rss, start, stop):
     uvw = np.empty((3, kmax))
     b, x, d, acc = np.empty(P3), np.empty(P3), np.empty(P3), np.empty(1)
     G, L = np.empty((P3, P3)), np.empty((P3, P3))
-    packed, R = np.empty((3, kmax)), np.empty((P3, kmax))
+    pu, pv, pw, R = np.empty(kmax), np.empty(kmax), np.empty(kmax), np.empty((P3, kmax))
     for r in range(start, stop):
         _offsets(f, r, 0, kmax, uvw)
         G[:, :] = 0.0
@@ -66,7 +68,7 @@ def _residuals_block(f, ks, rcond, rss, start, stop):
         acc[0] = 0.0
         prev = 0
         for c in range(len(ks)):
-            ring_sums(uvw, prev, ks[c], G, b, acc, packed, R)
+            ring_sums(uvw, prev, ks[c], G, b, acc, pu, pv, pw, R)
             prev = ks[c]
             if cholesky(G, P3, rcond, d, L):
                 chol_solve(L, d, P3, b, x)
@@ -76,8 +78,8 @@ def _residuals_block(f, ks, rcond, rss, start, stop):
 
 
 @njit(**OPTS)
-def _hessian_sd(L, d, x3, sigma2, out):
-    """Standard deviations of (2 c3, c4, 2 c5) = (f_uu, f_uv, f_vv) at noise sigma2, from
+def _hessian_sd(L, d, x3, sigma2, bounds):
+    """bounds[3] = the standard deviations of (2 c3, c4, 2 c5) = (f_uu, f_uv, f_vv) at noise sigma2, from
     (G^-1)_ii, i = 3, 4, 5, with the factor of :func:`~core.kernels.algebra.cholesky`: entry i
     of ``chol_solve(L, d, p, e_i, x)``, bit for bit, without its dead work. Its forward pass
     leaves x[a] = +0.0 for a < i (0.0 / d[a], less exact zeros: L is finite once the
@@ -103,7 +105,7 @@ def _hessian_sd(L, d, x3, sigma2, out):
                 s -= L[c, a] * x3[t, c]
             x3[t, a] = s / L[a, a]
     for t in range(3):
-        out[t] = (2.0 if t != 1 else 1.0) * math.sqrt(max(x3[t, 3 + t] / d[3 + t], 0.0) * sigma2)
+        bounds[3, t] = (2.0 if t != 1 else 1.0) * math.sqrt(max(x3[t, 3 + t] / d[3 + t], 0.0) * sigma2)
 
 
 @njit(**OPTS, parallel=True)
@@ -133,70 +135,87 @@ def jet_ici(f, ks, sigma2, rule, deg, chosen, coef, walked):
 
 @njit(**OPTS)
 def _ici_block(f, ks, sigma2, rule, deg, chosen, coef, walked, start, stop):
-    """:func:`jet_ici` for centres start..stop-1, scratch arrays allocated once."""
-    uvw = np.empty((3, ks[-1]))
-    vecs = np.empty((9, P5))  # row, b, x, d, (unused), chosen coefficients, 3 rows of scratch
-    G, L = np.empty((P5, P5)), np.empty((P3, P3))
-    ring = (np.empty((3, ks[-1])), np.empty((P3, ks[-1])))  # a ring's offsets packed, their monomials
-    bounds, ref, acc = np.empty((4, 3)), np.empty(8), np.empty(2)  # lo, hi, est, sd; sum w^2, count
+    """:func:`jet_ici` for centres start..stop-1, scratch arrays allocated once, whole arrays
+    all (rows of them by index: a view or a record's field taken per size costs its reference
+    count, see the module)."""
+    kmax = ks[-1]
+    uvw = np.empty((3, kmax))
+    sums = (np.empty(P5), np.empty((P5, P5)), np.empty(P5), np.empty(2))  # row, G, b, (sum w^2, count)
+    bounds, ref = np.empty((4, 3)), np.empty(8)  # the intervals' lo, hi, est, sd; _local_reference's
+    cubic = (np.empty((P3, P3)), np.empty(P3), np.empty(P3), np.empty((3, P3)), bounds, ref)  # L, d, x, x3
+    ring = (np.empty(kmax), np.empty(kmax), np.empty(kmax), np.empty((P3, kmax)))  # u, v, w packed, monomials
     ds = degree_scratch(len(deg.kd), len(ks))
+    table, flags = ds.table, ds.flags
     for r in range(start, stop):
         _local_reference(f.points, f.normals, f.idx, r, ks[0], f.z, rule.fold_cos, ref)
-        p = (deg.dmax + 1) * (deg.dmax + 2) // 2 if deg.quiet[r] else P3
-        G[:p, :p] = 0.0
-        vecs[1, :p] = 0.0
-        acc[:] = 0.0
-        bounds[0, :] = -math.inf
-        bounds[1, :] = math.inf
-        start_chain(ds)
-        chosen[r], prev = _ici_point(f, ks, sigma2[r], rule, deg, r, uvw, vecs, (G, L), bounds, ref, (acc, ds, ring))
-        coef[r, :] = vecs[5, :P3]
+        _start_point(sums, deg.quiet[r], deg.dmax, bounds, table, flags)
+        chosen[r], prev = _ici_point(f, ks, sigma2[r], rule, deg, r, uvw, sums, cubic, ring, ds, coef)
         walked[r] = -1
         if chosen[r] < 0:
             coef[r, :] = math.nan
         elif deg.quiet[r] and len(deg.kd) > 0 and ks[chosen[r]] <= deg.reach:
             top = min(deg.kmax, ks[-1])  # the neighbours held
-            if prev < top and ds.alive[0] and ks[chosen[r]] >= deg.kd[deg.by_k[0]]:  # see jet_degree.jet_degrees
+            alive = flags[len(flags) - 1]
+            if prev < top and alive and ks[chosen[r]] >= deg.kd[deg.by_k[0]]:  # see jet_degree.jet_degrees
                 _offsets(f, r, prev, top, uvw)
-                grow(uvw, prev, top, deg, vecs[0], G, vecs[1], acc, sigma2[r], rule.rcond, ds)
-            final = top == deg.kmax or not ds.alive[0] or ks[chosen[r]] < deg.kd[deg.by_k[0]]
-            walked[r] = walk(ds, deg, chosen[r], bounds) if final else -2
+                grow(uvw, prev, top, deg, sums, sigma2[r], rule.rcond, ds.L, ds.d, ds.x, table, flags)
+            alive = flags[len(flags) - 1]
+            final = top == deg.kmax or not alive or ks[chosen[r]] < deg.kd[deg.by_k[0]]
+            walked[r] = walk(table, flags, deg, chosen[r]) if final else -2
             if 0 <= walked[r] < len(deg.kd):
-                coef[r, :6] = ds.keep[walked[r]]
+                for a in range(6):
+                    coef[r, a] = table[walked[r], KEEP + a]
 
 
 @njit(**OPTS, inline="always")
-def _grows(f, ks, rule, r, c, fold_here, ref):
+def _start_point(sums, quiet, dmax, bounds, table, flags):
+    """Empty sums (of degree dmax where ``quiet``, else the cubic's), intervals and models."""
+    row, G, b, acc = sums
+    p = (dmax + 1) * (dmax + 2) // 2 if quiet else P3
+    G[:p, :p] = 0.0
+    b[:p] = 0.0
+    acc[:] = 0.0
+    bounds[0, :] = -math.inf
+    bounds[1, :] = math.inf
+    start_chain(table, flags)
+
+
+@njit(**OPTS, inline="always")
+def _grows(points, normals, idx, ks, rule, r, c, fold_here, ref):
     """(stop, fold_next): a ring that folds, followed by another (or the last), ends the growth."""
-    fold_next = c + 1 >= len(ks) or _folded(f.points, f.normals, f.idx, r, ks[c], ks[c + 1], rule, ref)
+    fold_next = c + 1 >= len(ks) or _folded(points, normals, idx, r, ks[c], ks[c + 1], rule, ref)
     if c == 1:
-        fold_here = _folded(f.points, f.normals, f.idx, r, ks[0], ks[1], rule, ref)
+        fold_here = _folded(points, normals, idx, r, ks[0], ks[1], rule, ref)
     return fold_here and fold_next, fold_next
 
 
 @njit(**OPTS, inline="always")
-def _ici_point(f, ks, sigma2, rule, deg, r, uvw, vecs, mats, bounds, ref, sums):
-    """(the chosen index for centre r, -1 if none; the neighbours summed); its
-    coefficients in vecs[5]. ``mats`` = (G, L), ``sums`` = (acc, the degree rule's scratch, the
-    rings' scratch of :func:`~core.kernels.jet_sums.ring_sums`)."""
-    row, b, x, d = vecs[0], vecs[1], vecs[2], vecs[3]
-    lo, hi, est, sd = bounds[0], bounds[1], bounds[2], bounds[3]
-    G, L = mats
-    acc, ds, ring = sums
+def _ici_point(f, ks, sigma2, rule, deg, r, uvw, sums, cubic, ring, ds, coef):
+    """(the chosen index for centre r, -1 if none; the neighbours summed); its coefficients in
+    coef[r]. ``sums`` = (row, G, b, acc), ``cubic`` = (L, d, x, x3, bounds, ref) the cubic's
+    factor, solution, intervals and fold reference, ``ring`` = the rings' scratch of
+    :func:`~core.kernels.jet_sums.ring_sums`, ``ds`` the degree rule's :class:`DegreeScratch`;
+    all unpacked here, once a point, and handed on whole."""
+    row, G, b, acc = sums
+    L, d, x, x3, bounds, ref = cubic
+    pu, pv, pw, R = ring
+    L5, d5, x5, table, flags = ds
+    points, normals, idx = f.points, f.normals, f.idx
     quiet = deg.quiet[r]
+    n_models = len(deg.kd)
     chosen = -1
     prev = 0
     fold_here = False
     for c in range(len(ks)):
         if c > 0:
-            stop, fold_here = _grows(f, ks, rule, r, c, fold_here, ref)
+            stop, fold_here = _grows(points, normals, idx, ks, rule, r, c, fold_here, ref)
             if stop:
                 break
         _offsets(f, r, prev, ks[c], uvw)
         if quiet:
-            grow(uvw, prev, ks[c], deg, row, G, b, acc, sigma2, rule.rcond, ds)
+            grow(uvw, prev, ks[c], deg, sums, sigma2, rule.rcond, L5, d5, x5, table, flags)
         else:
-            ring_sums(uvw, prev, ks[c], G, b, acc, ring[0], ring[1])
+            ring_sums(uvw, prev, ks[c], G, b, acc, pu, pv, pw, R)
         prev = ks[c]
         if not cholesky(G, P3, rule.rcond, d, L):
             if chosen < 0:
@@ -204,16 +223,24 @@ def _ici_point(f, ks, sigma2, rule, deg, r, uvw, vecs, mats, bounds, ref, sums):
             break
         chol_solve(L, d, P3, b, x)
         if quiet and ks[c] <= deg.reach:
-            stash_cubic(L, d, x, b, acc, sigma2, len(deg.kd) + c, ds)
-        est[0], est[1], est[2] = 2.0 * x[3], x[4], 2.0 * x[5]
-        _hessian_sd(L, d, vecs[6:9], sigma2, sd)
-        meet = True
-        for t in range(3):
-            lo[t] = max(lo[t], est[t] - rule.gamma * sd[t])
-            hi[t] = min(hi[t], est[t] + rule.gamma * sd[t])
-            meet = meet and lo[t] <= hi[t]
-        if not meet and chosen >= 0:
+            stash_cubic(L, d, x, b, acc, sigma2, n_models + c, table, flags)
+        _hessian_sd(L, d, x3, sigma2, bounds)
+        if not _meet(bounds, x, rule.gamma) and chosen >= 0:
             break
         chosen = c
-        vecs[5, :P3] = x[:P3]
+        for a in range(P3):
+            coef[r, a] = x[a]
     return chosen, prev
+
+
+@njit(**OPTS, inline="always")
+def _meet(bounds, x, gamma):
+    """Narrow the intervals (bounds rows lo, hi) by this size's estimate (2 x3, x4, 2 x5, kept in
+    the row est) +- gamma sd (row sd); True if they still meet."""
+    bounds[2, 0], bounds[2, 1], bounds[2, 2] = 2.0 * x[3], x[4], 2.0 * x[5]
+    meet = True
+    for t in range(3):
+        bounds[0, t] = max(bounds[0, t], bounds[2, t] - gamma * bounds[3, t])
+        bounds[1, t] = min(bounds[1, t], bounds[2, t] + gamma * bounds[3, t])
+        meet = meet and bounds[0, t] <= bounds[1, t]
+    return meet

@@ -152,10 +152,10 @@ def test_ring_sums_are_the_cubic_least_squares_sums():
     for j, (u, v) in enumerate(uvw[:2].T):
         poly_row.py_func(u, v, 3, rows[j])
     G, b, acc = np.zeros((P5, P5)), np.zeros(P5), np.zeros(2)
-    packed, R = np.empty((3, 320)), np.empty((P3, 320))
+    packed, R = (np.empty(320), np.empty(320), np.empty(320)), np.empty((P3, 320))
     lower = np.tril_indices(P3)
     for lo, hi in zip(ks, ks[1:]):
-        ring_sums(uvw, lo, hi, G, b, acc, packed, R)
+        ring_sums(uvw, lo, hi, G, b, acc, *packed, R)
         has = np.isfinite(uvw[2, :hi])
         M, w = rows[:hi][has], uvw[2, :hi][has]
         np.testing.assert_allclose(G[lower], (M.T @ M)[lower], rtol=1e-12, atol=1e-13 * np.abs(M.T @ M).max())
