@@ -39,8 +39,8 @@ from .tuning import FOLD_FLAT, INITIAL_JET_PIVOT, THETA_REACH, THIN_SPREAD
 #: 4 spacings wide spans 0.08-0.13 at the sizes chosen; the final neighbourhoods of tori, range and stripe scans
 #: (3-16x), thin plates and tubes, cubes and thin cylinders at noise 0.1-0.3 spacing: none below 0.2
 NOISY_SPREAD = 0.2
-#: ... looked at only where the graph's held nearest spread less than this (a ribbon's 40 nearest: 0.32-0.78)
-STRIP_SCREEN = 0.8
+#: ... looked at only where the STRIP_K nearest spread less than this (a ribbon's 40 nearest: 0.32-0.78)
+STRIP_SCREEN, STRIP_K = 0.8, 40
 #: ... and only where some of this many of them, evenly drawn, is narrower than NOISY_SPREAD at its own k
 STRIP_PROBE = 256
 
@@ -92,7 +92,7 @@ def widened(pts, normals, nb, k, ks, noisy=None) -> np.ndarray:
     is 0.5, every point valid). Noise-free the narrow fit is exact and is kept."""
     out = np.asarray(k, dtype=np.int64).copy()
     need = np.full(len(out), THIN_SPREAD) if noisy is None else np.where(noisy, NOISY_SPREAD, THIN_SPREAD)
-    thin = ~spans_plane(pts, normals, nb, out, need)
+    thin = ~spans_plane(pts, normals, nb, out)
     if noisy is not None:
         thin |= _strips(pts, normals, nb, out, noisy)
     thin = np.flatnonzero(thin)
@@ -111,16 +111,15 @@ def widened(pts, normals, nb, k, ks, noisy=None) -> np.ndarray:
 
 def _strips(pts, normals, nb, k, noisy) -> np.ndarray:
     """(N,) bool: ``noisy`` points whose ``k`` nearest spread less than :data:`NOISY_SPREAD`
-    though the graph's held columns span the plane (:func:`spans_plane` judges on those): a
-    strip's nearest are as wide as they are long, its wider neighbourhoods only longer.
-    Looked at where the held columns are lopsided already (below :data:`STRIP_SCREEN`), and
+    (:func:`spans_plane` judges on the graph's held columns, which span a strip: its nearest
+    are as wide as they are long, its wider neighbourhoods only longer). Looked at where the
+    nearest :data:`STRIP_K` are lopsided already (below :data:`STRIP_SCREEN`), and
     only if some of :data:`STRIP_PROBE` of those, evenly drawn, is thin (as the clumps' screen:
     the wide rows cost 8-14 % of a noisy cloud's estimate where most points are lopsided)."""
     out = np.zeros(len(k), dtype=bool)
-    held = np.minimum(k, nb.width)
-    look = np.flatnonzero(noisy & (k > held))
+    look = np.flatnonzero(noisy)  # the screen reads the same rows whatever the graph holds (tiles)
     if len(look):
-        look = look[spreads(pts, normals, nb, held[look], look) < STRIP_SCREEN]
+        look = look[spreads(pts, normals, nb, np.minimum(k[look], STRIP_K), look) < STRIP_SCREEN]
     probe = look[np.linspace(0, len(look) - 1, min(len(look), STRIP_PROBE)).astype(np.int64)]
     if not (spreads(pts, normals, nb, k[probe], probe) < NOISY_SPREAD).any():
         return out
