@@ -35,6 +35,16 @@ from .normals import pca_normals_at
 from .tuning import FOLD_FLAT, INITIAL_JET_PIVOT, THETA_REACH, THIN_SPREAD
 
 
+#: k="auto" with measured noise: NR's neighbours must reach this plane spread (:func:`widened`). A ribbon 200:1 and
+#: 4 spacings wide spans 0.08-0.13 at the sizes chosen; the final neighbourhoods of tori, range and stripe scans
+#: (3-16x), thin plates and tubes, cubes and thin cylinders at noise 0.1-0.3 spacing: none below 0.2
+NOISY_SPREAD = 0.2
+#: ... looked at only where the STRIP_K nearest spread less than this (a ribbon's 40 nearest: 0.32-0.78)
+STRIP_SCREEN, STRIP_K = 0.8, 40
+#: ... and only where some of this many of them, evenly drawn, is narrower than NOISY_SPREAD at its own k
+STRIP_PROBE = 256
+
+
 def spreads(pts, normals, nb, k, centres=None) -> np.ndarray:
     """The plane spread of ``centres`` (default: every point, on the columns the graph
     holds, read in place) over their first ``k`` neighbours (an int, or one per centre) of
@@ -53,18 +63,19 @@ def spreads(pts, normals, nb, k, centres=None) -> np.ndarray:
 
 def spans_plane(pts, normals, nb, k, threshold=THIN_SPREAD, centres=None) -> np.ndarray:
     """(m,) bool: the first ``k`` (m,) neighbours of each of ``centres`` (default: every
-    point) span its tangent plane, a plane spread of at least ``threshold`` (True where it
-    has no normal: nothing is fitted there anyway). Judged first on the graph's held
-    columns (a point whose nearer neighbours span the plane is not re-searched)."""
+    point) span its tangent plane, a plane spread of at least ``threshold`` (one, or one per
+    centre; True where it has no normal: nothing is fitted there anyway). Judged first on the
+    graph's held columns (a point whose nearer neighbours span the plane is not re-searched)."""
     narrow = np.minimum(k, nb.width)
     ok = ~(spreads(pts, normals, nb, narrow, centres) < threshold)
     again = np.flatnonzero(~ok & (k > narrow))
     if len(again):
-        ok[again] = ~(spreads(pts, normals, nb, k[again], again if centres is None else centres[again]) < threshold)
+        at = again if centres is None else centres[again]
+        ok[again] = ~(spreads(pts, normals, nb, k[again], at) < np.broadcast_to(threshold, ok.shape)[again])
     return ok
 
 
-def widened(pts, normals, nb, k, ks) -> np.ndarray:
+def widened(pts, normals, nb, k, ks, noisy=None) -> np.ndarray:
     """``k`` (N,) raised, where a point's neighbours do not span its plane, to the smallest
     candidate of ``ks`` whose neighbours do and lie near one plane, as do those of the next
     candidate (:data:`FLAT_SHARE`); 0 where none does. Scan lines farther apart than k reach
@@ -72,19 +83,49 @@ def widened(pts, normals, nb, k, ks) -> np.ndarray:
     widened on its spread alone, a 200-point pole on a 3000-point plane had 59 points fitted
     (k up to 320, the fits reaching the plane; H -16.5 to 0.7 where there is no surface;
     validity changed at 71 of them under a turn). The next size too: a line with two or
-    three points of the plane beside it is flat by chance."""
+    three points of the plane beside it is flat by chance.
+
+    Where ``noisy`` (N,) bool (the measured noise is not nil) the spread must reach
+    :data:`NOISY_SPREAD`: a strip a few spacings wide (a ribbon, 200:1) spans its
+    plane at 0.08-0.13 at k = 113-320, and across it the curvature is the noise over
+    lever arms of one or two spacings (noise 0.1 spacing: median |H| error 0.37-0.5 where H
+    is 0.5, every point valid). Noise-free the narrow fit is exact and is kept."""
     out = np.asarray(k, dtype=np.int64).copy()
-    thin = np.flatnonzero(~spans_plane(pts, normals, nb, out))
+    need = np.full(len(out), THIN_SPREAD) if noisy is None else np.where(noisy, NOISY_SPREAD, THIN_SPREAD)
+    thin = ~spans_plane(pts, normals, nb, out)
+    if noisy is not None:
+        thin |= _strips(pts, normals, nb, out, noisy)
+    thin = np.flatnonzero(thin)
     for at, cand in enumerate(ks):
         wider = thin[out[thin] < cand]
         if not len(wider):
             continue
-        ok = ~(spreads(pts, normals, nb, cand, wider) < THIN_SPREAD)
+        ok = ~(spreads(pts, normals, nb, cand, wider) < need[wider])
         for size in ks[at:at + 2]:
             ok[ok] = _surface(pts, nb.rows(wider[ok], size)[0], curve=False)
         out[wider[ok]] = cand
         thin = np.setdiff1d(thin, wider[ok])
     out[thin] = 0
+    return out
+
+
+def _strips(pts, normals, nb, k, noisy) -> np.ndarray:
+    """(N,) bool: ``noisy`` points whose ``k`` nearest spread less than :data:`NOISY_SPREAD`
+    (:func:`spans_plane` judges on the graph's held columns, which span a strip: its nearest
+    are as wide as they are long, its wider neighbourhoods only longer). Looked at where the
+    nearest :data:`STRIP_K` are lopsided already (below :data:`STRIP_SCREEN`), and
+    only if some of :data:`STRIP_PROBE` of those, evenly drawn, is thin (as the clumps' screen:
+    the wide rows cost 8-14 % of a noisy cloud's estimate where most points are lopsided)."""
+    out = np.zeros(len(k), dtype=bool)
+    look = np.flatnonzero(noisy)  # the screen reads the same rows whatever the graph holds (tiles)
+    if len(look):
+        look = look[spreads(pts, normals, nb, np.minimum(k[look], STRIP_K), look) < STRIP_SCREEN]
+    probe = look[np.linspace(0, len(look) - 1, min(len(look), STRIP_PROBE)).astype(np.int64)]
+    if not (spreads(pts, normals, nb, k[probe], probe) < NOISY_SPREAD).any():
+        return out
+    for start in range(0, len(look), _CHUNK):  # chunks: the rows of up to 320 neighbours
+        part = look[start:start + _CHUNK]
+        out[part] = spreads(pts, normals, nb, k[part], part) < NOISY_SPREAD
     return out
 
 

@@ -220,7 +220,7 @@ def choose_scale(pts, nrm, nb, inliers, plan, report, *, scores=None, k_initial=
         capped_at = scale.fold_capped(pts, masked, nb, lifted, ks, int(floor[lifted].max()))
         floor[lifted] = np.minimum(floor[lifted], capped_at)
     fit_k = np.maximum(kc, np.where(quiet, ks[0], floor))
-    wide = plane_spread.widened(pts, nrm, nb, fit_k, ks)
+    wide = plane_spread.widened(pts, nrm, nb, fit_k, ks, noisy=~quiet)
     fit_k = np.where(wide > 0, wide, fit_k)
     on_jet, fit_k = parts.capped(part_sizes, ks, kc, on_jet, fit_k)  # within the part a point lies on
     return Scale(fit_k, np.where(on_jet, kc, fit_k), on_jet, quiet, jets, np.where(on_jet, degree, -1),
