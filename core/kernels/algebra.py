@@ -7,7 +7,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ._base import OPTS
+from ._base import LEAF, OPTS
 
 
 @njit(**OPTS)
@@ -87,7 +87,7 @@ def poly_row(u, v, degree, row):
         prev += d
 
 
-@njit(**OPTS)
+@njit(**LEAF)
 def cholesky(G, p, rcond, d, L):
     """Cholesky factor L of the equilibrated p x p matrix G (lower triangle used; unit
     diagonal after scaling by d = sqrt(diag G)). False when a pivot is <= rcond
@@ -146,7 +146,7 @@ def determined(G, degree, tau, d, L):
     return True
 
 
-@njit(**OPTS)
+@njit(**LEAF)
 def chol_solve(L, d, p, b, x):
     """x = G^-1 b with the factor of :func:`cholesky` (x must not alias b)."""
     for a in range(p):

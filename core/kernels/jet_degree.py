@@ -17,7 +17,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
-from ._base import BLOCK, OPTS
+from ._base import BLOCK, LEAF, OPTS
 from .algebra import chol_solve, cholesky
 from ..tuning import JET_DEGREE_GAMMA, JET_MISFIT
 from .jet_sums import P3, P5, _offsets, _sums
@@ -113,7 +113,7 @@ def _fit_degree(G, b, acc, degree, rcond, sigma2, L, d, x, table, out):
     return fitted
 
 
-@njit(**OPTS)
+@njit(**LEAF)
 def _degree_out(L, d, x, b, ww, n, p, sigma2, table, out):
     """:func:`_fit_degree`'s row ``out`` of ``table`` from the factor (L, d) of p terms, the
     solution x, the sums b and ww = sum w^2 of n neighbours; the table's last 3 rows scratch."""
@@ -180,13 +180,14 @@ def stash_cubic(L, d, x, b, acc, sigma2, row, table, flags):
         table[row, KEEP + a] = x[a]
 
 
-@njit(**OPTS)
+@njit(**LEAF)
 def walk(table, flags, deg, c):
     """:func:`_walk_down` over the models of ``deg`` and the cubic at its size index c (kept by
     :func:`stash_cubic` in row n_models + c) of a :class:`DegreeScratch`'s table and flags."""
     n_models = len(deg.kd)
     top = n_models + c
-    table[n_models, :] = table[top]
+    for a in range(table.shape[1]):  # a row copied by hand: numba's row copy needs reference counting
+        table[n_models, a] = table[top, a]
     flags[n_models] = flags[top]
     return _walk_down(table, flags, n_models + 1, deg.gamma, deg.misfit)
 
@@ -267,7 +268,7 @@ def _higher_sums(uvw, degree, k, k3, sums, G3, b3, acc3):
     _sums(uvw, shared, k, degree, row, G, b, acc)
 
 
-@njit(**OPTS)
+@njit(**LEAF)
 def _walk_down(table, ok, nm, gamma, misfit):
     """The last of the nm models of the walk (see :func:`jet_degrees`; rows of a
     :class:`DegreeScratch`'s table and ok), -1 if none fits; the table's chain rows hold the

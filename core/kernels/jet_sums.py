@@ -8,7 +8,7 @@ import math
 
 from numba import njit
 
-from ._base import OPTS
+from ._base import LEAF, OPTS
 from .algebra import n_terms, poly_row
 from .lstsq import MOMENT_PAIR, copy_moments, monomials
 
@@ -37,7 +37,7 @@ def _offsets(f, r, j0, j1, uvw):
         uvw[2, j] = dx * f.z[r, 0] + dy * f.z[r, 1] + dz * f.z[r, 2]
 
 
-@njit(**OPTS)
+@njit(**LEAF)
 def ring_sums(uvw, j0, j1, G, b, acc, pu, pv, pw, R):
     """Cubic sums of the neighbours j0 <= j < j1 added onto G (lower triangle), b and acc[0] =
     sum w^2 (NaN heights left out), by moments: those neighbours packed into ``pu``, ``pv``, ``pw``
@@ -57,7 +57,7 @@ def ring_sums(uvw, j0, j1, G, b, acc, pu, pv, pw, R):
     _moments(R, pw, n, G, b, acc)
 
 
-@njit(**OPTS, fastmath=True)
+@njit(**LEAF, fastmath=True)
 def _moments(R, w, n, G, b, acc):
     """G (lower triangle), b and acc[0] += the cubic sums over the n monomial columns of R
     and heights w, one dot product per distinct moment (vectorised)."""
@@ -79,7 +79,7 @@ def _moments(R, w, n, G, b, acc):
     copy_moments(G, P3)
 
 
-@njit(**OPTS)
+@njit(**LEAF)
 def _sums(uvw, j0, j1, degree, row, G, b, acc):
     """Least-squares sums of the jet of ``degree`` over neighbours j0 <= j < j1 (offsets in
     ``uvw``, NaN heights left out) added onto G (lower triangle), b, acc[0] = sum w^2 and

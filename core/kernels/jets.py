@@ -13,12 +13,13 @@ sums: one pass over the neighbours, not two (the degree rule alone cost 0.40 CPU
 
 The helpers called once per size (:func:`_grows`, :func:`_meet`, :func:`_ici_point` and
 :mod:`~core.kernels.jet_degree`'s ``grow``, ``stash_cubic``, ``_fit_degree``, ``_narrow``) are
-inlined by numba and take whole arrays and row indices only: a call increments and decrements
-the reference count of each array it receives (an atomic instruction each), and so does each
-record field or row view taken inside the loop over sizes. The scratch is unpacked once a
-point, the degree rule's packed into one float table and one bool array
-(:class:`~core.kernels.jet_degree.DegreeScratch`); see docs/performance-log.md for the counts
-and the time they took.
+inlined by numba and take whole arrays and row indices only. The loop over centres
+(:func:`_ici_points`) and the helpers it calls are compiled without numba's reference counting
+(:data:`~core.kernels._base.LEAF`; the block allocates their scratch): a call otherwise
+increments and decrements the count of each array it receives, an atomic instruction each, and
+so does each record field or row view taken in the loop (they cost ~13 % of it after the
+inlining; see docs/performance-log.md). The scratch is unpacked once a point, the degree rule's
+packed into one float table and one bool array (:class:`~core.kernels.jet_degree.DegreeScratch`).
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from ._base import BLOCK, OPTS
+from ._base import BLOCK, LEAF, OPTS
 from .algebra import chol_solve, cholesky
 from .jet_degree import KEEP, DegreeRule, degree_scratch, grow, jet_degrees, start_chain, stash_cubic, walk
 from .jet_sums import P3, P5, _offsets, ring_sums
@@ -77,7 +78,7 @@ def _residuals_block(f, ks, rcond, rss, start, stop):
                 rss[r, c] = math.nan
 
 
-@njit(**OPTS)
+@njit(**LEAF)
 def _hessian_sd(L, d, x3, sigma2, bounds):
     """bounds[3] = the standard deviations of (2 c3, c4, 2 c5) = (f_uu, f_uv, f_vv) at noise sigma2, from
     (G^-1)_ii, i = 3, 4, 5, with the factor of :func:`~core.kernels.algebra.cholesky`: entry i
@@ -136,8 +137,7 @@ def jet_ici(f, ks, sigma2, rule, deg, chosen, coef, walked):
 @njit(**OPTS)
 def _ici_block(f, ks, sigma2, rule, deg, chosen, coef, walked, start, stop):
     """:func:`jet_ici` for centres start..stop-1, scratch arrays allocated once, whole arrays
-    all (rows of them by index: a view or a record's field taken per size costs its reference
-    count, see the module)."""
+    all (rows of them by index)."""
     kmax = ks[-1]
     uvw = np.empty((3, kmax))
     sums = (np.empty(P5), np.empty((P5, P5)), np.empty(P5), np.empty(2))  # row, G, b, (sum w^2, count)
@@ -145,6 +145,17 @@ def _ici_block(f, ks, sigma2, rule, deg, chosen, coef, walked, start, stop):
     cubic = (np.empty((P3, P3)), np.empty(P3), np.empty(P3), np.empty((3, P3)), bounds, ref)  # L, d, x, x3
     ring = (np.empty(kmax), np.empty(kmax), np.empty(kmax), np.empty((P3, kmax)))  # u, v, w packed, monomials
     ds = degree_scratch(len(deg.kd), len(ks))
+    _ici_points(f, ks, sigma2, rule, deg, (chosen, coef, walked), start, stop, (uvw, sums, cubic, ring, ds))
+
+
+@njit(**LEAF)
+def _ici_points(f, ks, sigma2, rule, deg, out, start, stop, scratch):
+    """:func:`_ici_block`'s loop over its centres; ``out`` = (chosen, coef, walked), ``scratch`` =
+    (uvw, sums, cubic, ring, ds) as the block allocated them. Compiled without reference counting,
+    as are the helpers it calls (:data:`~core.kernels._base.LEAF`): it allocates nothing."""
+    chosen, coef, walked = out
+    uvw, sums, cubic, ring, ds = scratch
+    bounds, ref = cubic[4], cubic[5]
     table, flags = ds.table, ds.flags
     for r in range(start, stop):
         _local_reference(f.points, f.normals, f.idx, r, ks[0], f.z, rule.fold_cos, ref)

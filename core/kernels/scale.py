@@ -9,7 +9,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
-from ._base import BLOCK, OPTS
+from ._base import BLOCK, LEAF, OPTS
 from .lstsq import CX, CY, accumulate, fit_scratch, monomials, reset, slope_variances, solve_determined
 from .nf import gather
 
@@ -34,7 +34,7 @@ class ScaleRule(NamedTuple):
     pivot: float
 
 
-@njit(**OPTS)
+@njit(**LEAF)
 def _local_reference(points, normals, idx, r, n, z, fold_cos, ref):
     """What a fold of centre r is judged against, from its neighbours 0..n-1 (the
     smallest neighbourhood): ``ref`` gets their centroid (0:3) and mean normal (3:6,
@@ -57,12 +57,14 @@ def _local_reference(points, normals, idx, r, n, z, fold_cos, ref):
         seen += 1
     norm = math.sqrt(ref[3] ** 2 + ref[4] ** 2 + ref[5] ** 2)
     if seen == 0 or norm == 0.0:
-        ref[0:3] = points[idx[r, 0]]
+        for a in range(3):
+            ref[a] = points[idx[r, 0], a]
         ref[3], ref[4], ref[5] = c0, c1, c2
         ref[6] = ref[7] = 0.0
         return
-    ref[0:3] /= seen
-    ref[3:6] /= norm
+    for a in range(3):
+        ref[a] /= seen
+        ref[3 + a] /= norm
     height2 = 0.0
     turned = 0
     for j in range(n):
@@ -81,7 +83,7 @@ def _local_reference(points, normals, idx, r, n, z, fold_cos, ref):
     ref[7] = turned / seen
 
 
-@njit(**OPTS)
+@njit(**LEAF)
 def _folded(points, normals, idx, r, j0, j1, rule, ref):
     """Whether the ring of neighbours j0..j1-1 of centre r has left the graph of a
     function over the local plane ``ref`` (see :func:`_local_reference`): more of it
