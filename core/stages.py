@@ -214,8 +214,8 @@ def choose_scale(pts, nrm, nb, inliers, plan, report, *, scores=None, k_initial=
     steady = inliers & ~suspect  # the jets are least squares: suspects sit out the choice of k
     masked = np.where(steady[:, None], nrm, np.nan)
     prio = anchors.priority(pts, nb.take_indices(anchors.RATIOS + 1)) if anchors.shares_scale(plan) else None
-    if prio is not None and hasattr(nb, "keep_rows"):  # the anchors' fits read the rows their jets search
-        nb.keep_rows(ks[-1])
+    if hasattr(nb, "keep_rows"):  # the fits read rows the jets search (anchors' of 320, the degree rule's of 113)
+        nb.keep_rows(nb.width + 1)
     kc, on_jet, quiet, jets, degree = parts.choose_within(
         lambda sizes, usable: scale.choose_model(pts, masked, nb, usable, sizes, report, priority=prio,
                                                  sat_out=inliers & suspect), ks, part_sizes, steady)

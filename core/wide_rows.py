@@ -48,13 +48,14 @@ def _wide_rows(nb, centres, k, kc, h, kept=None):
     ``(centres, rows)`` copied (:func:`core.kernels.permute.copy_rows`), the others searched
     in chunks; writes the distance to each one's ``kc``-th into ``h`` (for a kept row, the
     search's own distance recomputed: :func:`core.kernels.kdtree.distances_at`). The list
-    ``kept`` is emptied, each block freed once copied (all of them beside the new rows were
-    365 MB more at 1M points)."""
+    ``kept`` (rows at least ``k`` wide, a centre's first block read) is emptied, each block
+    freed once copied (all of them beside the new rows were 365 MB more at 1M points)."""
     w_idx = np.empty((len(centres), k), dtype=nb.take(1)[0].dtype)
     todo = np.ones(len(centres), dtype=bool)
     while kept:
         got, rows = kept.pop(0)
         at, pos = _positions(centres, got)
+        at, pos = at[todo[at]], pos[todo[at]]  # a row kept twice (searched at two widths) is copied once
         copy_rows(rows, pos, w_idx, at)
         c, dist = centres[at], np.empty(len(at))
         distances_at(nb.points, c, rows, pos, kc[c] - 1, dist)
