@@ -163,25 +163,34 @@ class WidenableNeighbours(Neighbours):
         with self._lock:
             return self._pair, self._sheets
 
-    def widen(self, k: int | None = None, *, progress=None):
-        """Every row searched to ``k`` (default ``k_max``) neighbours, if fewer are held."""
+    def widen(self, k: int | None = None, *, progress=None, found=None):
+        """Every row searched to ``k`` (default ``k_max``) neighbours, if fewer are held;
+        ``found``: those rows already, ``(idx, dist)`` as :meth:`rows` gives them."""
         k = self._k_max if k is None else k
         self._check_k(k)
         with self._lock:  # a viewer's result may be read on one thread while the next job widens it
             if self.width < k:
-                n = len(self._points)
-                idx = np.empty((n, k), dtype=self._pair[0].dtype)
-                dist = np.empty((n, k), dtype=np.float64)
-                _query_tree(self._points, self._tree, self._rank, idx, dist, Progress(progress))
+                if found is None:
+                    found = self._searched(k, progress)
+                idx, dist = found
                 sheets = self._sheets
                 if sheets is not None:
-                    sheets.put(idx, dist, self._pair)
                     sheets = sheets.beyond(k - self.width)  # the columns now held are dropped from it
                 idx.setflags(write=False)
                 dist.setflags(write=False)
                 object.__setattr__(self, "_pair", (idx, dist))
                 object.__setattr__(self, "_sheets", sheets)
             return self._pair
+
+    def _searched(self, k, progress):
+        """Every row's ``k`` nearest, searched (those listing their own sheet first as :meth:`rows` serves them)."""
+        n = len(self._points)
+        idx = np.empty((n, k), dtype=self._pair[0].dtype)
+        dist = np.empty((n, k), dtype=np.float64)
+        _query_tree(self._points, self._tree, self._rank, idx, dist, Progress(progress))
+        if self._sheets is not None:
+            self._sheets.put(idx, dist, self._pair)
+        return idx, dist
 
 
 class LazyNeighbours(Neighbours):

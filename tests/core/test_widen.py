@@ -358,3 +358,28 @@ def test_rows_kept_at_any_width_past_the_fits_serve_them(quantised, monkeypatch)
     np.testing.assert_array_equal(h[need], full.distances[need, kc[need] - 1])
     np.testing.assert_array_equal(rows[need], full.indices[need])
     assert narrow._kept is None
+
+
+def test_a_graph_widened_where_its_rows_were_kept_reads_them(quantised, monkeypatch):
+    """Where most points fit wide (tiny noise: the anchors' rows of 320 held nearly every point)
+    the graph is widened whole: from the rows kept, their distances recomputed, and only the
+    others searched; the same graph, bit for bit, as a search of every row."""
+    import core.wide_neighbours as wide
+
+    narrow, _ = search_in_spatial_order(quantised, 160, width=24)
+    full, _ = search_in_spatial_order(quantised, 90)
+    n = len(quantised)
+    narrow.keep_rows(narrow.width + 1)
+    every = np.random.default_rng(3).permutation(n)
+    narrow.rows(every[: n // 2], 160)
+    narrow.rows(every[n // 3: n - 50], 90)  # overlapping the first; 50 rows not kept
+    searched, whole = [], []
+    monkeypatch.setattr(wide, "_query_tree", lambda *a: whole.append(a))
+    real = wide.query_rows
+    monkeypatch.setattr(wide, "query_rows", lambda p, t, r, c, *a: (searched.append(c.copy()), real(p, t, r, c, *a)))
+    rows, h = rows_at_least(narrow, np.full(n, 90))
+    assert not whole and np.array_equal(np.sort(np.concatenate(searched)), np.sort(every[n - 50:]))
+    assert narrow.width == 90
+    np.testing.assert_array_equal(rows, full.indices)
+    np.testing.assert_array_equal(h, full.distances[:, -1])
+    np.testing.assert_array_equal(narrow.take(90)[1], full.distances)
