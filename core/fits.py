@@ -11,7 +11,7 @@ import numpy as np
 
 from . import anchors
 from .anchor_blend import blended
-from .frame import darboux_frame
+from .frame import darboux_frame, frame_valid
 from .kernels.permute import put_rows
 from .patch import Chunk
 
@@ -50,15 +50,25 @@ def fit_all(pts, nrm, idx, kc, h, has_normal, *, method, options, report) -> Fit
     return out
 
 
-def empty_fit(n) -> Fit:
+def fit_residuals(pts, nrm, idx, kc, h, has_normal, *, method, options, report) -> Fit:
+    """:func:`fit_all` read for its ``valid``, ``rms``, ``spread`` and ``degree`` alone: the frames'
+    fields are None (no principal directions computed, no frame stored: 0.05 s CPU of a default
+    estimate of 100k points went to the crease reference's frames)."""
+    out = empty_fit(len(pts), frames=False)
+    Fitter(pts, idx, kc, h, method, options).into(out, nrm, has_normal, report)
+    return out
+
+
+def empty_fit(n, *, frames=True) -> Fit:
+    """A :class:`Fit` of ``n`` invalid points (without ``frames``: normals, k1, k2, e1, e2 None)."""
     def vectors():
-        return np.full((n, 3), np.nan)
+        return np.full((n, 3), np.nan) if frames else None
 
-    def scalars():
-        return np.full(n, np.nan)
+    def scalars(kept=True):
+        return np.full(n, np.nan) if kept else None
 
-    return Fit(vectors(), scalars(), scalars(), vectors(), vectors(), np.zeros(n, dtype=bool), scalars(), scalars(),
-               np.zeros(n, dtype=np.int8))
+    return Fit(vectors(), scalars(frames), scalars(frames), vectors(), vectors(), np.zeros(n, dtype=bool),
+               scalars(), scalars(), np.zeros(n, dtype=np.int8))
 
 
 class Fitter(NamedTuple):
@@ -131,8 +141,13 @@ class Fitter(NamedTuple):
 
 
 def _fit_chunk(chunk, method, opts, out: Fit, kept=None) -> None:
-    """Fit ``chunk`` into ``out``; ``kept`` keeps the anchors' fits, with their polynomials (NF's)."""
+    """Fit ``chunk`` into ``out``; ``kept`` keeps the anchors' fits, with their polynomials (NF's).
+    Where ``out`` holds no frames (:func:`fit_residuals`) only their validity is found."""
     mu, W, ok, diag = method.fit(chunk, **opts) if kept is None else method.fit(chunk, **opts, coefficients=True)
+    if out.normals is None:
+        valid = frame_valid(chunk.t1, chunk.t2, chunk.z, mu, W / chunk.h[:, None, None])
+        _store(out, chunk.centres, None, diag, ok & valid)
+        return
     frame = darboux_frame(chunk.t1, chunk.t2, chunk.z, mu, W / chunk.h[:, None, None])
     good = ok & frame.ok
     if kept is not None:
@@ -141,8 +156,10 @@ def _fit_chunk(chunk, method, opts, out: Fit, kept=None) -> None:
 
 
 def _store(out: Fit, centres, frame, diag, good) -> None:
-    """``out``'s rows ``centres[good]`` = the frame's and the fit's diagnostics' (valid last: True where good)."""
-    stored = [(frame.normal, out.normals), (frame.e1, out.e1), (frame.e2, out.e2), (frame.k1, out.k1), (frame.k2, out.k2)]
+    """``out``'s rows ``centres[good]`` = the frame's (unless None) and the fit's diagnostics' (valid
+    last: True where good)."""
+    stored = [] if frame is None else \
+        [(frame.normal, out.normals), (frame.e1, out.e1), (frame.e2, out.e2), (frame.k1, out.k1), (frame.k2, out.k2)]
     if diag is not None and "rms" in diag:
         stored += [(diag["rms"], out.rms), (diag["spread"], out.spread), (diag["degree"], out.degree)]
     stored.append((good, out.valid))

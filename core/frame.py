@@ -56,17 +56,32 @@ def darboux_frame(t1, t2, z, mu, W):
     eigenvalues are k1 >= k2 (eq. 5), with the sign convention k = +1/R on a sphere
     with outward normals. Computed per point in :mod:`core.kernels.frame`.
     """
-    t1, t2, z = (np.ascontiguousarray(a, dtype=np.float64) for a in (t1, t2, z))
-    mu = np.ascontiguousarray(mu, dtype=np.float64)
-    W = np.ascontiguousarray(W, dtype=np.float64)
+    t1, t2, z, mu, normal, k1, k2, yx, ok = _curvatures(t1, t2, z, mu, W)
     m = len(mu)
-    normal, e1, e2 = np.empty((m, 3)), np.empty((m, 3)), np.empty((m, 3))
-    k1, k2, yx, ok = np.empty(m), np.empty(m), np.empty((m, 2)), np.empty(m, dtype=bool)
-    frame_curvatures(t1, t2, z, mu, W, MAX_TILT2, normal, k1, k2, yx, ok)
+    e1, e2 = np.empty((m, 3)), np.empty((m, 3))
     phi = 0.5 * np.arctan2(yx[:, 0], yx[:, 1])
     frame_directions(t1, t2, z, mu, ok, np.cos(phi), np.sin(phi), e1, e2)
     ok &= np.isfinite(k1) & np.isfinite(k2)
     return DarbouxFrame(normal, k1, k2, e1, e2, ok)
+
+
+def frame_valid(t1, t2, z, mu, W) -> np.ndarray:
+    """(M,) bool: :func:`darboux_frame`'s ``ok`` alone (mu and W usable, k1 and k2 finite), without
+    the principal directions (a fit read only for its residuals keeps no frame)."""
+    *_, k1, k2, _, ok = _curvatures(t1, t2, z, mu, W)
+    return ok & np.isfinite(k1) & np.isfinite(k2)
+
+
+def _curvatures(t1, t2, z, mu, W):
+    """The contiguous ``t1, t2, z, mu`` and :func:`core.kernels.frame.frame_curvatures`' ``normal,
+    k1, k2, yx, ok`` of :func:`darboux_frame`."""
+    t1, t2, z = (np.ascontiguousarray(a, dtype=np.float64) for a in (t1, t2, z))
+    mu = np.ascontiguousarray(mu, dtype=np.float64)
+    W = np.ascontiguousarray(W, dtype=np.float64)
+    m = len(mu)
+    normal, k1, k2, yx, ok = np.empty((m, 3)), np.empty(m), np.empty(m), np.empty((m, 2)), np.empty(m, dtype=bool)
+    frame_curvatures(t1, t2, z, mu, W, MAX_TILT2, normal, k1, k2, yx, ok)
+    return t1, t2, z, mu, normal, k1, k2, yx, ok
 
 
 def turned_over(normal, k1, k2, e1, e2, flip):

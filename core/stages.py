@@ -18,8 +18,8 @@ from .initial_normals import Initial, initial_normals, initial_rows
 from .orientation import orient
 from ._progress import Progress
 from .spatial_order import SpatialOrder, given_in_spatial_order
-from .wide_neighbours import search_in_spatial_order
-from .fits import Fit, fit_all, invalid_at
+from .wide_neighbours import WidenableNeighbours, search_in_spatial_order
+from .fits import Fit, fit_all, fit_residuals, invalid_at
 from .creases import crease_residuals, judge_creases as _creases
 from .off_surface import off_surface
 from .volumetric import volumetric
@@ -155,14 +155,20 @@ class Residuals(NamedTuple):
     spread: np.ndarray
 
 
+#: the graphs whose held rows :meth:`take` serves in place (views): a fit reads their first k columns
+#: there, not a copy of every row (a copy of 100k rows was ~5 ms of the crease reference's 47)
+_SERVED_IN_PLACE = (Neighbours, WidenableNeighbours)
+
+
 def crease_reference(pts, nrm, has_normal, nb, plan, report) -> Residuals:
     """The paper's linear fit at the initial scale, which creases are judged by with
     k="auto": a cubic over a wide neighbourhood explains half of a step, so its
     residuals do not show it. Only its residuals are kept (its frames were 84 MiB at 1M points)."""
-    idx_p, dist_p = nb.take(plan.k_initial)
+    k = plan.k_initial
+    idx_p, dist_p = nb.take(max(k, nb.width) if type(nb) in _SERVED_IN_PLACE else k)  # the fit reads the first k
     linear = {**plan.options, "degree": 1, "robust": None}
-    kc = np.full(len(pts), idx_p.shape[1])
-    fit = fit_all(pts, nrm, idx_p, kc, dist_p[:, -1], has_normal, method=plan.method, options=linear, report=report)
+    fit = fit_residuals(pts, nrm, idx_p, np.full(len(pts), k), dist_p[:, k - 1], has_normal, method=plan.method,
+                        options=linear, report=report)
     return Residuals(fit.valid, fit.rms, fit.spread)
 
 
@@ -208,8 +214,8 @@ def choose_scale(pts, nrm, nb, inliers, plan, report, *, scores=None, k_initial=
     steady = inliers & ~suspect  # the jets are least squares: suspects sit out the choice of k
     masked = np.where(steady[:, None], nrm, np.nan)
     prio = anchors.priority(pts, nb.take_indices(anchors.RATIOS + 1)) if anchors.shares_scale(plan) else None
-    if prio is not None and hasattr(nb, "keep_rows"):  # the anchors' fits read the rows their jets search
-        nb.keep_rows(ks[-1])
+    if hasattr(nb, "keep_rows"):  # the fits read rows the jets search (anchors' of 320, the degree rule's of 113)
+        nb.keep_rows(nb.width + 1)
     kc, on_jet, quiet, jets, degree = parts.choose_within(
         lambda sizes, usable: scale.choose_model(pts, masked, nb, usable, sizes, report, priority=prio,
                                                  sat_out=inliers & suspect), ks, part_sizes, steady)

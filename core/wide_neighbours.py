@@ -58,7 +58,7 @@ class WidenableNeighbours(Neighbours):
         object.__setattr__(self, "_k_max", int(k_max))
         object.__setattr__(self, "_tree", tree)
         object.__setattr__(self, "_rank", rank)
-        object.__setattr__(self, "_kept", None)  # (width, [(centres, rows), ...]) while keep_rows asks
+        object.__setattr__(self, "_kept", None)  # (least width, [(centres, rows), ...]) while keep_rows asks
 
     def __reduce__(self):  # pickled (and copied) as the whole graph: the lock and tree stay here
         return Neighbours, (self.points, self.indices, self.distances)
@@ -126,25 +126,25 @@ class WidenableNeighbours(Neighbours):
         if sheets is not None:
             sheets.put(idx, dist, pair, centres)
         with self._lock:
-            if self._kept is not None and self._kept[0] == k:
+            if self._kept is not None and self._kept[0] <= k:
                 self._kept[1].append((centres, idx))
         return idx, dist
 
     def keep_rows(self, k: int) -> None:
-        """Keep the indices of the rows :meth:`rows` searches at width ``k`` from now on, for
-        :meth:`kept_rows`: k="auto"'s jets and its anchors' fits read the same rows of 320 at
+        """Keep the indices of the rows :meth:`rows` searches at width ``k`` or more from now on,
+        for :meth:`kept_rows`: k="auto"'s jets and its anchors' fits read the same rows of 320 at
         nearly the same points, and searching them twice was 5 % of a noisy estimate."""
         with self._lock:
             object.__setattr__(self, "_kept", (int(k), []))
 
     def kept_rows(self, k: int) -> list:
-        """``[(centres, rows), ...]`` searched at width ``k`` since :meth:`keep_rows` (their
-        distances are not kept: at 1M points they were 600 MB), handed over: this graph keeps
-        no more of them."""
+        """``[(centres, rows), ...]`` searched at width ``k`` or more since :meth:`keep_rows`
+        (their first k columns are a search's at k, bit for bit; their distances are not kept:
+        at 1M points they were 600 MB), handed over: this graph keeps no more of them."""
         with self._lock:
-            kept, width = self._kept, None if self._kept is None else self._kept[0]
+            kept = self._kept
             object.__setattr__(self, "_kept", None)
-        return kept[1] if width == k else []
+        return [] if kept is None else [(c, rows) for c, rows in kept[1] if rows.shape[1] >= k]
 
     def whole_rows(self, centres):
         """All ``k_max`` columns of the rows of ``centres``, which list their own sheet first
@@ -163,25 +163,34 @@ class WidenableNeighbours(Neighbours):
         with self._lock:
             return self._pair, self._sheets
 
-    def widen(self, k: int | None = None, *, progress=None):
-        """Every row searched to ``k`` (default ``k_max``) neighbours, if fewer are held."""
+    def widen(self, k: int | None = None, *, progress=None, found=None):
+        """Every row searched to ``k`` (default ``k_max``) neighbours, if fewer are held;
+        ``found``: those rows already, ``(idx, dist)`` as :meth:`rows` gives them."""
         k = self._k_max if k is None else k
         self._check_k(k)
         with self._lock:  # a viewer's result may be read on one thread while the next job widens it
             if self.width < k:
-                n = len(self._points)
-                idx = np.empty((n, k), dtype=self._pair[0].dtype)
-                dist = np.empty((n, k), dtype=np.float64)
-                _query_tree(self._points, self._tree, self._rank, idx, dist, Progress(progress))
+                if found is None:
+                    found = self._searched(k, progress)
+                idx, dist = found
                 sheets = self._sheets
                 if sheets is not None:
-                    sheets.put(idx, dist, self._pair)
                     sheets = sheets.beyond(k - self.width)  # the columns now held are dropped from it
                 idx.setflags(write=False)
                 dist.setflags(write=False)
                 object.__setattr__(self, "_pair", (idx, dist))
                 object.__setattr__(self, "_sheets", sheets)
             return self._pair
+
+    def _searched(self, k, progress):
+        """Every row's ``k`` nearest, searched (those listing their own sheet first as :meth:`rows` serves them)."""
+        n = len(self._points)
+        idx = np.empty((n, k), dtype=self._pair[0].dtype)
+        dist = np.empty((n, k), dtype=np.float64)
+        _query_tree(self._points, self._tree, self._rank, idx, dist, Progress(progress))
+        if self._sheets is not None:
+            self._sheets.put(idx, dist, self._pair)
+        return idx, dist
 
 
 class LazyNeighbours(Neighbours):

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from core.frame import darboux_frame
+from core.frame import darboux_frame, frame_valid
 from core.linalg import symmetric_eig2, tangent_basis
 from core.tuning import MAX_TILT2
 
@@ -73,6 +73,26 @@ def test_compiled_frame_is_the_numpy_frame_bit_for_bit():
     for name, a, b in zip(("normal", "k1", "k2", "e1", "e2", "ok"), got, ref):
         np.testing.assert_array_equal(a, b, err_msg=name)
     assert (got.k1[got.ok] >= got.k2[got.ok]).all()
+
+
+def test_frame_validity_alone_is_the_frames_own():
+    """frame_valid (the crease reference's fits keep no frame) flags the rows darboux_frame does:
+    NaN or too tilted normals, infinite W, and curvatures that overflow from a finite W."""
+    rng = np.random.default_rng(7)
+    m = 5000
+    z = rng.normal(size=(m, 3))
+    z /= np.linalg.norm(z, axis=1)[:, None]
+    t1, t2 = tangent_basis(z)
+    mu = rng.normal(scale=0.3, size=(m, 2))
+    mu[::97], mu[::89] = np.nan, 2.0
+    W = rng.normal(size=(m, 2, 2)) * rng.choice([1e-8, 1.0, 1e6], size=(m, 1, 1))
+    W[::101, 0, 1] = np.inf
+    W[::31] = 1e308  # finite, but k1 = inf
+    with np.errstate(over="ignore", invalid="ignore"):
+        ok = darboux_frame(t1, t2, z, mu, W).ok
+        got = frame_valid(t1, t2, z, mu, W)
+    assert ok.sum() > m // 2 and (~ok[::31]).all()
+    np.testing.assert_array_equal(got, ok)
 
 
 def test_frame_of_no_points():

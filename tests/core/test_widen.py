@@ -332,3 +332,54 @@ def test_rows_kept_for_the_fits_are_not_searched_again(quantised, monkeypatch):
     assert narrow.kept_rows(120) == [] and narrow._kept is None  # handed over
     narrow.rows(need[:5], 120)
     assert narrow._kept is None  # and no longer kept
+
+
+def test_rows_kept_at_any_width_past_the_fits_serve_them(quantised, monkeypatch):
+    """The jets search rows at several widths (the degree rule's 113, the reruns' 320): every
+    row kept at least as wide as the fits read serves them (its first k columns are a search's
+    at k, bit for bit), once where kept at two widths; narrower ones are searched again."""
+    import core.wide_neighbours as wide
+
+    narrow, _ = search_in_spatial_order(quantised, 160, width=24)
+    full, _ = search_in_spatial_order(quantised, 90)
+    n = len(quantised)
+    kc = np.where(np.arange(n) % 3 == 0, 90, 20)
+    narrow.keep_rows(narrow.width + 1)
+    rng = np.random.default_rng(2)
+    at_90, at_160, at_60 = (rng.permutation(n)[:m] for m in (300, 200, 100))  # overlapping, any order
+    for c, k in ((at_90, 90), (at_160, 160), (at_60, 60)):
+        narrow.rows(c, k)
+    searched = []
+    real = wide.query_rows
+    monkeypatch.setattr(wide, "query_rows", lambda p, t, r, c, *a: (searched.append(c.copy()), real(p, t, r, c, *a)))
+    rows, h = rows_at_least(narrow, kc)
+    need = np.flatnonzero(kc > 24)
+    np.testing.assert_array_equal(np.sort(np.concatenate(searched)), np.setdiff1d(need, np.union1d(at_90, at_160)))
+    np.testing.assert_array_equal(h[need], full.distances[need, kc[need] - 1])
+    np.testing.assert_array_equal(rows[need], full.indices[need])
+    assert narrow._kept is None
+
+
+def test_a_graph_widened_where_its_rows_were_kept_reads_them(quantised, monkeypatch):
+    """Where most points fit wide (tiny noise: the anchors' rows of 320 held nearly every point)
+    the graph is widened whole: from the rows kept, their distances recomputed, and only the
+    others searched; the same graph, bit for bit, as a search of every row."""
+    import core.wide_neighbours as wide
+
+    narrow, _ = search_in_spatial_order(quantised, 160, width=24)
+    full, _ = search_in_spatial_order(quantised, 90)
+    n = len(quantised)
+    narrow.keep_rows(narrow.width + 1)
+    every = np.random.default_rng(3).permutation(n)
+    narrow.rows(every[: n // 2], 160)
+    narrow.rows(every[n // 3: n - 50], 90)  # overlapping the first; 50 rows not kept
+    searched, whole = [], []
+    monkeypatch.setattr(wide, "_query_tree", lambda *a: whole.append(a))
+    real = wide.query_rows
+    monkeypatch.setattr(wide, "query_rows", lambda p, t, r, c, *a: (searched.append(c.copy()), real(p, t, r, c, *a)))
+    rows, h = rows_at_least(narrow, np.full(n, 90))
+    assert not whole and np.array_equal(np.sort(np.concatenate(searched)), np.sort(every[n - 50:]))
+    assert narrow.width == 90
+    np.testing.assert_array_equal(rows, full.indices)
+    np.testing.assert_array_equal(h, full.distances[:, -1])
+    np.testing.assert_array_equal(narrow.take(90)[1], full.distances)
