@@ -54,17 +54,22 @@ def _numpy_frame(t1, t2, z, mu, W):
     return normal, k1, k2, e1, e2, ok
 
 
-def test_compiled_frame_is_the_numpy_frame_bit_for_bit():
-    rng = np.random.default_rng(4)
-    m = 20_000
+def _awkward_rows(seed, m):
+    """Frames' inputs with invalid rows: NaN and too tilted normals, infinite W, W over 12 decades."""
+    rng = np.random.default_rng(seed)
     z = rng.normal(size=(m, 3))
     z /= np.linalg.norm(z, axis=1)[:, None]
     t1, t2 = tangent_basis(z)
     mu = rng.normal(scale=0.3, size=(m, 2))
-    mu[::97] = np.nan  # invalid rows: NaN, too tilted, infinite W, and exact zeros (umbilics)
-    mu[::89] = 2.0
+    mu[::97], mu[::89] = np.nan, 2.0
     W = rng.normal(size=(m, 2, 2)) * rng.choice([1e-8, 1.0, 1e6], size=(m, 1, 1))
     W[::101, 0, 1] = np.inf
+    return t1, t2, z, mu, W
+
+
+def test_compiled_frame_is_the_numpy_frame_bit_for_bit():
+    m = 20_000
+    t1, t2, z, mu, W = _awkward_rows(4, m)  # and exact zeros (umbilics), symmetric rows
     W[::7, 0, 1] = W[::7, 1, 0]
     W[::13], mu[::13] = 0.0, 0.0
     got = darboux_frame(t1, t2, z, mu, W)
@@ -78,15 +83,8 @@ def test_compiled_frame_is_the_numpy_frame_bit_for_bit():
 def test_frame_validity_alone_is_the_frames_own():
     """frame_valid (the crease reference's fits keep no frame) flags the rows darboux_frame does:
     NaN or too tilted normals, infinite W, and curvatures that overflow from a finite W."""
-    rng = np.random.default_rng(7)
     m = 5000
-    z = rng.normal(size=(m, 3))
-    z /= np.linalg.norm(z, axis=1)[:, None]
-    t1, t2 = tangent_basis(z)
-    mu = rng.normal(scale=0.3, size=(m, 2))
-    mu[::97], mu[::89] = np.nan, 2.0
-    W = rng.normal(size=(m, 2, 2)) * rng.choice([1e-8, 1.0, 1e6], size=(m, 1, 1))
-    W[::101, 0, 1] = np.inf
+    t1, t2, z, mu, W = _awkward_rows(7, m)
     W[::31] = 1e308  # finite, but k1 = inf
     with np.errstate(over="ignore", invalid="ignore"):
         ok = darboux_frame(t1, t2, z, mu, W).ok
