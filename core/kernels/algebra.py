@@ -110,7 +110,7 @@ def cholesky(G, p, rcond, d, L):
     return True
 
 
-@njit(**OPTS)
+@njit(**LEAF)
 def determined(G, degree, tau, d, L):
     """Whether the smallest eigenvalue of the normal matrix G (lower triangle used) of a
     polynomial of ``degree`` in (u, v) exceeds ``tau`` once the monomials are scaled as an

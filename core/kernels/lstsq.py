@@ -19,7 +19,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ._base import OPTS
+from ._base import LEAF, OPTS
 from .algebra import MAX_TERMS, chol_solve, cholesky, determined, n_terms
 
 # rows of the per-block vector scratch of the NF kernels
@@ -141,7 +141,7 @@ def put_linear(t, vec, G, acc, add):
         acc[a] = acc[a] + t[c] if add else t[c]
 
 
-@njit(**OPTS, fastmath=True)
+@njit(**LEAF, fastmath=True)
 def _accumulate_linear(R, X, Y, wt, j0, j1, vec, G, acc):
     """:func:`accumulate` for degree 1: all sums in one pass (short neighbourhoods
     gain nothing from vectors)."""
@@ -168,7 +168,7 @@ def accumulate(R, X, Y, wt, j0, j1, degree, vec, G, acc, WR):
         _accumulate_moments(R, X, Y, wt, j0, j1, degree, vec, G, acc, WR)
 
 
-@njit(**OPTS, fastmath=True)
+@njit(**LEAF, fastmath=True)
 def _accumulate_moments(R, X, Y, wt, j0, j1, degree, vec, G, acc, WR):
     """:func:`accumulate` for degree 2 or 3: the weighted monomials w R_a are kept (WR)
     from the right-hand sides' loop, so each moment is a dot product of two rows (the same
@@ -288,7 +288,7 @@ def solve(degree, rcond, vec, G, L, acc):
     return True
 
 
-@njit(**OPTS)
+@njit(**LEAF)
 def solve_coefficients(degree, rcond, vec, G, L, acc):
     """:func:`solve` without the columns of G^-1 (vec[C1], vec[C2]), which only the
     variances and the exact constraint need: what an intermediate reweighting needs."""
@@ -308,7 +308,7 @@ def solve_coefficients(degree, rcond, vec, G, L, acc):
     return True
 
 
-@njit(**OPTS)
+@njit(**LEAF)
 def solve_determined(degree, rcond, pivot, vec, G, L, acc, columns):
     """The highest degree d <= ``degree`` whose fit the sums determine, solved: for d >= 2
     the smallest eigenvalue of the scaled normal matrix above ``pivot``

@@ -12,7 +12,7 @@ import math
 
 from numba import njit
 
-from ._base import OPTS
+from ._base import LEAF
 from .algebra import n_terms
 from .lstsq import CX, CY
 
@@ -25,7 +25,7 @@ MAD_SIGMA = 1.4826
 MIN_SCALE = 1e-4
 
 
-@njit(**OPTS)
+@njit(**LEAF)
 def _partition(a, lo, hi, pivot, strict):
     """Move the values of a[lo:hi] below ``pivot`` (at or below it unless ``strict``) to
     its front, without a branch per value; returns the end of that front part."""
@@ -38,7 +38,7 @@ def _partition(a, lo, hi, pivot, strict):
     return store
 
 
-@njit(**OPTS)
+@njit(**LEAF)
 def select(a, lo, hi, kth):
     """Partially order a[lo:hi] in place so a[kth] is the value a full sort would put
     there and no value before it is larger (quickselect, median-of-3 pivot; values equal
@@ -56,7 +56,7 @@ def select(a, lo, hi, kth):
         lo = upto
 
 
-@njit(**OPTS)
+@njit(**LEAF)
 def root_median(a, m):
     """Median of sqrt(a[:m]) for a[:m] >= 0 (reorders a), without the copy np.median makes:
     the square root is monotone, so only the one or two middle values need it."""
@@ -64,7 +64,7 @@ def root_median(a, m):
     return selected_root_median(a, m)
 
 
-@njit(**OPTS)
+@njit(**LEAF)
 def selected_root_median(a, m):
     """:func:`root_median` of a[:m] once it is selected at m // 2 (or sorted)."""
     upper = math.sqrt(a[m // 2])
@@ -76,7 +76,7 @@ def selected_root_median(a, m):
     return 0.5 * (upper + math.sqrt(lower))
 
 
-@njit(**OPTS)
+@njit(**LEAF)
 def _squared_residuals(s, n, degree):
     """s.res[j] = |(X, Y) - fit|^2 of neighbours 0..n-1 (monomials innermost: vectorised)."""
     R, res, tmp, vec = s.R, s.res, s.tmp, s.vec
@@ -92,7 +92,7 @@ def _squared_residuals(s, n, degree):
         res[j] = res[j] * res[j] + tmp[j] * tmp[j]
 
 
-@njit(**OPTS)
+@njit(**LEAF)
 def robust_weights(s, n, degree, kind):
     """IRLS weights ``s.wt`` of neighbours 0..n-1 from the residuals of the current fit in
     the :class:`~core.kernels.lstsq.Scratch` ``s``: Huber (kind 1, c = 1.345) or Tukey
