@@ -41,20 +41,14 @@ class Fit(NamedTuple):
 
 
 
-def fit_all(pts, nrm, idx, kc, h, has_normal, *, method, options, report) -> Fit:
+def fit_all(pts, nrm, idx, kc, h, has_normal, *, method, options, report, frames=True) -> Fit:
     """One fit of ``method`` with ``options`` over all points in chunks, through the shared
     frame path: point i uses its first ``kc[i]`` neighbours in ``idx``, lengths in units of
-    ``h[i]``; points without ``has_normal`` (or h = 0) stay invalid."""
-    out = empty_fit(len(pts))
-    Fitter(pts, idx, kc, h, method, options).into(out, nrm, has_normal, report)
-    return out
-
-
-def fit_residuals(pts, nrm, idx, kc, h, has_normal, *, method, options, report) -> Fit:
-    """:func:`fit_all` read for its ``valid``, ``rms``, ``spread`` and ``degree`` alone: the frames'
-    fields are None (no principal directions computed, no frame stored: 0.05 s CPU of a default
-    estimate of 100k points went to the crease reference's frames)."""
-    out = empty_fit(len(pts), frames=False)
+    ``h[i]``; points without ``has_normal`` (or h = 0) stay invalid. Without ``frames`` the fit
+    is read for its ``valid``, ``rms``, ``spread`` and ``degree`` alone: the frames' fields are
+    None (no principal directions computed, no frame stored: 0.05 s CPU of a default estimate
+    of 100k points went to the crease reference's frames)."""
+    out = empty_fit(len(pts), frames=frames)
     Fitter(pts, idx, kc, h, method, options).into(out, nrm, has_normal, report)
     return out
 
@@ -142,7 +136,7 @@ class Fitter(NamedTuple):
 
 def _fit_chunk(chunk, method, opts, out: Fit, kept=None) -> None:
     """Fit ``chunk`` into ``out``; ``kept`` keeps the anchors' fits, with their polynomials (NF's).
-    Where ``out`` holds no frames (:func:`fit_residuals`) only their validity is found."""
+    Where ``out`` holds no frames (:func:`fit_all` without ``frames``) only their validity is found."""
     mu, W, ok, diag = method.fit(chunk, **opts) if kept is None else method.fit(chunk, **opts, coefficients=True)
     if out.normals is None:
         valid = frame_valid(chunk.t1, chunk.t2, chunk.z, mu, W / chunk.h[:, None, None])

@@ -19,7 +19,7 @@ from .orientation import orient
 from ._progress import Progress
 from .spatial_order import SpatialOrder, given_in_spatial_order
 from .wide_neighbours import WidenableNeighbours, search_in_spatial_order
-from .fits import Fit, fit_all, fit_residuals, invalid_at
+from .fits import Fit, fit_all, invalid_at
 from .creases import crease_residuals, judge_creases as _creases
 from .off_surface import off_surface
 from .volumetric import volumetric
@@ -167,8 +167,8 @@ def crease_reference(pts, nrm, has_normal, nb, plan, report) -> Residuals:
     k = plan.k_initial
     idx_p, dist_p = nb.take(max(k, nb.width) if type(nb) in _SERVED_IN_PLACE else k)  # the fit reads the first k
     linear = {**plan.options, "degree": 1, "robust": None}
-    fit = fit_residuals(pts, nrm, idx_p, np.full(len(pts), k), dist_p[:, k - 1], has_normal, method=plan.method,
-                        options=linear, report=report)
+    fit = fit_all(pts, nrm, idx_p, np.full(len(pts), k), dist_p[:, k - 1], has_normal, method=plan.method,
+                  options=linear, report=report, frames=False)
     return Residuals(fit.valid, fit.rms, fit.spread)
 
 
