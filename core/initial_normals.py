@@ -10,6 +10,7 @@ from typing import NamedTuple
 import numpy as np
 
 from . import anchors, kernels, local_noise, parts, plane_spread, reach, scale, tuning
+from .clump_surfaces import scatter_shapes
 from .kernels.knn import unflagged_first
 from .normals import jet_normals, pca_jet_at, pca_normals
 
@@ -245,8 +246,7 @@ def unfolded(wide, small, spread, clean, typical=None, *, pts=None, small_rows=N
         typical = typical_spread(spread, clean)
     folded = (spread < tuning.FOLD_SPREAD * typical) & np.isfinite(small[:, 0])
     if folded.any() and pts is not None:
-        flat, line = np.empty(np.count_nonzero(folded)), np.empty(np.count_nonzero(folded))
-        kernels.scatter_shapes(pts, np.ascontiguousarray(small_rows[folded]), flat, line)
+        flat, line = scatter_shapes(pts, small_rows[folded])
         folded[folded] = ~((flat > tuning.FOLD_FLAT) & (line < plane_spread.LINE_SPREAD))
     if not folded.any():
         return wide, typical, folded
