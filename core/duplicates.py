@@ -249,6 +249,8 @@ class CopiesNeighbours(Neighbours):
     """The distinct positions' graph ``nb`` as neighbours of every caller's point: a copy's
     row is its position's, itself first (its own copies are not its neighbours)."""
 
+    served_in_place = False  # its rows are copies
+
     def __init__(self, nb, merged: Merged, points):
         for name, value in dict(_nb=nb, _merged=merged, _points=points).items():
             object.__setattr__(self, name, value)

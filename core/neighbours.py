@@ -4,7 +4,7 @@ is kept apart from *which estimator*)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable, Union
+from typing import Callable, ClassVar, Union
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -47,6 +47,10 @@ class Neighbours:
     points: np.ndarray
     indices: np.ndarray
     distances: np.ndarray
+
+    #: True where :meth:`take` serves the held rows in place (views): a caller that reads only
+    #: the first k columns may take :attr:`width` of them and skip a copy of every row
+    served_in_place: ClassVar[bool] = True
 
     @property
     def k_max(self) -> int:

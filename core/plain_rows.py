@@ -28,6 +28,8 @@ class PlainNeighbours(Neighbours):
     row that is the plain row's j-th; the other rows are ``fit``'s. ``whole(centres)`` gives those
     whole rows of ``fit``; ``slot`` (N,) is each point's row of ``plain`` (-1: none)."""
 
+    served_in_place = False  # its rows are copies
+
     def __init__(self, fit, centres, plain, slot, whole):
         for name, value in dict(_fit=fit, _centres=centres, _plain=plain, _slot=slot, _whole=whole,
                                 _made=None, _lock=threading.Lock()).items():

@@ -18,7 +18,7 @@ from .initial_normals import Initial, initial_normals, initial_rows
 from .orientation import orient
 from ._progress import Progress
 from .spatial_order import SpatialOrder, given_in_spatial_order
-from .wide_neighbours import WidenableNeighbours, search_in_spatial_order
+from .wide_neighbours import search_in_spatial_order
 from .fits import Fit, fit_all, invalid_at
 from .creases import crease_residuals, judge_creases as _creases
 from .off_surface import off_surface
@@ -155,17 +155,13 @@ class Residuals(NamedTuple):
     spread: np.ndarray
 
 
-#: the graphs whose held rows :meth:`take` serves in place (views): a fit reads their first k columns
-#: there, not a copy of every row (a copy of 100k rows was ~5 ms of the crease reference's 47)
-_SERVED_IN_PLACE = (Neighbours, WidenableNeighbours)
-
-
 def crease_reference(pts, nrm, has_normal, nb, plan, report) -> Residuals:
     """The paper's linear fit at the initial scale, which creases are judged by with
     k="auto": a cubic over a wide neighbourhood explains half of a step, so its
     residuals do not show it. Only its residuals are kept (its frames were 84 MiB at 1M points)."""
     k = plan.k_initial
-    idx_p, dist_p = nb.take(max(k, nb.width) if type(nb) in _SERVED_IN_PLACE else k)  # the fit reads the first k
+    idx_p, dist_p = nb.take(max(k, nb.width) if nb.served_in_place else k)  # the fit reads the first k
+    # (in place: a copy of 100k rows was ~5 ms of the crease reference's 47)
     linear = {**plan.options, "degree": 1, "robust": None}
     fit = fit_all(pts, nrm, idx_p, np.full(len(pts), k), dist_p[:, k - 1], has_normal, method=plan.method,
                   options=linear, report=report, frames=False)

@@ -203,6 +203,8 @@ class LazyNeighbours(Neighbours):
     estimate it is passed back to searches no more than the first one did); reading
     :attr:`indices` or :attr:`distances` makes the whole graph once, by ``make()``."""
 
+    served_in_place = False  # its rows are copies
+
     def __init__(self, points, source, order, make):
         inverse = np.empty_like(order)
         inverse[order] = np.arange(len(order), dtype=order.dtype)
