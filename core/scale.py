@@ -80,7 +80,7 @@ from .patch import Chunk
 from .tuning import (ANCHOR_REACH, AUTO_DEGREE, AUTO_KS, DEGREE_PIVOT, FOLD_COS, FOLD_FRACTION, FOLD_MIN_BAD, FOLD_NOISE,
                      GAMMA, INITIAL_K0, INITIAL_SHARE, JET_DEGREE, JET_GAMMA, JET_DEGREES, JET_KS, JET_QUIET, JET_REACH,
                      JET_DEGREE_GAMMA, JET_MISFIT, JET_SCORE, NOISE_KS, NOISE_POOL, RCOND, JET_RCOND, JET_THIN_TILT,
-                     JET_TILT, ROUNDING_NOISE, WIDEN_SHARE)
+                     JET_TILT, ROUNDING_NOISE, WIDEN_SHARE, COORD_ROUNDING)
 
 __all__ = ["AUTO_DEGREE", "AUTO_KS", "GAMMA", "INITIAL_K0", "JET_KS", "JET_DEGREE", "JET_SCORE",
            "candidates", "choose_k", "noise_ratio", "initial_k", "jet_candidates", "noise_variance", "choose_jets",
@@ -177,16 +177,16 @@ def jet_candidates(n_points: int) -> tuple[int, ...]:
     return neighbour_budget.affordable(JET_KS, n_points, JET_KS[1])
 
 
-def noise_variance(rss_a, rss_b, s, idx, ka=NOISE_KS[0], kb=NOISE_KS[1]):
+def noise_variance(rss_a, rss_b, s, idx, ka=NOISE_KS[0], kb=NOISE_KS[1], size=0.0):
     """Per-point variance of the position noise along the normal (length units squared).
 
     The residual variance of a cubic jet on k neighbours is sigma^2 (noise, the same at
     every k) plus the model's bias, whose quartic terms grow as h^8, i.e. as k^4 on a
     surface (h^2 ~ k). With the variances a at ka and b at kb, pooled over the point's
     :data:`NOISE_POOL` nearest neighbours, sigma^2 = (rho a - b) / (rho - 1), rho =
-    (kb / ka)^4, at least :data:`ROUNDING_NOISE`. Noise-free this is ~0 (the residual is
-    all bias), so the intervals of :func:`choose_jets` are narrow and the smallest size wins;
-    the plain residual variance would let a biased fit pass for noise. Returns (sigma^2, a).
+    (kb / ka)^4, at least :data:`ROUNDING_NOISE` x s and :data:`COORD_ROUNDING` x ``size`` (N,), the point's
+    largest coordinate. Noise-free this is ~0 (all bias), so the intervals of :func:`choose_jets` are narrow
+    and the smallest wins; the plain residual variance would let a biased fit pass for noise. Returns (sigma^2, a).
     """
     s2 = s * s
     with np.errstate(invalid="ignore"):
@@ -203,7 +203,7 @@ def noise_variance(rss_a, rss_b, s, idx, ka=NOISE_KS[0], kb=NOISE_KS[1]):
             a = np.nanmean(va[pool], axis=1)
             b = np.nanmean(vb[pool], axis=1)
     rho = (kb / ka) ** 4
-    sigma2 = np.maximum((rho * a - b) / (rho - 1.0), (ROUNDING_NOISE * s) ** 2)  # exact data: not 0
+    sigma2 = np.maximum((rho * a - b) / (rho - 1.0), np.maximum(ROUNDING_NOISE * s, COORD_ROUNDING * size) ** 2)
     return np.nan_to_num(sigma2, nan=0.0), np.nan_to_num(a, nan=np.inf)
 
 
@@ -291,7 +291,7 @@ def _measured_noise(points, normals, idx, usable, s, t1, t2):
     f = _jet_frames(points, normals, _rows(idx, usable, NOISE_KS[1]), usable, s, t1, t2)
     jet_kernels.jet_residuals(f, np.asarray(NOISE_KS, dtype=np.int64), RCOND, out)
     rss[usable] = out
-    return noise_variance(rss[:, 0], rss[:, 1], s, idx)
+    return noise_variance(rss[:, 0], rss[:, 1], s, idx, size=np.abs(points).max(axis=1))
 
 
 def _jet_ici(nb, idx, usable, ks, frames, sigma2_h, deg, report, *, lead=None):

@@ -234,13 +234,14 @@ JET_GAMMA = 5.0
 #: 0.027); 0.001 (about 0.004 spacing) leaves a 3x margin over noise-free data. An outlier that raises a point's
 #: neighbours' residuals keeps them off the jet (the jet is not robust).
 JET_QUIET = 0.001
-#: the least noise (over s) the jet rule's intervals assume: float64 coordinates are rounded to ~1e-16 of their size, so
-#: no measured noise below this is real. A cube whose faces lie on the axes is exactly planar and measured 0, the same
-#: cube turned by 1e-12 rad 3e-16: the intervals of zero width took other sizes there (median k 56 against 40; normals
-#: up to 8 degrees apart, |k| up to 0.83). Both races unchanged. Cost: both now take the axis-aligned path, the worse
-#: one on tilted noise-free flat shapes (normal error +0.01-0.03 degrees, H +3-17 %); a floor of 1e-14 or 1e-16 left the
-#: two apart.
+#: the least noise the jet rule's intervals assume, over s, and (COORD_ROUNDING) over the size of the point's
+#: coordinates: float64 rounds them to ~1e-16 of that size, so no measured noise below these is real. A cube on the
+#: axes is exactly planar and measured 0, turned by 1e-12 rad 3e-16: intervals of zero width took other sizes (median
+#: k 56 against 40, normals up to 8 degrees apart, |k| up to 0.83); races unchanged; tilted noise-free flat shapes:
+#: normal error +0.01-0.03 degrees, H +3-17 %; 1e-14 or 1e-16 left the two apart. Beyond ~1000 s from the origin
+#: rounding passes 1e-12 s: a 30 deg X scaled 0.1, 300 away, moved k at 50 of 12000 points; 4 ulps of |p|: none.
 ROUNDING_NOISE = 1e-12
+COORD_ROUNDING = 4 * 2.220446049250313e-16
 #: when more than this share of the points measures noise above JET_QUIET, the jet rule
 #: searches every point's whole list at once instead of the rows that grow past the
 #: columns held (core.tuning.SEARCH_WIDTH): with noise most jets grow to the largest size

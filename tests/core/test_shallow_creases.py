@@ -13,11 +13,11 @@ import core
 N = 12000
 
 
-def _junction(kind, seed):
-    """A unit plane z = 0 and a sheet rising from the line x = z = 0 at 30 deg: a half-plane
-    ("T") or a whole plane ("X"). Returns (points, distance to the line, spacing)."""
+def _junction(kind, seed, angle=np.pi / 6):
+    """A unit plane z = 0 and a sheet rising from the line x = z = 0 at ``angle`` (30 deg): a
+    half-plane ("T") or a whole plane ("X"). Returns (points, distance to the line, spacing)."""
     rng = np.random.default_rng(seed)
-    slope = np.array([np.cos(np.pi / 6), 0.0, np.sin(np.pi / 6)])
+    slope = np.array([np.cos(angle), 0.0, np.sin(angle)])
     if kind == "T":
         m = 2 * N // 3
         flat = np.column_stack([rng.uniform(-1, 1, (m, 2)), np.zeros(m)])
