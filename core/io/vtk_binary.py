@@ -32,7 +32,7 @@ _CELLS = (b"vertices", b"lines", b"polygons", b"triangle_strips", b"cells")
 _SPACE = re.compile(rb"[ \t\r\n\v\f]*")
 WORDS = re.compile(rb"[^ \t\r\n\v\f]+")
 #: VTK reads the rest of an array's or a cell array's header line into a buffer of 256 bytes (getline
-#: stores 255; :func:`core.io.vtk._binary_start` too)
+#: stores 255; :func:`core.io.vtk_legacy._binary_start` too)
 LINE_BUFFER = 256
 
 
@@ -57,7 +57,7 @@ def check_binary_arrays(path, data, body: int, legacy_cells: bool) -> list:
     """Each array of the BINARY legacy file ``data`` after ``body`` (where its header lines end)
     holds the bytes it declares: POINTS (or X/Y/Z_COORDINATES), every array of its POINT_DATA
     and CELL_DATA and of every FIELD section; the cell arrays are stepped over (``legacy_cells``:
-    the file is older than version 5.0, its ids checked by ``vtk._check_cells``). Returns the
+    the file is older than version 5.0, its ids checked by ``vtk_legacy._check_cells``). Returns the
     dataset's FIELD sections as :func:`core.io.vtk_ascii.check_ascii_arrays` does."""
     walk = _BinaryWalk(path, data, legacy_cells)
     walk.walk(body)

@@ -1,5 +1,5 @@
 """The XML of a VTK XML file, parsed as VTK parses it (expat), for the checks made before VTK
-reads it (:mod:`core.io.vtk`, :mod:`core.io.vtp_blocks`): quotes of either kind, spaces
+reads it (:mod:`core.io.vtp_sizes`, :mod:`core.io.vtp_blocks`): quotes of either kind, spaces
 around '=', character references and comments are read as VTK reads them, where byte
 patterns saw only one spelling (``NumberOfPoints='1000000000000'`` aborted the process)."""
 
