@@ -61,6 +61,7 @@ def check_binary_arrays(path, data, body: int, legacy_cells: bool) -> list:
     dataset's FIELD sections as :func:`core.io.vtk_ascii.check_ascii_arrays` does."""
     walk = _BinaryWalk(path, data, legacy_cells)
     walk.walk(body)
+    walk.check_lost_bytes()
     return walk.fields
 
 
@@ -83,6 +84,8 @@ class _BinaryWalk(_Walk):
         super().__init__(path, data)
         self.legacy_cells = legacy_cells
         self.cell_counts = (0, 0)  # the OFFSETS and CONNECTIVITY values of a version 5 cell array
+        self.spaced = False  # an array's data were followed by a line end, as VTK writes them
+        self.suspect = None  # (header words, values, bytes) of the first array whose data end in a newline
 
     def section(self, start: int) -> int | None:
         """Check the section at ``start`` (cell arrays stepped over); where the walk goes on, or None."""
@@ -130,7 +133,28 @@ class _BinaryWalk(_Walk):
         held = len(self.data) - newline - 1
         if nbytes > held:
             self._short(words, need, f", {nbytes} bytes, but {held} follow its header before the file ends", field)
+        self._note_end(newline + 1 + nbytes, (words, need, nbytes, field))
         return None, newline + 1 + nbytes
+
+    def _note_end(self, end: int, array) -> None:
+        """Note how the data of ``array`` end at ``end``: followed by a line end (VTK's writers),
+        or their last byte a newline with a word or the file's end right after it."""
+        after = self.data[end : end + 1]
+        if after in (b"\n", b"\r"):
+            self.spaced = True
+        elif self.data[end - 1 : end] == b"\n" and self.suspect is None and after not in (b" ", b"\t"):
+            self.suspect = array
+
+    def check_lost_bytes(self) -> None:
+        """A byte lost inside an array: VTK reads the newline after its data as their last byte and
+        every value after the lost one shifted (1e38, 1e304 in points within 3), then the next keyword,
+        which needs no newline before it. A file whose data are written without line ends after them
+        (read on purpose) may end an array with the byte 10 by chance; one that ends another array
+        with a line end does not: there, an array whose data end in a newline is refused."""
+        if self.spaced and self.suspect is not None:
+            words, need, nbytes, field = self.suspect
+            self._short(words, need, f", {nbytes} bytes, whose last is the line end that follows the other arrays' "
+                                      "data: a byte short (a byte lost in it shifts every value after it)", field)
 
     def _header_end(self, start: int, header: int) -> int | None:
         """Where the ``header``-th word of the line at ``start`` ends, or None if the line has fewer."""
