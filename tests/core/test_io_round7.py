@@ -4,6 +4,8 @@ padding), ..."""
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -79,3 +81,57 @@ def test_a_failed_e57_seed_leaves_no_exception_for_the_destructor(tmp_path, monk
         F.e57(points, tmp_path)
     gc.collect()
     assert not ignored, ignored
+
+
+def _rows(points, fmt="%.6f", extra=""):
+    return "".join(" ".join(fmt % float(v) for v in p) + extra + "\n" for p in points)
+
+
+def _text_files(points, fmt):
+    """name: (extension, text) of every text format but delimited columns, ``fmt`` numbers, ending in points."""
+    n, rows = len(points), _rows(points, fmt)
+    grid = _rows(points, fmt, " 0.5")
+    return {
+        "ply": ("ply", f"ply\nformat ascii 1.0\nelement vertex {n}\nproperty float x\nproperty float y\n"
+                       f"property float z\nend_header\n{rows}"),
+        "pcd": ("pcd", f"VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH {n}\nHEIGHT 1\n"
+                       f"VIEWPOINT 0 0 0 1 0 0 0\nPOINTS {n}\nDATA ascii\n{rows}"),
+        "obj": ("obj", "# cloud\n" + "".join("v " + line for line in rows.splitlines(True))),
+        "off": ("off", f"OFF\n{n} 0 0\n{rows}"),
+        "ptx": ("ptx", f"1\n{n}\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n{grid}"),
+        "vtk": ("vtk", f"# vtk DataFile Version 3.0\nt\nASCII\nDATASET POLYDATA\nPOINTS {n} float\n{rows}"),
+    }
+
+
+@pytest.mark.parametrize("fmt", ["%.6f", "%.4e", "%.3f"])
+@pytest.mark.parametrize("name", ["ply", "pcd", "obj", "off", "ptx", "vtk"])
+def test_a_text_file_cut_in_its_last_number_warns_in_every_text_format(tmp_path, name, fmt):
+    rng = np.random.default_rng(len(name) + len(fmt))
+    points = rng.normal(scale=10.0 ** rng.integers(-2, 4), size=(int(rng.integers(12, 300)), 3))
+    ext, text = _text_files(points, fmt)[name]
+    if name == "vtk":
+        pytest.importorskip("vtkmodules")
+    whole = tmp_path / f"whole.{ext}"
+    whole.write_text(text)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert len(read_cloud(whole).points) == len(points)
+    for cut in (1, 2) if fmt.endswith("f") else (1,):  # decimals (or an exponent's digit) lost, and the newline
+        path = tmp_path / f"cut{cut}.{ext}"
+        path.write_text(text.rstrip("\n")[:-cut])
+        with pytest.warns(UserWarning, match=f"{path.name}: the file ends without a newline, in .* the file looks cut"):
+            read_cloud(path)
+
+
+@pytest.mark.parametrize("name", ["ply", "obj", "off", "vtk"])
+def test_shortest_digit_text_files_ending_without_a_newline_read_without_a_word(tmp_path, name):
+    """repr numbers vary in their decimals: no evidence of a cut, no warning."""
+    if name == "vtk":
+        pytest.importorskip("vtkmodules")
+    points = np.random.default_rng(1).normal(size=(40, 3))
+    ext, text = _text_files(points, "%r")[name]
+    path = tmp_path / f"repr.{ext}"
+    path.write_text(text.rstrip("\n"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert len(read_cloud(path).points) == 40
