@@ -111,6 +111,10 @@ class _BinaryWalk(_Walk):
         pos = _SPACE.match(self.data, pos).end()
         return pos if pos < len(self.data) else None
 
+    def _gap_floor(self, pos: int) -> int:
+        """The white space before a keyword starts after the data (whose bytes may be spaces)."""
+        return pos
+
     def _other(self, key: bytes, end: int) -> int | None:
         """Only words follow a section of _TEXT; after any other, where binary data start is unknown."""
         return end if key.startswith(_TEXT) else None

@@ -135,3 +135,79 @@ def test_shortest_digit_text_files_ending_without_a_newline_read_without_a_word(
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert len(read_cloud(path).points) == 40
+
+
+_HEAD = "# vtk DataFile Version 3.0\nt\n{kind}\nDATASET POLYDATA\nPOINTS 2 float\n"
+_SCALARS = "POINT_DATA 2\nSCALARS s float 1\nLOOKUP_TABLE default\n"
+
+
+def _legacy(kind: str, gap: str, where: str) -> bytes:
+    """A legacy file whose ``gap`` follows the points' data (then the scalars) or the scalars' (the file's end)."""
+    values = (b"0 0 0 1 1 1" if kind == "ASCII" else np.arange(6, dtype=">f4").tobytes())
+    scalars = (b"5 6" if kind == "ASCII" else np.array([5, 6], ">f4").tobytes())
+    head = _HEAD.format(kind=kind).encode()
+    if where == "points":
+        return head + values + gap.encode() + b"\n" + _SCALARS.encode() + scalars + b"\n"
+    return head + values + b"\n" + _SCALARS.encode() + scalars + gap.encode()
+
+
+def test_a_run_of_spaces_where_vtk_reads_a_keyword_is_refused_not_a_hang(tmp_path, helpers):
+    """VTK 9.7's legacy reader never returned from 256 or more spaces (and carriage returns)
+    between an array's data and the next keyword or the file's end (read in one child process,
+    which a hang would keep past read_in_child's limit)."""
+    pytest.importorskip("vtkmodules")
+    paths = []
+    for kind in ("ASCII", "BINARY"):
+        for where in ("points", "end"):
+            for i, gap in enumerate([" " * 256, " " * 5000, " \r" * 200, "\n" + " " * 300, "\r" * 300]):
+                paths.append(tmp_path / f"{kind}_{where}_{i}.vtk")
+                paths[-1].write_bytes(_legacy(kind, gap, where))
+    answers = helpers.read_in_child(paths)
+    for path in paths:
+        for part in (path.name, "spaces (or carriage returns)", "VTK's reader never returns", "allowed: fewer than 256"):
+            assert part in answers[str(path)], answers[str(path)]
+
+
+@pytest.mark.parametrize("kind", ["ASCII", "BINARY"])
+@pytest.mark.parametrize("gap", [" " * 255, "\t" * 5000, " \n" * 300, "\v" * 300, " " * 200 + "\n" + " " * 200])
+def test_other_white_space_after_vtk_data_still_reads(tmp_path, kind, gap):
+    pytest.importorskip("vtkmodules")
+    for where in ("points", "end"):
+        path = tmp_path / f"{where}.vtk"
+        path.write_bytes(_legacy(kind, gap, where))
+        cloud = read_cloud(path)
+        assert cloud.points.ravel().tolist() == [0, 0, 0, 1, 1, 1] if kind == "ASCII" else list(range(6))
+        assert cloud.fields["s"].tolist() == [5, 6]
+
+
+_PIECE = ('<Piece NumberOfPoints="1"><Points><DataArray type="Float32" NumberOfComponents="3" format="ascii">'
+          "1 2 3</DataArray></Points></Piece>")
+
+
+@pytest.mark.parametrize("depth, part", [(1001, "nests elements more than 1000 deep"),
+                                         (200_000, "nests elements more than 1000 deep")])
+def test_deeply_nested_vtp_xml_is_refused_before_vtk(tmp_path, helpers, depth, part):
+    """200,000 nested elements overflowed VTK's parser's stack: a segmentation fault."""
+    pytest.importorskip("vtkmodules")
+    path = tmp_path / "deep.vtp"
+    path.write_text(f'<?xml version="1.0"?><VTKFile type="PolyData"><PolyData>{_PIECE}'
+                    + "<a>" * depth + "</a>" * depth + "</PolyData></VTKFile>")
+    answer = helpers.read_in_child([path])[str(path)]
+    assert isinstance(answer, str) and path.name in answer and part in answer, answer
+
+
+def test_an_element_of_many_attributes_is_refused_before_vtk(tmp_path):
+    """VTK reads n attributes of an element in n**2 time: 300,000 took minutes."""
+    pytest.importorskip("vtkmodules")
+    path = tmp_path / "attributes.vtp"
+    path.write_text('<?xml version="1.0"?><VTKFile type="PolyData" ' + " ".join(f'a{i}="1"' for i in range(1001))
+                    + f"><PolyData>{_PIECE}</PolyData></VTKFile>")
+    refused(path, "its XML gives <VTKFile> (at byte 21) 1002 attributes; allowed: at most 1000")
+
+
+def test_vtp_nesting_and_attributes_within_the_limits_read(tmp_path):
+    pytest.importorskip("vtkmodules")
+    path = tmp_path / "ok.vtp"
+    path.write_text('<?xml version="1.0"?><VTKFile type="PolyData" ' + " ".join(f'a{i}="1"' for i in range(900))
+                    + f"><PolyData>{_PIECE}" + "<a>" * 990 + "</a>" * 990 + "</PolyData></VTKFile>")
+    assert read_cloud(path).points.tolist() == [[1, 2, 3]]
