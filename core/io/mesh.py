@@ -17,6 +17,8 @@ _STL_VERTEX = re.compile(rb"(?<![^\r\n])[ \t]*vertex[ \t]+(\S+)[ \t]+(\S+)[ \t]+
 _STL_VERTEX_WORD = re.compile(rb"(?<![^\r\n])[ \t]*vertex(?![^ \t\r\n])", re.IGNORECASE)
 #: bytes a binary STL may have after its last triangle (some writers pad or add a newline)
 _STL_SLACK = 50
+#: triangles before a binary STL's last one that the last one's check needs as evidence
+_LAST_EVIDENCE = 3
 #: a binary STL triangle's stored normal is zero or of length 1 within this
 _UNIT_NORMAL_TOL = 1e-3
 
@@ -168,7 +170,7 @@ def _check_stl_alignment(path, records, size: int) -> None:
     the first triangle's stored normal is a unit vector, the writer stores unit normals
     (zero only for a degenerate triangle): a later triangle of another normal marks a shift
     behind padding-like bytes, and the file is refused naming it. Bytes inserted into the
-    last triangle that leave a padding-like end (its attribute's zeros) cannot be told."""
+    last triangle leave a padding-like end (its attribute's zeros): see _last_triangle_problem."""
     n, extra = len(records), size - 84 - 50 * len(records)
     said = f"the binary STL header declares {n} triangles ({84 + 50 * n} bytes) but the file has {size} bytes"
     with open(path, "rb") as f:
@@ -184,6 +186,10 @@ def _check_stl_alignment(path, records, size: int) -> None:
     if tail_data:
         raise CloudFileError(path, f"{said}, {extra} more, which are not padding (NULs, a newline): bytes were inserted "
                                    "into its data or its triangle count (bytes 80-83) is wrong; the file is damaged")
+    problem = _last_triangle_problem(records)
+    if problem:
+        raise CloudFileError(path, f"{said}, {extra} more, padding-like, but the last triangle {problem}: bytes were "
+                                   "inserted into it, leaving its zero attribute bytes after it; the file is damaged")
 
 
 def _stored_normals_fit(records) -> np.ndarray:
@@ -198,6 +204,38 @@ def _stored_normals_fit(records) -> np.ndarray:
         degenerate = area == 0  # a repeated corner: a shifted record's garbage is never exactly flat
         fit = (np.abs(length - 1) < _UNIT_NORMAL_TOL) | ((length == 0) & degenerate)
     return fit if len(fit) and abs(length[0] - 1) < _UNIT_NORMAL_TOL else np.zeros(len(fit), bool)
+
+
+def _last_triangle_problem(records) -> str | None:
+    """What shows the last triangle read shifted against the (3 or more) triangles before it, or
+    None: shifted float bytes read as a corner far from theirs (:func:`_stray_corners`), or as a
+    stored normal off its corners' normal where every earlier one matches its own (unit normals
+    computed from the corners, as most writers store them)."""
+    if len(records) <= _LAST_EVIDENCE:
+        return None
+    with np.errstate(all="ignore"):
+        corners = records["vertices"].astype(np.float64)
+        if _stray_corners(corners[:-1].reshape(-1, 3), corners[-1]):
+            shown = "; ".join(" ".join(f"{v:.6g}" for v in corner) for corner in corners[-1])
+            return f"has corners ({shown}) of another magnitude than every corner before it"
+        stored = records["normal"].astype(np.float64)
+        geometric = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        lengths = np.linalg.norm(stored, axis=1) * np.linalg.norm(geometric, axis=1)
+        cosine = np.einsum("ij,ij->i", stored, geometric) / lengths
+    if np.all(cosine[:-1] > 0.99) and not cosine[-1] > 0.99 and np.linalg.norm(geometric[-1]) > 0:
+        return (f"has a stored normal ({' '.join(f'{v:.6g}' for v in stored[-1])}) off its corners' normal, where "
+                "every triangle before it stores its corners' normal")
+    return None
+
+
+def _stray_corners(before, last) -> bool:
+    """Whether a corner of ``last`` is not finite, lies 10 times the box of the corners ``before``
+    outside it, or is nonzero 1e20 times below their magnitude (a float's bytes shifted: 1e38, 1e-39)."""
+    low, high = before.min(axis=0), before.max(axis=0)
+    size = np.linalg.norm(high - low)
+    far = (last < low - 10 * size) | (last > high + 10 * size)
+    tiny = (last != 0) & (np.abs(last) < 1e-20 * (np.abs(before).max() + size))
+    return bool(not np.isfinite(last).all() or (size > 0 and far.any()) or tiny.any())
 
 
 def _stl_tail_holds_data(path, start: int) -> bool:

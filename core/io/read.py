@@ -13,6 +13,7 @@ from .sniff import refuse_misread_text, refuse_other_content
 from .._validate import check_bool
 from .cloud import Cloud, CloudFileError, RawCloud, file_path, finalize
 from .formats import READ_FORMATS, resolve_format
+from .text_tail import warn_if_text_cut
 
 _READERS = {
     "ply": ply.read_ply,
@@ -130,7 +131,9 @@ def _read_raw(path, fmt) -> RawCloud:
         refuse_other_content(path, fmt)
         refuse_misread_text(path, fmt)
         with np.errstate(all="ignore"):  # a NaN or inf cast (a float32 sNaN, 1e308 as float32) is finalize's to flag
-            return _READERS[fmt](path)
+            raw = _READERS[fmt](path)
+        warn_if_text_cut(path, fmt)
+        return raw
     except ModuleNotFoundError as exc:  # an optional reader dependency is not installed
         extra = _EXTRAS.get(fmt)
         hint = f"pip install 'darboux[{extra}]'" if extra else f"pip install {exc.name}"

@@ -8,6 +8,8 @@ shorter one, and writers end a file with a newline. A last line without one, who
 value has fewer decimals (or exponent digits) than every one of the many lines before it
 has in that column, is a cut, and a warning says so. Files of shortest-digit numbers
 (``repr``, ``%g``: the decimals vary) or integer columns give no such evidence and pass.
+The same holds for the rows of every text format (:func:`warn_if_text_cut`): an ASCII PLY or
+PCD, an OBJ, OFF, PTX or ASCII legacy VTK file cut in its last number reads whole as well.
 """
 
 from __future__ import annotations
@@ -23,12 +25,30 @@ _TAIL, _EVIDENCE = 1 << 16, 8
 _SHAPE = re.compile(r"[+-]?(\d*)(?:\.(\d*))?(?:[eEdD][+-]?(\d*))?\Z")
 
 
-def warn_if_cut(path, encoding: str, delimiter) -> None:
+#: a text format's data, told by its first KiB (the formats of text only: None)
+_TEXT_DATA = {"ply": re.compile(rb"\nformat[ \t]+ascii[ \t]"), "pcd": re.compile(rb"\nDATA[ \t]+ascii\b"),
+              "vtk": re.compile(rb"\A[^\n]*\n[^\n]*\n[ \t]*ASCII", re.I), "obj": None, "off": None, "ptx": None}
+
+
+def warn_if_text_cut(path, fmt: str) -> None:
+    """:func:`warn_if_cut` for a file of another text format than delimited columns (an ASCII
+    STL cut in a facet and a .vtp without its closing tag are refused by their readers)."""
+    if fmt not in _TEXT_DATA:
+        return
+    if _TEXT_DATA[fmt] is not None:
+        with open(path, "rb") as f:
+            if not _TEXT_DATA[fmt].search(f.read(1024)):
+                return
+    warn_if_cut(path, "latin-1", None, stacklevel=5)
+
+
+def warn_if_cut(path, encoding: str, delimiter, stacklevel: int = 4) -> None:
     """Warn where the file looks cut inside its last number (see the module's text)."""
     rows = _last_rows(path, encoding, delimiter)
     if len(rows) <= _EVIDENCE:
         return
-    last, before = rows[-1], [row for row in rows[:-1] if len(row) == len(rows[-1])][-1000:]
+    last = rows[-1]
+    before = [row for row in rows[:-1] if _numbers(row, last)][-1000:]
     shapes = {_shape(row[-1]) for row in before}
     if len(before) < _EVIDENCE or len(shapes) != 1 or None in shapes:
         return
@@ -37,7 +57,7 @@ def warn_if_cut(path, encoding: str, delimiter) -> None:
         what = f"{decimals} decimals" + (f" and {exponent} exponent digits" if exponent >= 0 else "")
         warnings.warn(f"{path}: the file ends without a newline, in {last[-1][:40]!r}, shorter than the {what} of the "
                       f"{len(before)} values before it in that column: the file looks cut short (the last point is "
-                      "read as it stands)", UserWarning, stacklevel=4)
+                      "read as it stands)", UserWarning, stacklevel=stacklevel)
 
 
 def _last_rows(path, encoding: str, delimiter) -> list:
@@ -53,6 +73,15 @@ def _last_rows(path, encoding: str, delimiter) -> list:
         return []
     lines = tail.decode("latin-1").splitlines()[1 if size > _TAIL else 0 :]
     return [split(line.strip(), delimiter) for line in lines if line.strip() and "#" not in line]
+
+
+def _numbers(row, last) -> bool:
+    """Whether ``row`` is a data row like ``last``: as many tokens, numbers but for a leading
+    keyword they share (OBJ's ``v``), the last one not an integer (integers are no evidence of
+    a format: a header's counts, an OFF's or PTX's, are not data rows)."""
+    keyword = _shape(last[0]) is None
+    return (len(row) == len(last) and (not keyword or row[0] == last[0]) and _shape(row[-1]) != (0, -1)
+            and all(_shape(token) is not None for token in row[keyword:]))
 
 
 def _shape(token: str):

@@ -39,6 +39,8 @@ _CLASS[list(b"0123456789.")] = 3
 _STARTS = np.zeros(16, dtype=bool)
 _STARTS[[4 + 0, 4 + 2, 4 + 3, 12 + 2]] = True
 _SIGN_AFTER = re.compile(rb"[0-9.][+-]")
+#: white space VTK cannot read a keyword after (see _Walk._check_gap), within the bytes looked at before it
+_SPACES, _GAP_WINDOW = re.compile(rb"[ \r]{256,}"), 4096
 #: point or cell data sections: their first word (VTK compares its start, in this order), values
 #: per point or cell, the header word that multiplies them and the one naming their type (if any)
 _ATTRIBUTES = ((b"vectors", 3, None, 2), (b"tensors6", 6, None, 2), (b"tensors", 9, None, 2),
@@ -77,10 +79,31 @@ class _Walk:
 
     def walk(self, pos: int):
         """Check the sections from ``pos``: (None if the walk stopped, where the last one starts)."""
-        last = pos
+        last, arrays = pos, self.arrays
         while pos is not None and (keyword := self._next(pos)) is not None:
-            last, pos = keyword, self.section(keyword)
+            if self.arrays > arrays:  # after an array's data
+                self._check_gap(pos, _WORD.search(self.data, keyword).start())
+            last, arrays, pos = keyword, self.arrays, self.section(keyword)
+        if pos is not None and self.arrays > arrays:
+            self._check_gap(pos, len(self.data))
         return pos, last
+
+    def _gap_floor(self, pos: int) -> int:
+        """Where the white space before the next keyword can start: after the last number (in ASCII)."""
+        return 0
+
+    def _check_gap(self, pos: int, stop: int) -> None:
+        """Refuse a run of 256 or more spaces and carriage returns in the white space between an
+        array's data and the keyword at ``stop`` (or the file's end): VTK's reader never returned
+        (a tab, a newline or a number between shorter runs, such a run inside the data or after
+        a header line, read)."""
+        window = bytes(self.data[max(self._gap_floor(pos), stop - _GAP_WINDOW) : stop])
+        run = _SPACES.search(window, len(window.rstrip(b" \t\r\n\v\f")))
+        if run:
+            before = "the file's end" if stop == len(self.data) else repr(_shown(self._line(stop)[1]))
+            raise CloudFileError(self.path, f"holds a run of {run.end() - run.start()}+ spaces (or carriage returns) "
+                                            f"before {before}, at byte {stop - len(window) + run.start()}: VTK's reader "
+                                            "never returns from one where it reads a keyword; allowed: fewer than 256")
 
     def _next(self, pos: int) -> int | None:
         """Where the next section starts: the first line from ``pos`` that starts with a word."""

@@ -32,7 +32,7 @@ _CELLS = (b"vertices", b"lines", b"polygons", b"triangle_strips", b"cells")
 _SPACE = re.compile(rb"[ \t\r\n\v\f]*")
 WORDS = re.compile(rb"[^ \t\r\n\v\f]+")
 #: VTK reads the rest of an array's or a cell array's header line into a buffer of 256 bytes (getline
-#: stores 255; :func:`core.io.vtk._binary_start` too)
+#: stores 255; :func:`core.io.vtk_legacy._binary_start` too)
 LINE_BUFFER = 256
 
 
@@ -57,10 +57,11 @@ def check_binary_arrays(path, data, body: int, legacy_cells: bool) -> list:
     """Each array of the BINARY legacy file ``data`` after ``body`` (where its header lines end)
     holds the bytes it declares: POINTS (or X/Y/Z_COORDINATES), every array of its POINT_DATA
     and CELL_DATA and of every FIELD section; the cell arrays are stepped over (``legacy_cells``:
-    the file is older than version 5.0, its ids checked by ``vtk._check_cells``). Returns the
+    the file is older than version 5.0, its ids checked by ``vtk_legacy._check_cells``). Returns the
     dataset's FIELD sections as :func:`core.io.vtk_ascii.check_ascii_arrays` does."""
     walk = _BinaryWalk(path, data, legacy_cells)
     walk.walk(body)
+    walk.check_lost_bytes()
     return walk.fields
 
 
@@ -83,6 +84,8 @@ class _BinaryWalk(_Walk):
         super().__init__(path, data)
         self.legacy_cells = legacy_cells
         self.cell_counts = (0, 0)  # the OFFSETS and CONNECTIVITY values of a version 5 cell array
+        self.spaced = False  # an array's data were followed by a line end, as VTK writes them
+        self.suspect = None  # (header words, values, bytes) of the first array whose data end in a newline
 
     def section(self, start: int) -> int | None:
         """Check the section at ``start`` (cell arrays stepped over); where the walk goes on, or None."""
@@ -108,6 +111,10 @@ class _BinaryWalk(_Walk):
         pos = _SPACE.match(self.data, pos).end()
         return pos if pos < len(self.data) else None
 
+    def _gap_floor(self, pos: int) -> int:
+        """The white space before a keyword starts after the data (whose bytes may be spaces)."""
+        return pos
+
     def _other(self, key: bytes, end: int) -> int | None:
         """Only words follow a section of _TEXT; after any other, where binary data start is unknown."""
         return end if key.startswith(_TEXT) else None
@@ -130,7 +137,28 @@ class _BinaryWalk(_Walk):
         held = len(self.data) - newline - 1
         if nbytes > held:
             self._short(words, need, f", {nbytes} bytes, but {held} follow its header before the file ends", field)
+        self._note_end(newline + 1 + nbytes, (words, need, nbytes, field))
         return None, newline + 1 + nbytes
+
+    def _note_end(self, end: int, array) -> None:
+        """Note how the data of ``array`` end at ``end``: followed by a line end (VTK's writers),
+        or their last byte a newline with a word or the file's end right after it."""
+        after = self.data[end : end + 1]
+        if after in (b"\n", b"\r"):
+            self.spaced = True
+        elif self.data[end - 1 : end] == b"\n" and self.suspect is None and after not in (b" ", b"\t"):
+            self.suspect = array
+
+    def check_lost_bytes(self) -> None:
+        """A byte lost inside an array: VTK reads the newline after its data as their last byte and
+        every value after the lost one shifted (1e38, 1e304 in points within 3), then the next keyword,
+        which needs no newline before it. A file whose data are written without line ends after them
+        (read on purpose) may end an array with the byte 10 by chance; one that ends another array
+        with a line end does not: there, an array whose data end in a newline is refused."""
+        if self.spaced and self.suspect is not None:
+            words, need, nbytes, field = self.suspect
+            self._short(words, need, f", {nbytes} bytes, whose last is the line end that follows the other arrays' "
+                                      "data: a byte short (a byte lost in it shifts every value after it)", field)
 
     def _header_end(self, start: int, header: int) -> int | None:
         """Where the ``header``-th word of the line at ``start`` ends, or None if the line has fewer."""

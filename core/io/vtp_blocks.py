@@ -70,7 +70,7 @@ def check_binary_headers(data, tags: "Tags", available: int, path) -> None:
     """Raise :class:`CloudFileError` when a binary DataArray's header is one that VTK would
     act on to its harm (see the module docstring). ``data``: the file, memory-mapped;
     ``tags``: what expat read of its XML (:mod:`core.io.xml_scan`, the one parse
-    :func:`core.io.vtk.check_vtp` shares); ``available``: the memory available."""
+    :func:`core.io.vtp_sizes.check_vtp` shares); ``available``: the memory available."""
     if len(tags.arrays) > MAX_ARRAYS:  # VTK's read of n arrays takes n**2 (20,000: 7 s)
         raise CloudFileError(path, f"holds {len(tags.arrays):,} data arrays; a point cloud's file is read with at "
                                    f"most {MAX_ARRAYS:,}")

@@ -1,5 +1,5 @@
 """The XML of a VTK XML file, parsed as VTK parses it (expat), for the checks made before VTK
-reads it (:mod:`core.io.vtk`, :mod:`core.io.vtp_blocks`): quotes of either kind, spaces
+reads it (:mod:`core.io.vtp_sizes`, :mod:`core.io.vtp_blocks`): quotes of either kind, spaces
 around '=', character references and comments are read as VTK reads them, where byte
 patterns saw only one spelling (``NumberOfPoints='1000000000000'`` aborted the process)."""
 
@@ -11,21 +11,41 @@ from .cloud import CloudFileError
 
 _CHUNK = 1 << 20  # bytes of XML given to expat at a time
 _MAX_MARKUP = 1 << 24  # a longer tag is refused: VTK writes none, and expat 2.5 rescans it per chunk
+#: elements nested deeper are refused (VTK's files nest fewer than 10; 200,000 crashed VTK's parser)
+MAX_DEPTH = 1000
+#: attributes an element may have (VTK writes fewer than 10; it reads n of them in n**2 time)
+MAX_ATTRIBUTES = 1000
 
 
 def scan_xml(data, handler, path) -> None:
     """Give expat the XML before the first '<AppendedData' (where VTK stops parsing), a chunk at
     a time, calling ``handler.start(name, attributes, position)`` at each start tag (the byte
     of its '<' in ``data``) and ``handler.end(name)``, if it has one, at each end tag. A
-    document type is refused (its entities could spell what is checked); at a syntax error
+    document type is refused (its entities could spell what is checked), so are elements nested
+    more than :data:`MAX_DEPTH` deep; at a syntax error
     parsing stops quietly (VTK's parser stops there too, and names the error)."""
     end = data.find(b"<AppendedData")
     end = len(data) if end < 0 else end
     parser = expat.ParserCreate()
     skipped = [0]  # bytes of long comments not given to expat (:func:`_resume`), before the current chunk
-    parser.StartElementHandler = lambda name, attrs: handler.start(name, attrs, parser.CurrentByteIndex + skipped[0])
-    if hasattr(handler, "end"):
-        parser.EndElementHandler = handler.end
+    depth = [0]
+
+    def on_start(name, attrs):
+        depth[0] += 1
+        if depth[0] > MAX_DEPTH:  # VTK's parser recursed into each: 200,000 levels overflowed its stack
+            _refuse(path, f"its XML nests elements more than {MAX_DEPTH} deep (<{name}> at byte "
+                          f"{parser.CurrentByteIndex + skipped[0]}); allowed: at most {MAX_DEPTH}")
+        if len(attrs) > MAX_ATTRIBUTES:  # VTK stores each after a search of those before: 300,000 took minutes
+            _refuse(path, f"its XML gives <{name}> (at byte {parser.CurrentByteIndex + skipped[0]}) {len(attrs)} "
+                          f"attributes; allowed: at most {MAX_ATTRIBUTES}")
+        handler.start(name, attrs, parser.CurrentByteIndex + skipped[0])
+
+    def on_end(name):
+        depth[0] -= 1
+        if hasattr(handler, "end"):
+            handler.end(name)
+
+    parser.StartElementHandler, parser.EndElementHandler = on_start, on_end
     parser.StartDoctypeDeclHandler = lambda *_: _refuse(path, "its XML has a document type (<!DOCTYPE>); allowed: none")
     pos = 0
     with memoryview(data) as view:

@@ -159,10 +159,17 @@ def las(points, tmp, point_format=3, version="1.2", scale=0.001, offset=0.0, laz
 
 
 def e57(points, tmp):
+    """An E57 file of one scan of ``points``. libE57 cannot write the bounds of non-finite or
+    huge coordinates: its close raises IndexError, and pye57's ``E57.__del__`` closed the file
+    again, an "Exception ignored in E57.__del__" warning in pytest; the one close is the ``with``'s."""
     import pye57
     path = tmp / "seed.e57"
-    with pye57.E57(str(path), mode="w") as f:
-        f.write_scan_raw({"cartesianX": points[:, 0], "cartesianY": points[:, 1], "cartesianZ": points[:, 2]})
+    f = pye57.E57(str(path), mode="w")
+    try:
+        with f:
+            f.write_scan_raw({"cartesianX": points[:, 0], "cartesianY": points[:, 1], "cartesianZ": points[:, 2]})
+    finally:
+        f.__dict__.pop("image_file", None)  # pye57's destructor closes only a file it still holds
     return path.read_bytes()
 
 

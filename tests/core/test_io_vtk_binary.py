@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from core.io import read_cloud
-from core.io.vtk import _legacy_header
+from core.io.vtk_legacy import _legacy_header
 from core.io.vtk_binary import _BinaryWalk, new_cells
 from io_testutils import refused as _error
 
