@@ -24,6 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from .kernels import sign_evidence as kern
+from .kernels.cross import cross_terms
 from .kernels.union_find import signed_forest
 from .orientation_evidence import GATE, ORIENT_K
 from .tuning import VOTE_GROWTH, VOTE_SIZE
@@ -50,19 +51,13 @@ def cross_edges(points, normals, graph, spread, rows=slice(None)):
     """For the edges of ``graph[rows]``: the chord term ``a_i a_j`` of
     :func:`core.kernels.sign_evidence.sign_evidence` (the offsets beyond the noise gate,
     over the chord) where the two normals are parallel (:data:`PARALLEL_DEG`) and it
-    opposes Hoppe's term (a chord across a gap between parallel sheets), else 0."""
-    g = graph[rows]
-    p, n = points[rows], normals[rows]
-    chord = points[g] - p[:, None, :]
-    d = np.linalg.norm(chord, axis=2)
-    ti = np.einsum("ijk,ik->ij", chord, n)
-    tj = -np.einsum("ijk,ijk->ij", chord, normals[g])
-    floor = GATE * np.hypot(spread[rows][:, None], spread[g])
-    with np.errstate(invalid="ignore", divide="ignore"):
-        term = np.sign(ti * tj) * np.maximum(np.abs(ti) - floor, 0) * np.maximum(np.abs(tj) - floor, 0) / (d * d)
-    nn = np.einsum("ik,ijk->ij", n, normals[g])
-    cross = (np.abs(nn) > np.cos(np.radians(PARALLEL_DEG))) & (term * nn < 0)
-    return np.where(cross, np.nan_to_num(term), 0.0)
+    opposes Hoppe's term (a chord across a gap between parallel sheets), else 0
+    (:func:`core.kernels.cross.cross_terms`, one compiled pass)."""
+    rows = np.arange(len(graph))[rows] if isinstance(rows, slice) else np.asarray(rows, dtype=np.int64)
+    out = np.empty((len(rows), graph.shape[1]))
+    cross_terms(np.asarray(points, dtype=np.float64), np.asarray(normals, dtype=np.float64), graph,
+                np.asarray(spread, dtype=np.float64), rows, GATE, np.cos(np.radians(PARALLEL_DEG)), out)
+    return out
 
 
 def frustration(ev, graph, flip) -> float:
