@@ -7,7 +7,8 @@ per algorithm.
 - :mod:`.scale` the per-point choice of k (ICI) and the fold test that bounds it;
 - :mod:`.sign_evidence` the signed chord evidence and Kruskal signs of :mod:`core.orientation`;
   :mod:`.border` the angular-gap border test; :mod:`.outliers` scores; :mod:`.anisotropy` the
-  sampling anisotropy of :mod:`core.anisotropy`;
+  sampling anisotropy of :mod:`core.anisotropy`; :mod:`.cross` the cross edges of
+  :mod:`core.double_scan`;
 - :mod:`.kd_order` the spatial order itself, :mod:`.kdtree` the k nearest neighbours of points
   in that order; :mod:`.frame` the
   augmented Darboux frame every fit ends in (:func:`core.frame.darboux_frame`);
