@@ -9,7 +9,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
-from ._base import BLOCK, OPTS
+from ._base import BLOCK, LEAF, OPTS
 from .border import _sort_small
 from .frame import _shape_operator, tangent_basis_of
 from .kdtree import _distance
@@ -62,14 +62,14 @@ class Blended(NamedTuple):
     e2: np.ndarray
 
 
-@njit(**OPTS)
-def _offsets(pts, p, nrm, picked, x, y, d2):
-    """The anchors' offsets from point p in its tangent plane (x, y) and squared distances
-    d2; returns the number of anchors and the largest distance (1 without anchors)."""
+@njit(**LEAF)
+def _offsets(pts, p, nrm, picked, m, x, y, d2):
+    """The offsets from point p of its anchors ``picked[m]`` in its tangent plane (x, y) and
+    squared distances d2; returns the number of anchors and the largest distance (1 without anchors)."""
     t1, t2 = tangent_basis_of(nrm[p, 0], nrm[p, 1], nrm[p, 2])
     count, far = 0, 0.0
-    for b in range(len(picked)):
-        a = picked[b]
+    for b in range(picked.shape[1]):
+        a = picked[m, b]
         if a < 0:
             continue
         count += 1
@@ -81,19 +81,19 @@ def _offsets(pts, p, nrm, picked, x, y, d2):
     return count, math.sqrt(far) if far > 0.0 else 1.0
 
 
-@njit(**OPTS)
-def _weights(pts, p, nrm, picked, w, floor, xyd):
+@njit(**LEAF)
+def _weights(pts, p, nrm, picked, m, w, floor, xyd):
     """w[0:B] = the affine weights of :func:`core.anchor_blend.affine_weights` for point p
-    (none below ``-floor``, else inverse squared distances); ``xyd`` (3, B) scratch."""
-    B = len(picked)
+    and its anchors ``picked[m]`` (none below ``-floor``, else inverse squared distances);
+    ``xyd`` (3, B) scratch."""
+    B = picked.shape[1]
     x, y, d2 = xyd[0], xyd[1], xyd[2]
-    x[:] = 0.0
-    y[:] = 0.0
-    d2[:] = 0.0
-    count, s = _offsets(pts, p, nrm, picked, x, y, d2)
+    for b in range(B):
+        x[b] = y[b] = d2[b] = 0.0
+    count, s = _offsets(pts, p, nrm, picked, m, x, y, d2)
     m00 = m01 = m02 = m11 = m12 = m22 = 0.0
     for b in range(B):
-        xb, yb, on = x[b] / s, y[b] / s, 1.0 if picked[b] >= 0 else 0.0
+        xb, yb, on = x[b] / s, y[b] / s, 1.0 if picked[m, b] >= 0 else 0.0
         m00 += on
         m01 += xb
         m02 += yb
@@ -104,24 +104,27 @@ def _weights(pts, p, nrm, picked, w, floor, xyd):
     det = m00 * c00 + m01 * c01 + m02 * c02
     affine = count >= 3 and abs(det) > 1e-6
     for b in range(B):
-        w[b] = (c00 + c01 * x[b] / s + c02 * y[b] / s) / det if affine and picked[b] >= 0 else 0.0
+        w[b] = (c00 + c01 * x[b] / s + c02 * y[b] / s) / det if affine and picked[m, b] >= 0 else 0.0
         affine = affine and w[b] >= -floor
-    if not affine:  # inverse squared distances
+    if not affine:  # inverse squared distances, normalised (w.sum()'s order: the same bits)
+        total = 0.0
         for b in range(B):
-            w[b] = (1.0 / d2[b] if d2[b] > 0.0 else 1.0) if picked[b] >= 0 else 0.0
-        w /= w.sum()
+            w[b] = (1.0 / d2[b] if d2[b] > 0.0 else 1.0) if picked[m, b] >= 0 else 0.0
+            total += w[b]
+        for b in range(B):
+            w[b] /= total
 
 
-@njit(**OPTS)
-def _accumulate(pts, nrm, p, picked, w, fits, project, max_tilt2, N, S, vecs):
+@njit(**LEAF)
+def _accumulate(pts, nrm, p, picked, m, w, fits, project, max_tilt2, N, S, vecs):
     """N += w_b n_b, S += w_b (the shape operator in world coordinates) over the anchors
-    ``picked`` of point p, each turned to the side of p's own normal ``nrm[p]`` (the result
+    ``picked[m]`` of point p, each turned to the side of p's own normal ``nrm[p]`` (the result
     keeps the sign p came with, as a fit of its own does); False if a fit read is not
     usable there. ``vecs`` (5, 6) scratch."""
     val, n, u1, u2 = vecs[0], vecs[1, :3], vecs[2, :3], vecs[3, :3]
     own0, own1, own2 = nrm[p, 0], nrm[p, 1], nrm[p, 2]
-    for b in range(len(picked)):
-        a = picked[b]
+    for b in range(picked.shape[1]):
+        a = picked[m, b]
         if a < 0:
             continue
         q = fits.row[a]
@@ -154,7 +157,7 @@ def _finite(a):
     return True
 
 
-@njit(**OPTS)
+@njit(**LEAF)
 def _principal(N, S, out, m):
     """out's row m: the unit normal along N and the principal curvatures and directions of
     S in its tangent plane (e1 x e2 = normal); False where N vanishes."""
@@ -188,22 +191,35 @@ def blend(pts, nrm, points, picked, fits, project, max_tilt2, floor, out, good):
     operator in world coordinates (the augmented Darboux frame of :mod:`core.kernels.frame`),
     averaged with the affine weights (:func:`_weights`) and diagonalised in the averaged
     normal's tangent plane, into the :class:`Blended` ``out``; ``good[m]``: every anchor read
-    usable (written here: numba drops a parallel loop's own writes to a record's arrays).
-    Scratch arrays are allocated once per block of followers: per follower, their eleven
-    allocations cost more than the arithmetic."""
+    usable. Scratch arrays are allocated once per block of followers (per follower, their
+    eleven allocations cost more than the arithmetic) and handed to :func:`_blend_block`."""
     n_blocks = (len(points) + BLOCK - 1) // BLOCK
     for blk in prange(n_blocks):
         B = picked.shape[1]
-        w, N, S, xyd, vecs = np.empty(B), np.empty(3), np.empty((3, 3)), np.empty((3, B)), np.empty((5, 6))
-        for m in range(blk * BLOCK, min(len(points), (blk + 1) * BLOCK)):
-            p = points[m]
-            N[:] = 0.0
-            S[:, :] = 0.0
-            _weights(pts, p, nrm, picked[m], w, floor, xyd)
-            fine = _accumulate(pts, nrm, p, picked[m], w, fits, project, max_tilt2, N, S, vecs)
-            if fine:
-                fine = _principal(N, S, out, m)
-            good[m] = fine
+        scratch = (np.empty(B), np.empty(3), np.empty((3, 3)), np.empty((3, B)), np.empty((5, 6)))
+        _blend_block(pts, nrm, points, picked, fits, (project, max_tilt2, floor), out, good,
+                     blk * BLOCK, min(len(points), (blk + 1) * BLOCK), scratch)
+
+
+@njit(**LEAF)
+def _blend_block(pts, nrm, points, picked, fits, settings, out, good, start, stop, scratch):
+    """Followers start..stop-1 of :func:`blend` (``settings`` = its project, max_tilt2,
+    floor), compiled without reference counting (:data:`~core.kernels._base.LEAF`: it and
+    its helpers allocate nothing; each call of a helper otherwise counts every array and
+    record it passes, per follower)."""
+    project, max_tilt2, floor = settings
+    w, N, S, xyd, vecs = scratch
+    for m in range(start, stop):
+        p = points[m]
+        for i in range(3):
+            N[i] = 0.0
+            for j in range(3):
+                S[i, j] = 0.0
+        _weights(pts, p, nrm, picked, m, w, floor, xyd)
+        fine = _accumulate(pts, nrm, p, picked, m, w, fits, project, max_tilt2, N, S, vecs)
+        if fine:
+            fine = _principal(N, S, out, m)
+        good[m] = fine
 
 
 @njit(**OPTS, parallel=True)
