@@ -72,7 +72,8 @@ def fit_passes(pts, initial: Initial, outlier, nb, sc: Scale, plan, report, *, n
     before the next pass if the caller did not)."""
     kc = sc.k
     anchor = _anchors(pts, nb, kc, held_h(nb, kc), sc, outlier, plan)
-    idx, h = rows_at_least(nb, kc, None if anchor is None else ~anchors.followers(anchor))  # followers' on demand
+    fits = ~sc.on_jet & sc.spans  # the points any pass fits: where the jet is the result, no rows are read
+    idx, h = rows_at_least(nb, kc, fits if anchor is None else fits & ~anchors.followers(anchor))  # followers' on demand
     nrm, has_normal = initial.normals, initial.has_normal
     if sc.on_jet.any():  # the jets' normals are the neighbours' input where the jet is kept
         nrm = np.where(sc.on_jet[:, None], sc.jets[0], nrm)

@@ -71,7 +71,7 @@ import warnings
 
 import numpy as np
 
-from . import anchors, kernels, neighbour_budget, plane_spread
+from . import anchors, kernels, neighbour_budget, plane_spread, wide_rows
 from .frame import jet_frames, turned_over
 from .kernels import jets as jet_kernels, pool as pool_kernels
 from .kernels.frame import intrinsic_frames
@@ -339,8 +339,8 @@ def _jet_ici(nb, idx, usable, ks, frames, sigma2_h, deg, report, *, lead=None):
         richer = usable[~again & (out[2][usable] == -2)], ks[:int(np.searchsorted(ks, deg.kmax, side="right"))]
         for redo, sizes in ((usable[again], ks), richer):  # the cubic final, the quartic still growing: to its widest
             for start in range(0, len(redo), _CHUNK):
-                c = redo[start:start + _CHUNK]
-                run(c, nb.rows(c, sizes[-1])[0], sizes)
+                run(c := redo[start:start + _CHUNK], rows := nb.rows(c, sizes[-1])[0], sizes)
+                wide_rows.keep_only(nb, rows, ~deg.quiet[c])  # a quiet point's jet is nearly always the result
     chosen[follow] = chosen[lead_of]
     alone = follow[(chosen[follow] < 0) & noisy[follow]]  # their anchor's rule failed: their own (not the sat-out)
     if len(alone):

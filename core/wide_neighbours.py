@@ -137,6 +137,18 @@ class WidenableNeighbours(Neighbours):
         with self._lock:
             object.__setattr__(self, "_kept", (int(k), []))
 
+    def keep_only(self, rows: np.ndarray, keep: np.ndarray) -> None:
+        """Of ``rows`` (an array :meth:`rows` returned and kept) keep only the rows ``keep``
+        (bool): at 1e-3 spacing of noise every jet of a 1M torus is re-run on 320 and is the
+        result, and the kept rows nobody fits on were 1221 MB at the estimate's peak."""
+        with self._lock:
+            blocks = [] if self._kept is None else self._kept[1]
+            at = next((b for b, (_, idx) in enumerate(blocks) if idx is rows), None)
+            if at is not None and not keep.all():
+                centres = blocks.pop(at)[0]
+                if keep.any():
+                    blocks.insert(at, (centres[keep], rows[keep]))
+
     def kept_rows(self, k: int) -> list:
         """``[(centres, rows), ...]`` searched at width ``k`` or more since :meth:`keep_rows`
         (their first k columns are a search's at k, bit for bit; their distances are not kept:

@@ -17,7 +17,7 @@ from .neighbour_budget import whole_cap
 #: (row, neighbour) entries searched at a time (their distances: 32 MB)
 _SEARCHED = 1 << 22
 
-__all__ = ["rows_at_least", "held_h"]
+__all__ = ["rows_at_least", "held_h", "keep_only"]
 
 
 def rows_at_least(nb, kc, fits=None):
@@ -42,6 +42,13 @@ def rows_at_least(nb, kc, fits=None):
     idx = nb.take(nb.width)[0]
     h = held_h(nb, kc)
     return _Rows(idx, wide, _wide_rows(nb, wide, k, kc, h, kept), kc, nb), h
+
+
+def keep_only(nb, rows, keep):
+    """Of the rows ``nb`` kept (:meth:`~core.wide_neighbours.WidenableNeighbours.keep_only`),
+    only those ``keep``; the others a fit reads are searched again (:func:`_wide_rows`)."""
+    if hasattr(nb, "keep_only"):
+        nb.keep_only(rows, keep)
 
 
 def _wide_rows(nb, centres, k, kc, h, kept=None):
