@@ -17,8 +17,8 @@ avoids the patterns (names, not values, through signals; no None item data).
 
 GUI thread; call once a QCoreApplication exists (idempotent).
 
-:func:`pinned_children` guards against a second fault, in the teardown of a widget tree:
-see there.
+:func:`pinned_children` guards against a second fault, in the teardown of a widget tree,
+and :func:`forget_surface` against a third, stale wrappers of GL surfaces: see there.
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ import sys
 import shiboken6
 from PySide6.QtCore import QObject, QTimer, Signal
 
-__all__ = ["probe", "guard", "pinned_children"]
+__all__ = ["probe", "guard", "pinned_children", "forget_surface"]
 
 _EXTRA = 1 << 40
 _done: dict = {}
@@ -96,3 +96,19 @@ def pinned_children(owner: QObject) -> list:
     reference count 0) in 2 of 5 runs of ``tests/app`` on a busy machine. With the wrappers
     pinned, ``destroy`` only ever lowers a count that stays above zero."""
     return [o for o in owner.findChildren(QObject) if shiboken6.createdByPython(o)]
+
+
+def forget_surface(interactor) -> None:
+    """Drop a closed render widget's wrapper of its GL surface from PySide's wrapper map.
+
+    pyvistaqt's interactor keeps ``context().surface()``, a ``QSurface``: not a ``QObject``,
+    so PySide is never told when Qt deletes it with the window, and its wrapper stays mapped
+    to the address. An object Qt later makes there is handed back as that wrapper: the test
+    suite saw ``QTableWidget.verticalHeader()`` return a ``QSurface`` (``AttributeError:
+    setVisible``; every later window test erred), as ``toggleViewAction()`` and
+    ``combo.model()`` once did (:class:`app.actions.DockToggle`). Called after the plotter is
+    closed (its GL resources released); a later ``makeCurrent`` on it raises and is skipped,
+    as pyvistaqt skips a context already gone."""
+    surface = getattr(interactor, "_surface", None)
+    if surface is not None and shiboken6.isValid(surface):
+        shiboken6.invalidate(surface)

@@ -305,4 +305,5 @@ class MainWindow(WindowActions, WindowStatus, WindowViews, QMainWindow):
             self.compare.close_view()
         self.scene.close()
         self.plotter.close()
+        _refguard.forget_surface(self.plotter)
         self._pinned = _refguard.pinned_children(self)  # Qt may now delete the widgets safely

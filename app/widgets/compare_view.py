@@ -6,6 +6,7 @@ from __future__ import annotations
 from PySide6.QtCore import QTimer
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 
+from .. import _refguard
 from ..scene import CloudScene, make_plotter
 
 
@@ -73,3 +74,4 @@ class CompareView(QWidget):
             self.link = None
         self.scene.close()
         self.plotter.close()
+        _refguard.forget_surface(self.plotter)
